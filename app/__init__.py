@@ -1,0 +1,1 @@
+"""floatsim's browser viewer (viser). Importing this package imports no viser; `app.viewer` does."""

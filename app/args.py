@@ -1,0 +1,15 @@
+"""Command-line options of the viewer (no viser import here)."""
+
+from dataclasses import dataclass
+
+
+@dataclass
+class ViewArgs:
+    """Open the live 3D viewer in the browser."""
+
+    scene: str = "damped"
+    """Preset name (assets/scenes/NAME.toml) or path to a scene .toml."""
+    host: str = "127.0.0.1"
+    """Interface to bind (0.0.0.0 to share on the network)."""
+    port: int = 8080
+    """Port to serve on (a busy port moves to the next free one; the banner says which)."""

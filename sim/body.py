@@ -1,0 +1,162 @@
+"""Rigid bodies as surface samples: a cell-centred box or cube, or any watertight trimesh mesh."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .config import BodyConfig, ConfigError
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """Static description of a body. The body frame has its origin at the centre of mass and
+    its axes along the principal axes of inertia (for a cube or box: the edges)."""
+
+    r_body: np.ndarray
+    """(n, 3) sample positions, body frame, m."""
+    n_body: np.ndarray
+    """(n, 3) outward unit normals, body frame."""
+    area: np.ndarray
+    """(n,) sample areas, m^2."""
+    mass: float
+    """Total mass M, kg (spread over the samples in proportion to their area)."""
+    inertia: np.ndarray
+    """(3,) principal moments of inertia of the samples, kg m^2 (the body-frame tensor is diag(inertia))."""
+    volume: float
+    """Enclosed volume, m^3."""
+    radius: float
+    """Largest distance of a sample from the centre of mass, m."""
+    mesh_vertices: np.ndarray
+    """(v, 3) display mesh vertices, body frame, m."""
+    mesh_faces: np.ndarray
+    """(f, 3) display mesh triangles (vertex indices)."""
+    q_input_body: np.ndarray
+    """(4,) rotation from the principal frame to the frame the shape was given in (w, x, y, z)."""
+    name: str = "body"
+
+    @property
+    def sample_mass(self) -> np.ndarray:
+        """(n,) sample masses m_k = M a_k / A, kg."""
+        return self.mass * self.area / self.area.sum()
+
+    @property
+    def n_samples(self) -> int:
+        return len(self.area)
+
+
+def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cell-centre samples of a box surface: n x n cells per face (midpoint rule)."""
+    ext = np.asarray(extents, dtype=float)
+    c = (np.arange(n) + 0.5) / n - 0.5  # cell centres on [-1/2, 1/2]
+    a, b = np.meshgrid(c, c, indexing="ij")
+    pos, nor, area = [], [], []
+    for axis in range(3):
+        j, k = (axis + 1) % 3, (axis + 2) % 3
+        for sign in (1.0, -1.0):
+            p = np.zeros((n * n, 3))
+            p[:, axis] = sign * ext[axis] / 2
+            p[:, j] = a.ravel() * ext[j]
+            p[:, k] = b.ravel() * ext[k]
+            normal = np.zeros(3)
+            normal[axis] = sign
+            pos.append(p)
+            nor.append(np.tile(normal, (n * n, 1)))
+            area.append(np.full(n * n, ext[j] * ext[k] / n**2))
+    return np.concatenate(pos), np.concatenate(nor), np.concatenate(area)
+
+
+def _mass_from(cfg: BodyConfig, volume: float) -> float:
+    return float(cfg.mass) if cfg.mass is not None else float(cfg.density) * volume
+
+
+def _assemble(r, nrm, area, mass, volume, verts, faces, name) -> Body:
+    """Shift to the centre of mass and rotate to principal axes; compute inertia."""
+    w = area / area.sum()
+    com = w @ r
+    r = r - com
+    verts = verts - com
+    m = mass * w
+    inertia = np.einsum("k,k->", m, np.einsum("ki,ki->k", r, r)) * np.eye(3) - (r * m[:, None]).T @ r
+    off = np.abs(inertia - np.diag(np.diag(inertia))).max()
+    if off <= 1e-12 * np.abs(inertia).max():
+        moments, axes = np.diag(inertia).copy(), np.eye(3)
+    else:
+        moments, axes = np.linalg.eigh(inertia)
+        if np.linalg.det(axes) < 0:
+            axes[:, 2] *= -1
+    from .rotation import matrix_to_quat
+
+    return Body(
+        r_body=np.ascontiguousarray(r @ axes),
+        n_body=np.ascontiguousarray(nrm @ axes),
+        area=area,
+        mass=mass,
+        inertia=moments,
+        volume=float(volume),
+        radius=float(np.sqrt(np.einsum("ki,ki->k", r, r).max())),
+        mesh_vertices=np.ascontiguousarray(verts @ axes),
+        mesh_faces=faces,
+        q_input_body=matrix_to_quat(axes),
+        name=name,
+    )
+
+
+def make_box(extents, points_per_edge: int, mass: float, name: str = "box") -> Body:
+    import trimesh
+
+    r, nrm, area = box_samples(extents, points_per_edge)
+    display = trimesh.creation.box(extents=extents)
+    return _assemble(r, nrm, area, mass, np.prod(extents), display.vertices, display.faces, name)
+
+
+def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh") -> Body:
+    """Samples at triangle centroids after subdividing to at least `samples` triangles."""
+    import trimesh
+
+    if not isinstance(mesh, trimesh.Trimesh):
+        path = Path(mesh)
+        if not path.is_file():
+            raise ConfigError(f"mesh file not found: {mesh}")
+        try:
+            mesh = trimesh.load_mesh(path, process=True)
+        except Exception as e:  # trimesh raises many types for unreadable files
+            raise ConfigError(f"cannot read mesh {mesh}: {e}") from None
+        if not isinstance(mesh, trimesh.Trimesh):
+            raise ConfigError(f"mesh {path} holds no single triangle mesh")
+    if not mesh.is_watertight:
+        raise ConfigError(f"mesh '{name}' is not watertight: a floating body needs a closed surface")
+    if mesh.volume < 0:
+        mesh = mesh.copy()
+        mesh.invert()
+    verts, faces = np.asarray(mesh.vertices, float), np.asarray(mesh.faces)
+    edge = np.sqrt(4 * mesh.area / (np.sqrt(3) * samples))  # equilateral triangles of area A/samples
+    while True:
+        v, f = trimesh.remesh.subdivide_to_size(verts, faces, max_edge=edge)
+        if len(f) >= samples:
+            break
+        edge *= 0.8
+    tri = v[f]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    keep = area > 0
+    normals = cross[keep] / (2 * area[keep, None])
+    volume = float(mesh.volume)
+    total = float(mass) if mass is not None else float(density) * volume
+    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], total, volume, verts, faces, name)
+
+
+def make_body(cfg: BodyConfig, base_dir: str = ".") -> Body:
+    """The body a scene's config describes."""
+    if cfg.shape == "cube":
+        s = float(cfg.size)
+        return make_box((s, s, s), int(cfg.points_per_edge), _mass_from(cfg, s**3), "cube")
+    if cfg.shape == "box":
+        ext = tuple(float(e) for e in cfg.extents)
+        return make_box(ext, int(cfg.points_per_edge), _mass_from(cfg, float(np.prod(ext))), "box")
+    path = Path(cfg.mesh)
+    if not path.is_absolute() and not path.is_file():
+        path = Path(base_dir) / path
+    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem)

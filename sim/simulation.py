@@ -1,0 +1,197 @@
+"""A running simulation: set up from a scene, advanced in steps, observed as Frames; stops loudly on divergence."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .body import Body, make_body
+from .config import SceneConfig
+from .forces import Model, Params, hydrostatic_energy
+from .integrators import make_integrator
+from .rotation import normalized, quat_multiply
+from .state import State, angular_momentum, angular_velocity
+
+CSV_COLUMNS = (
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub".split(",")
+)
+
+
+class SimulationDiverged(RuntimeError):
+    """The state went non-finite or the energy blew up; the message names the time and a likely cause."""
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """A snapshot for viewers, CSV and tests. World frame, SI units."""
+
+    t: float
+    x_world: np.ndarray
+    """(3,) centre of mass, m."""
+    q_world_body: np.ndarray
+    """(4,) orientation (w, x, y, z)."""
+    u_world: np.ndarray
+    """(3,) velocity, m/s."""
+    omega_world: np.ndarray
+    """(3,) angular velocity, rad/s."""
+    L_world: np.ndarray
+    """(3,) angular momentum, kg m^2/s."""
+    force_world: np.ndarray
+    """(3,) total force including gravity, N."""
+    torque_world: np.ndarray
+    """(3,) total torque about the centre of mass, N m."""
+    E_kin: float
+    E_grav: float
+    E_hyd: float
+    submerged_area: float
+    """m^2."""
+    submerged_volume: float
+    """m^3 (from the samples, by the divergence theorem)."""
+    wet_index: np.ndarray
+    """Indices of the submerged samples."""
+
+    @property
+    def E_total(self) -> float:
+        return self.E_kin + self.E_grav + self.E_hyd
+
+    def row(self) -> list[float]:
+        """Values in CSV_COLUMNS order."""
+        return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
+                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume]  # fmt: skip
+
+
+def observe(model: Model, state: State) -> Frame:
+    """All diagnostics of a state, from one set of wet samples."""
+    body, params = model.body, model.params
+    R = state.R_world_body
+    wet = model.wetted(state.x_world, R)
+    omega = angular_velocity(body, R, state.L_world)
+    F, T = model.loads(wet, state.u_world, omega)
+    return Frame(
+        t=state.t,
+        x_world=state.x_world,
+        q_world_body=state.q_world_body,
+        u_world=state.u_world,
+        omega_world=omega,
+        L_world=state.L_world,
+        force_world=F,
+        torque_world=T,
+        E_kin=0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world),
+        E_grav=body.mass * params.g * float(state.x_world[2]),
+        E_hyd=hydrostatic_energy(params, wet) if model.has_pressure else 0.0,
+        submerged_area=wet.submerged_area,
+        submerged_volume=wet.submerged_volume,
+        wet_index=wet.index,
+    )
+
+
+def initial_state(body: Body, scene: SceneConfig) -> State:
+    init = scene.initial
+    q = normalized(quat_multiply(np.asarray(init.orientation, float), body.q_input_body))
+    R = State(0.0, np.zeros(3), q, np.zeros(3), np.zeros(3)).R_world_body
+    L = angular_momentum(body, R, np.asarray(init.omega, float))
+    return State(0.0, np.asarray(init.position, float), q, np.asarray(init.velocity, float), L)
+
+
+def with_mass(body: Body, mass: float) -> Body:
+    """The same geometry with another total mass (inertia scales with it)."""
+    return dataclasses.replace(body, mass=float(mass), inertia=body.inertia * (mass / body.mass))
+
+
+class Simulation:
+    """Owns body, params, integrator and state. Not thread-safe: one thread drives it."""
+
+    def __init__(self, scene: SceneConfig, body: Body | None = None):
+        self.scene = scene
+        body = body or make_body(scene.body, scene.base_dir)
+        fluid = scene.fluid
+        self.model = Model(body, Params(fluid.rho, fluid.g, fluid.damping))
+        self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
+        self.dt = float(scene.step.dt)
+        self.state = initial_state(body, scene)
+        self._rebase_energy()
+
+    @property
+    def body(self) -> Body:
+        return self.model.body
+
+    @property
+    def params(self) -> Params:
+        return self.model.params
+
+    def frame(self) -> Frame:
+        return observe(self.model, self.state)
+
+    def step(self, n: int = 1) -> State:
+        """Advance n steps; raise SimulationDiverged (state left at the last good step) on blow-up."""
+        model, integrator, dt = self.model, self.integrator, self.dt
+        state = self.state
+        for _ in range(n):
+            new = integrator.step(model, state, dt)
+            if not new.is_finite():
+                self.state = state
+                raise SimulationDiverged(self._diagnose(state, "the state became non-finite"))
+            state = new
+        self.state = state
+        energy = self.frame().E_total
+        if energy - self._E_ref > 10.0 * self._E_scale:
+            raise SimulationDiverged(self._diagnose(state, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
+        return state
+
+    def _rebase_energy(self) -> None:
+        """Energy reference for blow-up detection: a rise of 10x the body's energy scale
+        (its weight and displaced water lifted by its own size, plus its kinetic energy) is no drift."""
+        frame = self.frame()
+        body, p = self.body, self.params
+        self._E_ref = frame.E_total
+        self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
+
+    def stability_numbers(self) -> dict[str, float]:
+        """The explicit schemes' stability numbers from PHYSICS.md, for the current body and dt:
+        dt * omega_heave (with water-plane area ~ V^(2/3)) and dt * d * A / M (whole surface wet)."""
+        body, p = self.body, self.params
+        omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
+        return {"heave": self.dt * omega, "damping": self.dt * p.damping * float(body.area.sum()) / body.mass}
+
+    def _diagnose(self, state: State, what: str) -> str:
+        numbers = self.stability_numbers()
+        name = self.integrator.name
+        if numbers["damping"] > 1.0 and name not in ("implicit", "radau"):
+            cause = (f"dt = {self.dt:g} s is too large for this damping with '{name}' (dt*d*A/M = {numbers['damping']:.3g}, "
+                     "explicit limit about 2): use --integrator implicit or a smaller --dt")  # fmt: skip
+        elif numbers["heave"] > 0.5:
+            cause = f"dt = {self.dt:g} s is too large for this body's heave oscillation (dt*omega = {numbers['heave']:.3g}): use a smaller --dt"
+        else:
+            cause = "try a smaller --dt or another --integrator"
+        return f"simulation diverged at t = {state.t:.6g} s: {what}; likely cause: {cause}"
+
+    # Changes between steps (the viewer's commands). Each replaces the model, never patches arrays.
+
+    def set_params(self, **changes) -> None:
+        """Replace rho, g or damping; velocities are kept."""
+        self.model = Model(self.body, dataclasses.replace(self.params, **changes))
+        self._rebase_energy()
+
+    def set_density(self, density: float) -> None:
+        """New mass = density x volume, same geometry; keeps u and omega (so L scales with I)."""
+        R = self.state.R_world_body
+        omega = angular_velocity(self.body, R, self.state.L_world)
+        body = with_mass(self.body, density * self.body.volume)
+        self.model = Model(body, self.params)
+        self.state = dataclasses.replace(self.state, L_world=angular_momentum(body, R, omega))
+        self._rebase_energy()
+
+    def set_dt(self, dt: float) -> None:
+        self.dt = float(dt)
+
+    def set_integrator(self, name: str) -> None:
+        s = self.scene.step
+        self.integrator = make_integrator(name, s.rtol, s.atol)
+
+    def reset(self, state: State | None = None) -> None:
+        """Back to the scene's initial pose and velocities, keeping the current parameters."""
+        self.state = state or initial_state(self.body, self.scene)
+        self._rebase_energy()

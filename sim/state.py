@@ -1,0 +1,49 @@
+"""The evolving state of a rigid body: time, pose and momenta."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .body import Body
+from .rotation import quat_to_matrix
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    t: float
+    """Simulated time, s."""
+    x_world: np.ndarray
+    """(3,) centre-of-mass position, world frame, m."""
+    q_world_body: np.ndarray
+    """(4,) unit quaternion (w, x, y, z) rotating body-frame vectors into the world frame."""
+    u_world: np.ndarray
+    """(3,) centre-of-mass velocity, world frame, m/s."""
+    L_world: np.ndarray
+    """(3,) angular momentum about the centre of mass, world frame, kg m^2/s."""
+
+    @property
+    def R_world_body(self) -> np.ndarray:
+        return quat_to_matrix(self.q_world_body)
+
+    def is_finite(self) -> bool:
+        return bool(np.isfinite(self.x_world).all() and np.isfinite(self.q_world_body).all() and np.isfinite(self.u_world).all() and np.isfinite(self.L_world).all())
+
+    def as_vector(self) -> np.ndarray:
+        """(13,) x, q, u, L stacked (for solve_ivp)."""
+        return np.concatenate([self.x_world, self.q_world_body, self.u_world, self.L_world])
+
+    @staticmethod
+    def from_vector(t: float, y: np.ndarray) -> "State":
+        return State(t, y[0:3].copy(), y[3:7] / np.linalg.norm(y[3:7]), y[7:10].copy(), y[10:13].copy())
+
+
+def angular_velocity(body: Body, R: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """omega = R I^-1 R^T L, world frame, rad/s."""
+    return R @ ((R.T @ L) / body.inertia)
+
+
+def angular_momentum(body: Body, R: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """L = R I R^T omega, world frame."""
+    return R @ (body.inertia * (R.T @ omega))

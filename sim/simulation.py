@@ -130,10 +130,15 @@ class Simulation:
         model, integrator, dt = self.model, self.integrator, self.dt
         state = self.state
         for _ in range(n):
-            new = integrator.step(model, state, dt)
-            if not new.is_finite():
+            try:
+                new = integrator.step(model, state, dt)
+            except FloatingPointError as e:  # where np.seterr makes overflow raise, as in the tests
+                new, why = None, f"floating-point error ({e})"
+            else:
+                why = "the state became non-finite"
+            if new is None or not new.is_finite():
                 self.state = state
-                raise SimulationDiverged(self._diagnose(state, "the state became non-finite"))
+                raise SimulationDiverged(self._diagnose(state, why))
             state = new
         self.state = state
         energy = self.frame().E_total

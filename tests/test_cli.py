@@ -1,0 +1,107 @@
+"""The headless command line: CSV contract, overrides, clear one-line errors, divergence handling."""
+
+import csv
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from sim.cli import main
+
+HEADER = "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total".split(",")
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def test_run_writes_the_promised_columns_and_rows(tmp_path, capsys):
+    out = tmp_path / "rest.csv"
+    assert main(["run", "--scene", "rest", "--t-end", "1", "--dt", "0.01", "--every", "5", "--out", str(out)]) == 0
+    header, data = read_csv(out)
+    assert header[: len(HEADER)] == HEADER
+    assert data.shape == (21, len(header))  # t = 0 and every 5 of 100 steps
+    np.testing.assert_allclose(data[:, 0], np.linspace(0, 1, 21), atol=1e-12)
+    np.testing.assert_allclose(data[:, header.index("z")], -0.4, atol=1e-9)
+    np.testing.assert_allclose(data[:, header.index("E_total")], data[:, header.index("E_kin")] + data[:, header.index("E_grav")] + data[:, header.index("E_hyd")], rtol=1e-12)
+    summary = capsys.readouterr().out
+    assert "z = -0.400000 m" in summary and "100 steps" in summary
+
+
+def test_flags_override_the_scene(tmp_path):
+    out = tmp_path / "o.csv"
+    args = ["run", "--scene", "drop", "--density", "500", "--damping", "20", "--dt", "0.002", "--t-end", "0.01", "--integrator", "rk4",
+            "--points-per-edge", "4", "--z0", "1.5", "--q0", "0", "1", "0", "0", "--u0", "0.1", "0.2", "0.3", "--omega0", "1", "2", "3",
+            "--every", "1", "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    header, data = read_csv(out)
+    first = dict(zip(header, data[0]))
+    assert (first["z"], first["qw"], first["qx"]) == (1.5, 0.0, 1.0)
+    assert (first["ux"], first["uy"], first["uz"]) == (0.1, 0.2, 0.3)
+    np.testing.assert_allclose([first["wx"], first["wy"], first["wz"]], [1, 2, 3], rtol=1e-14)
+    mass = 500.0  # 1 m^3 cube
+    assert first["Fz"] == pytest.approx(-mass * 9.81)  # above water: gravity alone
+    inertia = 5 / 18 * mass * (1 - 2 / (5 * 4**2))  # the samples' exact inertia for N = 4 (see test_body)
+    np.testing.assert_allclose([first["Lx"], first["Ly"], first["Lz"]], inertia * np.array([1, 2, 3]), rtol=1e-11)  # CSV keeps 12 digits
+    assert data.shape[0] == 6
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--scene", "nope"], "unknown scene 'nope'"),
+        (["--scene", "missing.toml"], "scene file not found"),
+        (["--integrator", "leapfrog"], "unknown integrator 'leapfrog'"),
+        (["--density", "-900"], "density must be > 0"),
+        (["--density", "nan"], "density must be finite"),
+        (["--damping", "-1"], "damping must be >= 0"),
+        (["--dt", "0"], "dt must be > 0"),
+        (["--dt", "-0.1"], "dt must be > 0"),
+        (["--dt", "inf"], "dt must be finite"),
+        (["--t-end", "nan"], "t_end must be finite"),
+        (["--points-per-edge", "0"], "points per edge must be >= 1"),
+        (["--q0", "1", "1", "0", "0"], "unit quaternion"),
+        (["--every", "0"], "--every must be >= 1"),
+    ],
+)
+def test_user_mistakes_get_one_clear_line(flags, message, capsys):
+    assert main(["run", *flags]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
+
+
+def test_missing_mesh_file_gets_one_clear_line(tmp_path, capsys):
+    scene = tmp_path / "m.toml"
+    scene.write_text('[body]\nshape = "mesh"\nmesh = "no-such.stl"\n')
+    assert main(["run", "--scene", str(scene)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mesh file not found" in err
+
+
+def test_unknown_key_in_a_scene_file_is_named(tmp_path, capsys):
+    scene = tmp_path / "typo.toml"
+    scene.write_text("[fluid]\ndamp = 3\n")
+    assert main(["run", "--scene", str(scene)]) == 2
+    assert "unknown key 'damp'" in capsys.readouterr().err
+
+
+def test_divergence_stops_with_the_time_and_cause_and_keeps_rows(tmp_path, capsys):
+    out = tmp_path / "boom.csv"
+    code = main(["run", "--scene", "damped", "--damping", "1e6", "--integrator", "euler", "--dt", "0.01", "--t-end", "5", "--every", "1", "--out", str(out)])
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "diverged at t =" in err and "--integrator implicit" in err
+    header, data = read_csv(out)
+    assert len(data) >= 1 and np.isfinite(data).all()  # never NaN rows
+    assert data[-1, 0] < 5.0
+
+
+def test_python_dash_m_sim_and_console_script_exit_codes():
+    ok = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "rest", "--t-end", "0.05"], capture_output=True, text=True)
+    assert ok.returncode == 0 and "z = -0.400000 m" in ok.stdout
+    assert ok.stderr == ""  # no progress bar when not on a terminal
+    bad = subprocess.run([sys.executable, "-m", "app.cli", "run", "--density", "-1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.strip() == "floatsim: error: density must be > 0, got -1.0"

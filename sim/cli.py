@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time
 from dataclasses import dataclass
@@ -12,7 +11,9 @@ from typing import Annotated
 import numpy as np
 import tyro
 
+from .compare import CompareArgs, compare
 from .config import ConfigError, load_scene, with_overrides
+from .progress import progress_bar
 from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 
 
@@ -69,12 +70,6 @@ def scene_from_args(args: RunArgs):
     )
 
 
-def show_progress(flag: bool | None) -> bool:
-    if flag is not None:
-        return flag
-    return sys.stderr.isatty() and not os.environ.get("CI")
-
-
 def run(args: RunArgs) -> int:
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
@@ -82,9 +77,7 @@ def run(args: RunArgs) -> int:
     sim = Simulation(scene)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
     out = open(args.out, "w") if args.out else None
-    from tqdm import tqdm
-
-    bar = tqdm(total=n_steps, unit="step", disable=not show_progress(args.progress), file=sys.stderr, smoothing=0.1)
+    bar = progress_bar(n_steps, flag=args.progress)
     first = sim.frame()
     rows = 0
 
@@ -97,23 +90,16 @@ def run(args: RunArgs) -> int:
     if out:
         out.write(",".join(CSV_COLUMNS) + "\n")
     write(first)
-    status, started = 0, time.perf_counter()
-    try:
-        done = 0
-        while done < n_steps:
-            k = min(args.every, n_steps - done)
-            sim.step(k)
-            done += k
-            bar.update(k)
-            if done % args.every == 0 or done == n_steps:
-                write(sim.frame())
-    except SimulationDiverged as e:
-        print(f"floatsim: {e} (kept {rows} rows)", file=sys.stderr)
-        status = 3
+    started = time.perf_counter()
+    try:  # numpy's overflow warnings would only repeat what the divergence message says better
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            error = _advance(sim, n_steps, args.every, bar, write)
     finally:
         bar.close()
         if out:
             out.close()
+    if error:
+        print(f"floatsim: {error} (kept {rows} rows)", file=sys.stderr)
     wall = time.perf_counter() - started
     last = sim.frame()
     steps = round(last.t / sim.dt)
@@ -126,10 +112,25 @@ def run(args: RunArgs) -> int:
     rate = steps / wall if wall > 0 else math.inf
     print(f"{steps} steps in {wall:.3g} s wall ({rate:.0f} steps/s, {last.t / wall if wall > 0 else math.inf:.3g}x real time)"
           + (f"; {rows} rows -> {args.out}" if out else ""))  # fmt: skip
-    return status
+    return 3 if error else 0
 
 
-COMMANDS = {"run": (RunArgs, run)}
+def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | None:
+    """Step to n_steps, writing a frame every `every` steps; the divergence message if the run blows up."""
+    done = 0
+    try:
+        while done < n_steps:
+            k = min(every, n_steps - done)
+            sim.step(k)
+            done += k
+            bar.update(k)
+            write(sim.frame())
+    except SimulationDiverged as e:
+        return str(e)
+    return None
+
+
+COMMANDS = {"run": (RunArgs, run), "compare": (CompareArgs, compare)}
 
 
 def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:

@@ -59,7 +59,7 @@ class InitialConfig:
 
 @dataclass(frozen=True)
 class StepConfig:
-    integrator: str = "splitting"
+    integrator: str = "implicit"
     """Integrator name (see `sim.integrators.INTEGRATORS`)."""
     dt: float = 0.005
     """Time step, s (the output interval for the adaptive solve_ivp methods)."""

@@ -126,9 +126,9 @@ class Simulation:
         return observe(self.model, self.state)
 
     def step(self, n: int = 1) -> State:
-        """Advance n steps; raise SimulationDiverged (state left at the last good step) on blow-up."""
+        """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
         model, integrator, dt = self.model, self.integrator, self.dt
-        state = self.state
+        state = checked = self.state
         for _ in range(n):
             try:
                 new = integrator.step(model, state, dt)
@@ -138,12 +138,13 @@ class Simulation:
                 why = "the state became non-finite"
             if new is None or not new.is_finite():
                 self.state = state
-                raise SimulationDiverged(self._diagnose(state, why))
+                raise SimulationDiverged(self._diagnose(state.t + dt, why))
             state = new
         self.state = state
         energy = self.frame().E_total
         if energy - self._E_ref > 10.0 * self._E_scale:
-            raise SimulationDiverged(self._diagnose(state, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
+            self.state = checked  # the last state that passed this check
+            raise SimulationDiverged(self._diagnose(state.t, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
         return state
 
     def _rebase_energy(self) -> None:
@@ -161,7 +162,7 @@ class Simulation:
         omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
         return {"heave": self.dt * omega, "damping": self.dt * p.damping * float(body.area.sum()) / body.mass}
 
-    def _diagnose(self, state: State, what: str) -> str:
+    def _diagnose(self, t: float, what: str) -> str:
         numbers = self.stability_numbers()
         name = self.integrator.name
         if numbers["damping"] > 1.0 and name not in ("implicit", "radau"):
@@ -171,7 +172,7 @@ class Simulation:
             cause = f"dt = {self.dt:g} s is too large for this body's heave oscillation (dt*omega = {numbers['heave']:.3g}): use a smaller --dt"
         else:
             cause = "try a smaller --dt or another --integrator"
-        return f"simulation diverged at t = {state.t:.6g} s: {what}; likely cause: {cause}"
+        return f"simulation diverged at t = {t:.6g} s: {what}; likely cause: {cause}"
 
     # Changes between steps (the viewer's commands). Each replaces the model, never patches arrays.
 

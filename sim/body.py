@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +46,13 @@ class Body:
     @property
     def n_samples(self) -> int:
         return len(self.area)
+
+    @cached_property
+    def face_normals(self) -> np.ndarray:
+        """(f, 3) outward unit normals of the display mesh's triangles, body frame."""
+        v = self.mesh_vertices[self.mesh_faces]
+        n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
 def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

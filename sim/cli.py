@@ -33,6 +33,8 @@ class RunArgs:
     """Simulated duration, s."""
     integrator: str | None = None
     """euler | splitting | implicit | rk4 | rk45 | dop853 | radau."""
+    forces: str | None = None
+    """points (sum over the samples) | panels (exact integral over the clipped mesh triangles)."""
     points_per_edge: int | None = None
     """Cube/box samples: N x N cells per face."""
     z0: float | None = None
@@ -60,6 +62,7 @@ def scene_from_args(args: RunArgs):
         body__density=args.density,
         body__points_per_edge=args.points_per_edge,
         fluid__damping=args.damping,
+        fluid__forces=args.forces,
         step__dt=args.dt,
         step__t_end=args.t_end,
         step__integrator=args.integrator,

@@ -43,6 +43,9 @@ class FluidConfig:
     """Gravitational acceleration, m/s^2."""
     damping: float = 0.0
     """Viscous damping coefficient d, N s/m^3 (force -d * area * velocity on wet samples)."""
+    forces: str = "points"
+    """'points': water forces summed over the samples (the report's model); 'panels': integrated
+    exactly over the mesh's triangles clipped at the water line."""
 
 
 @dataclass(frozen=True)
@@ -168,6 +171,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     _number(f.rho, "water density rho", nonneg=True)
     _number(f.g, "gravity g", nonneg=True)
     _number(f.damping, "damping", nonneg=True)
+    if f.forces not in ("points", "panels"):
+        raise ConfigError(f"forces must be 'points' or 'panels', got {f.forces!r}")
     _vector(i.position, "initial position", 3)
     q = _vector(i.orientation, "initial orientation q0", 4)
     if abs(math.sqrt(sum(c * c for c in q)) - 1.0) > 1e-6:

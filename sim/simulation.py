@@ -108,7 +108,7 @@ class Simulation:
         self.scene = scene
         body = body or make_body(scene.body, scene.base_dir)
         fluid = scene.fluid
-        self.model = Model(body, Params(fluid.rho, fluid.g, fluid.damping))
+        self.model = Model(body, Params(fluid.rho, fluid.g, fluid.damping, fluid.forces))
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.dt = float(scene.step.dt)
         self.state = initial_state(body, scene)

@@ -1,0 +1,116 @@
+"""Stiff and extreme cases: enormous damping, very light and very heavy bodies, fast spin, big steps,
+bodies at the water line or far above it. Each either stays stable and right, or stops clearly."""
+
+import numpy as np
+import pytest
+from scenes import box_scene
+
+from sim import Simulation, SimulationDiverged, load_scene, with_overrides
+
+
+def trajectory(sim, steps, every=1):
+    z, frames = [], []
+    for _ in range(steps // every):
+        sim.step(every)
+        frames.append(sim.frame())
+    return frames
+
+
+@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("d", [1e4, 1e5, 1e6, 1e7])
+def test_overdamped_cube_creeps_monotonically_to_its_rest_depth(d, forces):
+    """Released with its centre on the water line under huge damping (implicit, dt = 0.01 s): it
+    sinks without ever overshooting z = -0.4, and the energy only falls."""
+    scene = with_overrides(load_scene("drop"), fluid__damping=d, fluid__forces=forces, step__integrator="implicit", step__dt=0.01)
+    sim = Simulation(scene)
+    frames = trajectory(sim, 300)
+    z = np.array([f.x_world[2] for f in frames])
+    energy = np.array([f.E_total for f in frames])
+    assert np.all(np.diff(z) <= 1e-12)  # monotone descent
+    assert z.min() >= -0.4 - 1e-9  # no overshoot
+    assert np.diff(energy).max() <= 1e-9 * abs(energy[0])
+    # the creep is slow when d is large: the heave time constant is d A / (rho g s^2), A ~ 1 + 4 draft
+    assert z[-1] < -1e-4
+
+
+@pytest.mark.parametrize("d", [1e4, 1e7])
+def test_overdamped_cube_stays_exactly_at_rest_depth(d):
+    sim = Simulation(with_overrides(load_scene("rest"), fluid__damping=d, step__integrator="implicit", step__dt=0.01))
+    sim.step(500)
+    assert abs(sim.state.x_world[2] + 0.4) < 1e-9
+    assert np.linalg.norm(sim.state.u_world) < 1e-9
+
+
+def test_very_light_body_jumps_out_of_the_water_and_falls_back():
+    """Density 1 kg/m^3 released 1 m under water: buoyancy 1000x its weight throws it clear of the
+    surface; with damping it then settles floating at a 1 mm draft."""
+    scene = with_overrides(load_scene("drop"), body__density=1.0, fluid__damping=50.0, initial__position=(0.0, 0.0, -1.0),
+                           step__integrator="implicit", step__dt=0.002)  # fmt: skip
+    sim = Simulation(scene)
+    frames = trajectory(sim, 20000, every=50)
+    z = np.array([f.x_world[2] for f in frames])
+    assert z.max() > 0.5 + 0.1  # the whole cube left the water
+    airborne = np.flatnonzero(z > 0.5)
+    assert airborne.size and z[airborne[-1] + 1 :].min() < 0.5  # and came back down
+    assert z[-1] == pytest.approx(0.5 - 0.001, abs=2e-4)
+
+
+def test_very_heavy_body_sinks_at_its_terminal_speed():
+    """Density 10 000 kg/m^3, fully submerged: v_t = (M - rho V) g / (d A), A = 6 s^2."""
+    d = 1000.0
+    scene = with_overrides(load_scene("drop"), body__density=10_000.0, fluid__damping=d, initial__position=(0.0, 0.0, -1.0), step__dt=0.01)
+    sim = Simulation(scene)
+    sim.step(4000)  # 40 s = 24 time constants M / (d A): the transient is below e^-24
+    v_terminal = (10_000.0 - 1000.0) * 9.81 / (d * 6.0)
+    assert sim.state.u_world[2] == pytest.approx(-v_terminal, rel=1e-6)
+    np.testing.assert_allclose(sim.state.u_world[:2], 0.0, atol=1e-9)
+
+
+def test_fast_spin_of_an_elongated_box_keeps_its_invariants():
+    """100 rad/s about the long (stable, least-inertia) axis with a wobble, in free space."""
+    scene = box_scene("splitting", 0.0005, damping=0.0, g=0.0, rho=0.0, z=5.0, omega=(100.0, 2.0, 1.0))
+    scene = with_overrides(scene, body__extents=(2.0, 0.5, 0.25))
+    sim = Simulation(scene)
+    L0, E0 = np.linalg.norm(sim.state.L_world), sim.frame().E_kin
+    for _ in range(20):
+        sim.step(100)
+        assert np.linalg.norm(sim.state.R_world_body.T @ sim.state.L_world) == pytest.approx(L0, rel=1e-12)
+        assert sim.frame().E_kin == pytest.approx(E0, rel=1e-4)
+
+
+@pytest.mark.parametrize("forces", ["points", "panels"])
+def test_big_time_step_stays_stable_with_the_implicit_scheme(forces):
+    scene = with_overrides(load_scene("damped"), fluid__forces=forces, step__dt=0.1)
+    sim = Simulation(scene)
+    sim.step(600)  # 60 s
+    assert sim.state.x_world[2] == pytest.approx(-0.4, abs=5e-3)
+    assert np.linalg.norm(sim.frame().omega_world) < 1e-2
+
+
+@pytest.mark.parametrize("forces", ["points", "panels"])
+def test_body_resting_on_the_water_line_with_nothing_wet(forces):
+    """Bottom face exactly at z = 0: nothing is wet (h = 0), so it falls in and bobs, no 0/0."""
+    sim = Simulation(with_overrides(load_scene("drop"), fluid__forces=forces, initial__position=(0.0, 0.0, 0.5)))
+    frame = sim.frame()
+    assert frame.submerged_volume == 0.0
+    assert frame.force_world[2] == pytest.approx(-sim.body.mass * 9.81)
+    sim.step(400)
+    assert sim.frame().submerged_volume > 0.5
+
+
+def test_body_far_above_the_water_falls_freely():
+    sim = Simulation(with_overrides(load_scene("drop"), initial__position=(0.0, 0.0, 1e6)))
+    assert sim.model.wetted(sim.state.x_world, sim.state.R_world_body).area.size == 0
+    sim.step(100)
+    t = sim.state.t
+    assert sim.state.x_world[2] == pytest.approx(1e6 - 0.5 * 9.81 * t * t, rel=1e-15)
+
+
+@pytest.mark.parametrize("name", ["euler", "splitting", "rk4"])
+def test_explicit_schemes_past_their_limit_stop_clearly(name):
+    scene = with_overrides(load_scene("damped"), fluid__damping=1e5, step__integrator=name, step__dt=0.01)
+    sim = Simulation(scene)
+    with pytest.raises(SimulationDiverged, match=r"diverged at t = [0-9.]+ s: .*too large for this damping"):
+        for _ in range(100):
+            sim.step(10)
+    assert sim.state.is_finite() and sim.frame().E_total < 1e6

@@ -54,6 +54,13 @@ class Body:
         n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
         return n / np.linalg.norm(n, axis=1, keepdims=True)
 
+    @cached_property
+    def packed(self) -> tuple:
+        """The arrays the compiled kernels take: samples (r, n, area) and mesh (vertices, faces, normals)."""
+        c = np.ascontiguousarray
+        return (c(self.r_body), c(self.n_body), c(self.area), c(self.mesh_vertices, dtype=float),
+                c(self.mesh_faces, dtype=np.int64), c(self.face_normals))  # fmt: skip
+
 
 def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cell-centre samples of a box surface: n x n cells per face (midpoint rule)."""

@@ -73,11 +73,22 @@ def scene_from_args(args: RunArgs):
     )
 
 
+def announce_compile(sim: Simulation) -> None:
+    """The compiled kernels build once per machine (then load from the disk cache): say so when slow."""
+    if sim.compiled:
+        from .fast import warm_up
+
+        seconds = warm_up()
+        if seconds > 1.0:
+            print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
+
+
 def run(args: RunArgs) -> int:
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
     scene = scene_from_args(args)
     sim = Simulation(scene)
+    announce_compile(sim)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
     out = open(args.out, "w") if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)

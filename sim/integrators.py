@@ -145,8 +145,9 @@ class Adaptive:
         self._h: float | None = None  # last step size: the next interval starts from it
 
     def step(self, model: Model, s: State, dt: float) -> State:
-        options = {"first_step": min(self._h, dt)} if self._h else {}
-        sol = solve_ivp(lambda t, y: derivative(model, y), (s.t, s.t + dt), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
+        t_end = s.t + dt
+        options = {"first_step": min(self._h, t_end - s.t)} if self._h else {}  # (t + dt) - t may be < dt
+        sol = solve_ivp(lambda t, y: derivative(model, y), (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
         if not sol.success:
             return State(s.t + dt, *(np.full(n, np.nan) for n in (3, 4, 3, 3)))
         if sol.t.size > 1:

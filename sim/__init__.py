@@ -1,6 +1,12 @@
 """floatsim's physics: rigid bodies sampled on their surface, floating in water. No viewer imports."""
 
-from .body import Body, make_body
+import os
+
+# Our matrices are 3x3 and 6x6: BLAS threads only add overhead and fight the viewer for cores.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+from .body import Body, make_body  # noqa: E402
 from .config import ConfigError, SceneConfig, load_scene, with_overrides
 from .forces import Model, Params
 from .integrators import INTEGRATORS, make_integrator

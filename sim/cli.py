@@ -11,10 +11,12 @@ from typing import Annotated
 import numpy as np
 import tyro
 
+from .bench import BenchArgs, bench
 from .compare import CompareArgs, compare
 from .config import ConfigError, load_scene, with_overrides
 from .progress import progress_bar
 from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
+from .sweep import SweepArgs, sweep
 
 
 @dataclass
@@ -144,7 +146,7 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | Non
     return None
 
 
-COMMANDS = {"run": (RunArgs, run), "compare": (CompareArgs, compare)}
+COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench)}
 
 
 def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:

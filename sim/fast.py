@@ -112,45 +112,42 @@ def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr):
     S = np.zeros(3)
     rr = np.zeros((3, 3))
     A = 0.0
-    if kind == 0:  # scalar loop, no allocations: this is the hot loop at large N
-        R00, R01, R02, R10, R11, R12, R20, R21, R22 = R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
-        zn0 = zn1 = zn2 = zt0 = zt1 = zt2 = S0 = S1 = S2 = 0.0
+    if kind == 0:
+        # Sums in the body frame, rotated once at the end: sum za (R n) = R sum za n,
+        # (R r) x (R n) = R (r x n), sum a (R r)(R r)^T = R (sum a r r^T) R^T. Scalar loop, no allocations.
+        R20, R21, R22 = R[2, 0], R[2, 1], R[2, 2]
+        n0 = n1 = n2 = c0 = c1 = c2 = S0 = S1 = S2 = 0.0
         r00 = r01 = r02 = r11 = r12 = r22 = 0.0
         for k in range(r.shape[0]):
             a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
-            lz = R20 * a0 + R21 * a1 + R22 * a2
-            z = x[2] + lz
+            z = x[2] + (R20 * a0 + R21 * a1 + R22 * a2)
             if z < 0.0:
-                lx = R00 * a0 + R01 * a1 + R02 * a2
-                ly = R10 * a0 + R11 * a1 + R12 * a2
                 b0, b1, b2 = nrm[k, 0], nrm[k, 1], nrm[k, 2]
-                nx = R00 * b0 + R01 * b1 + R02 * b2
-                ny = R10 * b0 + R11 * b1 + R12 * b2
-                nz = R20 * b0 + R21 * b1 + R22 * b2
                 ak = area[k]
                 za = z * ak
-                zn0 += za * nx
-                zn1 += za * ny
-                zn2 += za * nz
-                zt0 += za * (ly * nz - lz * ny)
-                zt1 += za * (lz * nx - lx * nz)
-                zt2 += za * (lx * ny - ly * nx)
+                n0 += za * b0
+                n1 += za * b1
+                n2 += za * b2
+                c0 += za * (a1 * b2 - a2 * b1)
+                c1 += za * (a2 * b0 - a0 * b2)
+                c2 += za * (a0 * b1 - a1 * b0)
                 if need_rr:
                     A += ak
-                    S0 += ak * lx
-                    S1 += ak * ly
-                    S2 += ak * lz
-                    r00 += ak * lx * lx
-                    r01 += ak * lx * ly
-                    r02 += ak * lx * lz
-                    r11 += ak * ly * ly
-                    r12 += ak * ly * lz
-                    r22 += ak * lz * lz
-        zn[0], zn[1], zn[2] = zn0, zn1, zn2
-        zt[0], zt[1], zt[2] = zt0, zt1, zt2
-        S[0], S[1], S[2] = S0, S1, S2
-        rr[0, 0], rr[0, 1], rr[0, 2], rr[1, 1], rr[1, 2], rr[2, 2] = r00, r01, r02, r11, r12, r22
-        rr[1, 0], rr[2, 0], rr[2, 1] = r01, r02, r12
+                    S0 += ak * a0
+                    S1 += ak * a1
+                    S2 += ak * a2
+                    r00 += ak * a0 * a0
+                    r01 += ak * a0 * a1
+                    r02 += ak * a0 * a2
+                    r11 += ak * a1 * a1
+                    r12 += ak * a1 * a2
+                    r22 += ak * a2 * a2
+        zn = mv(R, np.array([n0, n1, n2]))
+        zt = mv(R, np.array([c0, c1, c2]))
+        if need_rr:
+            S = mv(R, np.array([S0, S1, S2]))
+            Q = np.array([[r00, r01, r02], [r01, r11, r12], [r02, r12, r22]])
+            rr = R @ Q @ R.T
         return zn, zt, A, S, rr
     nv = verts.shape[0]
     lev = np.empty((nv, 3))
@@ -422,3 +419,14 @@ def warm_up() -> float:
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     advance(y, 1, 0.01, 2, 0, body.packed, body.mass, body.inertia, 1000.0, 9.81, 1.0)
     return time.perf_counter() - start
+
+
+@njit(**JIT)
+def advance_many(Y, n_steps, dt, scheme, kind, geom, masses, inertias, rho, g, ds):
+    """advance() for B bodies of one shape (rows of Y; their own mass, inertia and damping).
+    Returns the new states and each body's steps done (< n_steps where it diverged)."""
+    out = np.empty_like(Y)
+    done = np.empty(Y.shape[0], dtype=np.int64)
+    for b in range(Y.shape[0]):
+        out[b], done[b] = advance(Y[b], n_steps, dt, scheme, kind, geom, masses[b], inertias[b], rho, g, ds[b])
+    return out, done

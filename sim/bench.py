@@ -1,0 +1,113 @@
+"""`floatsim bench`: cost per step of each model, resolution and integrator, compiled vs numpy, in one run."""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import load_scene, with_overrides
+from .progress import progress_bar
+from .simulation import Simulation
+
+
+@dataclass
+class BenchArgs:
+    """Median cost per step on one core, and its ratio to the plain-numpy reference measured in the same run."""
+
+    scene: str = "damped"
+    """Scene whose initial state is stepped (damped: the cube dropped on the water line, spinning, d = 100)."""
+    sizes: tuple[int, ...] = (10, 50, 100)
+    """Points per edge N to time (6 N^2 samples)."""
+    integrators: tuple[str, ...] = ("euler", "splitting", "implicit", "rk4")
+    """Fixed-step integrators to time."""
+    repeats: int = 5
+    """Timed runs per cell; the median is reported."""
+    budget: float = 0.05
+    """Seconds of stepping per timed run (the step count adapts to it)."""
+    ensemble: int = 100
+    """Bodies in the ensemble row (0 to skip)."""
+
+
+def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
+    start = sim.state
+    sim.step(1)
+    t0 = time.perf_counter()
+    sim.step(1)
+    one = max(time.perf_counter() - t0, 1e-7)
+    n = max(1, int(budget / one))
+    costs = []
+    for _ in range(repeats):
+        sim.reset(start)
+        t0 = time.perf_counter()
+        sim.step(n)
+        costs.append((time.perf_counter() - t0) / n)
+    return statistics.median(costs)
+
+
+def machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import numba
+
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}"
+
+
+def bench(args: BenchArgs) -> int:
+    from .ensemble import Ensemble
+    from .fast import warm_up
+
+    compile_s = warm_up()
+    base = load_scene(args.scene)
+    cells = [("points", n, name) for n in args.sizes for name in args.integrators] + [("panels", 0, name) for name in args.integrators]
+    bar = progress_bar(len(cells) + (len(args.integrators) if args.ensemble else 0), unit="cell")
+    rows = []
+    for forces, n, name in cells:
+        scene = with_overrides(base, fluid__forces=forces, step__integrator=name, body__points_per_edge=n or base.body.points_per_edge)
+        fast = Simulation(scene, backend="numba")
+        ref = Simulation(scene, backend="numpy")
+        t_fast = _median_step_seconds(fast, args.repeats, args.budget)
+        t_ref = _median_step_seconds(ref, max(1, args.repeats // 2), args.budget)
+        samples = fast.body.n_samples
+        per = f"{t_fast * 1e9 / samples:.2f}" if forces == "points" else f"{t_fast * 1e9 / len(fast.body.mesh_faces):.0f} / triangle"
+        rows.append((forces, str(samples) if forces == "points" else f"{len(fast.body.mesh_faces)} triangles", name,
+                     f"{t_fast * 1e6:.2f}", per, f"{fast.dt / t_fast:.0f}", f"{t_ref * 1e6:.0f}", f"{t_ref / t_fast:.0f}"))  # fmt: skip
+        bar.update()
+    ens_rows = []
+    if args.ensemble:
+        for name in args.integrators:
+            scenes = [with_overrides(base, step__integrator=name, body__density=float(v)) for v in np.linspace(300, 1500, args.ensemble)]
+            ens = Ensemble(scenes)
+            ens.step(1)
+            costs = []
+            for _ in range(args.repeats):
+                t0 = time.perf_counter()
+                ens.step(100)
+                costs.append(time.perf_counter() - t0)
+            ens_rows.append((name, f"{args.ensemble * 100 / statistics.median(costs):,.0f}"))
+            bar.update()
+    bar.close()
+    print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
+    print(f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs")
+    print()
+    print("| model | samples | integrator | us/step | ns/sample | x real time | numpy us/step | speed-up |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print("| " + " | ".join(r) + " |")
+    if ens_rows:
+        print()
+        print(f"| ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500 | body-steps/s |")
+        print("|---|---|")
+        for name, rate in ens_rows:
+            print(f"| {name} | {rate} |")
+    return 0

@@ -59,7 +59,19 @@ class Body:
         """The arrays the compiled kernels take: samples (r, n, area) and mesh (vertices, faces, normals)."""
         c = np.ascontiguousarray
         return (c(self.r_body), c(self.n_body), c(self.area), c(self.mesh_vertices, dtype=float),
-                c(self.mesh_faces, dtype=np.int64), c(self.face_normals))  # fmt: skip
+                c(self.mesh_faces, dtype=np.int64), c(self.face_normals), self.sample_moments)  # fmt: skip
+
+    @cached_property
+    def sample_moments(self) -> np.ndarray:
+        """(n, 34) per-sample constants whose sums over the wet samples give every water-force
+        integral (z = x_z + R[2].r is linear in r): a; a r; a r r^T (xx xy xz yy yz zz); a n;
+        a n r^T (row-major); a c; a c r^T, with c = r x n. Body frame."""
+        a, r, n = self.area[:, None], self.r_body, self.n_body
+        c = np.cross(r, n)
+        rr = r[:, [0, 0, 0, 1, 1, 2]] * r[:, [0, 1, 2, 1, 2, 2]]
+        n_r = (n[:, :, None] * r[:, None, :]).reshape(-1, 9)
+        c_r = (c[:, :, None] * r[:, None, :]).reshape(-1, 9)
+        return np.ascontiguousarray(np.hstack([a, a * r, a * rr, a * n, a * n_r, a * c, a * c_r]))
 
 
 def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -104,7 +104,7 @@ def _accumulate(P, Z, normal, acc_zn, acc_zt, acc_S, acc_rr, need_rr):
 
 
 @njit(**JIT)
-def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr):
+def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr, moments, flags, acc):
     """Over the wet surface: integral of z nu dA, of (z r) x nu dA, the wet area, integral of r dA
     and of r r^T dA (the last two only if need_rr)."""
     zn = np.zeros(3)
@@ -113,40 +113,29 @@ def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr):
     rr = np.zeros((3, 3))
     A = 0.0
     if kind == 0:
-        # Sums in the body frame, rotated once at the end: sum za (R n) = R sum za n,
-        # (R r) x (R n) = R (r x n), sum a (R r)(R r)^T = R (sum a r r^T) R^T. Scalar loop, no allocations.
+        # Every wet sum is linear in z = x_z + R[2].r, so it is fixed by per-sample constants summed
+        # over the wet set (Body.sample_moments): keep those sums and, each evaluation, only add or
+        # remove the samples that crossed the water line since the last one.
         R20, R21, R22 = R[2, 0], R[2, 1], R[2, 2]
-        n0 = n1 = n2 = c0 = c1 = c2 = S0 = S1 = S2 = 0.0
-        r00 = r01 = r02 = r11 = r12 = r22 = 0.0
         for k in range(r.shape[0]):
-            a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
-            z = x[2] + (R20 * a0 + R21 * a1 + R22 * a2)
-            if z < 0.0:
-                b0, b1, b2 = nrm[k, 0], nrm[k, 1], nrm[k, 2]
-                ak = area[k]
-                za = z * ak
-                n0 += za * b0
-                n1 += za * b1
-                n2 += za * b2
-                c0 += za * (a1 * b2 - a2 * b1)
-                c1 += za * (a2 * b0 - a0 * b2)
-                c2 += za * (a0 * b1 - a1 * b0)
-                if need_rr:
-                    A += ak
-                    S0 += ak * a0
-                    S1 += ak * a1
-                    S2 += ak * a2
-                    r00 += ak * a0 * a0
-                    r01 += ak * a0 * a1
-                    r02 += ak * a0 * a2
-                    r11 += ak * a1 * a1
-                    r12 += ak * a1 * a2
-                    r22 += ak * a2 * a2
-        zn = mv(R, np.array([n0, n1, n2]))
-        zt = mv(R, np.array([c0, c1, c2]))
+            w = x[2] + (R20 * r[k, 0] + R21 * r[k, 1] + R22 * r[k, 2]) < 0.0
+            if w != flags[k]:
+                flags[k] = w
+                sign = 1.0 if w else -1.0
+                for j in range(34):
+                    acc[j] += sign * moments[k, j]
+        x2 = x[2]
+        nb = np.empty(3)
+        cb = np.empty(3)
+        for i in range(3):
+            nb[i] = x2 * acc[10 + i] + acc[13 + 3 * i] * R20 + acc[14 + 3 * i] * R21 + acc[15 + 3 * i] * R22
+            cb[i] = x2 * acc[22 + i] + acc[25 + 3 * i] * R20 + acc[26 + 3 * i] * R21 + acc[27 + 3 * i] * R22
+        zn = mv(R, nb)
+        zt = mv(R, cb)
         if need_rr:
-            S = mv(R, np.array([S0, S1, S2]))
-            Q = np.array([[r00, r01, r02], [r01, r11, r12], [r02, r12, r22]])
+            A = acc[0]
+            S = mv(R, acc[1:4].copy())
+            Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
             rr = R @ Q @ R.T
         return zn, zt, A, S, rr
     nv = verts.shape[0]
@@ -195,9 +184,9 @@ def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr):
 
 
 @njit(**JIT)
-def pose_loads(kind, x, R, geom, mass, rho, g, d):
+def pose_loads(kind, x, R, geom, mass, rho, g, d, flags, acc):
     """Gravity + pressure force and torque at a pose, and the 6x6 damping matrix D (None-like: has_d False)."""
-    r, nrm, area, verts, faces, fnormals = geom
+    r, nrm, area, verts, faces, fnormals, moments = geom
     F = np.zeros(3)
     F[2] = -mass * g
     T = np.zeros(3)
@@ -206,7 +195,7 @@ def pose_loads(kind, x, R, geom, mass, rho, g, d):
     has_d = d != 0.0 and rho != 0.0
     wet = False
     if has_p or has_d:
-        zn, zt, A, S, rr = wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, has_d)
+        zn, zt, A, S, rr = wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, has_d, moments, flags, acc)
         if has_p:
             F += (rho * g) * zn
             T += (rho * g) * zt
@@ -330,11 +319,11 @@ def twist_loads(F, T, D, wet, u, w):
 
 
 @njit(**JIT)
-def derivative(kind, y, geom, mass, inertia, rho, g, d):
+def derivative(kind, y, geom, mass, inertia, rho, g, d, flags, acc):
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
     R = quat_to_matrix(q)
     w = omega_of(R, L, inertia)
-    F, T, D, wet = pose_loads(kind, x, R, geom, mass, rho, g, d)
+    F, T, D, wet = pose_loads(kind, x, R, geom, mass, rho, g, d, flags, acc)
     F, T = twist_loads(F, T, D, wet, u, w)
     out = np.empty(13)
     out[0:3] = u
@@ -357,10 +346,12 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
     """Advance the state vector (x, q, u, L) by up to n_steps; stop before the first non-finite
     state. Returns (state, steps done)."""
     y = y0.copy()
+    flags = np.zeros(geom[0].shape[0], dtype=np.bool_)  # which samples are wet; the sums start afresh
+    acc = np.zeros(34)
     x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
     h = 0.5 * dt
     R = quat_to_matrix(q)
-    F, T, D, wet = pose_loads(kind, x, R, geom, mass, rho, g, d)
+    F, T, D, wet = pose_loads(kind, x, R, geom, mass, rho, g, d, flags, acc)
     K = damping_modes(D, R, mass, inertia)
     lam, V = np.zeros(6), np.eye(6)
     if wet and scheme == 2:
@@ -371,7 +362,7 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
             xn = x + dt * u
             qn = normalized(quat_mul(rotation_quat(dt * w), q))
             Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d, flags, acc)
             Fn, Tn = twist_loads(Fc, Tc, Dn, wetn, u, omega_of(Rn, L, inertia))
             un, Ln = u + dt * Fn / mass, L + dt * Tn
         elif scheme <= 2:  # splitting / implicit: B(h) A(h) C(dt) A(h) B(h), loads carried over
@@ -382,7 +373,7 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d, flags, acc)
             un, Ln = un + h * Fc / mass, Ln + h * Tc
             if wetn:
                 K = damping_modes(Dn, Rn, mass, inertia)
@@ -390,10 +381,10 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
                     lam, V = exact_modes(K, h)
                 un, Ln = damping_flow(K, lam, V, Rn, un, Ln, h, mass, inertia, scheme == 2)
         else:  # rk4 on (x, q, u, L), q renormalised
-            k1 = derivative(kind, y, geom, mass, inertia, rho, g, d)
-            k2 = derivative(kind, y + 0.5 * dt * k1, geom, mass, inertia, rho, g, d)
-            k3 = derivative(kind, y + 0.5 * dt * k2, geom, mass, inertia, rho, g, d)
-            k4 = derivative(kind, y + dt * k3, geom, mass, inertia, rho, g, d)
+            k1 = derivative(kind, y, geom, mass, inertia, rho, g, d, flags, acc)
+            k2 = derivative(kind, y + 0.5 * dt * k1, geom, mass, inertia, rho, g, d, flags, acc)
+            k3 = derivative(kind, y + 0.5 * dt * k2, geom, mass, inertia, rho, g, d, flags, acc)
+            k4 = derivative(kind, y + dt * k3, geom, mass, inertia, rho, g, d, flags, acc)
             yn = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             xn, qn, un, Ln = yn[0:3].copy(), normalized(yn[3:7]), yn[7:10].copy(), yn[10:13].copy()
             Rn = quat_to_matrix(qn)

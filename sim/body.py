@@ -159,12 +159,13 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
         mesh = mesh.copy()
         mesh.invert()
     verts, faces = np.asarray(mesh.vertices, float), np.asarray(mesh.faces)
-    edge = np.sqrt(4 * mesh.area / (np.sqrt(3) * samples))  # equilateral triangles of area A/samples
+    # the longest edge allowed shrinks until there are enough triangles: the first count past the target
+    edge = float(mesh.edges_unique_length.max()) * 1.0001
     while True:
         v, f = trimesh.remesh.subdivide_to_size(verts, faces, max_edge=edge)
         if len(f) >= samples:
             break
-        edge *= 0.8
+        edge *= 0.9
     tri = v[f]
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area = 0.5 * np.linalg.norm(cross, axis=1)

@@ -14,6 +14,7 @@ import tyro
 from .bench import BenchArgs, bench
 from .compare import CompareArgs, compare
 from .config import ConfigError, load_scene, with_overrides
+from .figures import FiguresArgs, figures
 from .progress import progress_bar
 from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from .sweep import SweepArgs, sweep
@@ -146,7 +147,8 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | Non
     return None
 
 
-COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench)}
+COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench),
+            "figures": (FiguresArgs, figures)}  # fmt: skip
 
 
 def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:

@@ -8,6 +8,8 @@ own point grid (`report_grid`), rebuilt for the comparison of figures 1-2; its f
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 import tempfile
@@ -128,14 +130,26 @@ def plan(quick: bool, d_low: float, d_high: float) -> list[Spec]:
     every = max(1, round(0.02 / dt))  # a frame every 0.02 s
     specs = [
         Spec("rest", "rest", (("step__integrator", "implicit"), ("step__dt", dt), span(10.0, 2.0)), every),
-        Spec("rest_spin", "rest", (("step__integrator", "euler"), ("step__dt", dt), span(10.0, 2.0), ("initial__omega", (1e-3, 0.0, 0.0))), every),
+        Spec(
+            "rest_spin",
+            "rest",
+            (("step__integrator", "euler"), ("step__dt", dt), span(10.0, 2.0), ("initial__omega", (1e-3, 0.0, 0.0))),
+            every,
+        ),
         Spec("spin_euler_coarse", "spin", (("step__integrator", "euler"), ("step__dt", 2 * dt), span(30.0, 6.0)), every // 2),
         Spec("spin_euler_fine", "spin", (("step__integrator", "euler"), ("step__dt", dt), span(30.0, 6.0)), every),
         Spec("spin_implicit", "spin", (("step__integrator", "implicit"), ("step__dt", dt), span(30.0, 6.0)), every),
         Spec("spin_free", "spin", (("step__integrator", "euler"), ("step__dt", 2 * dt), span(30.0, 6.0), ("fluid__g", 0.0)), every // 2),
     ]
     for density in DENSITIES:
-        specs.append(Spec(f"drop_{density:g}", "drop", (("body__density", density), ("step__integrator", "implicit"), ("step__dt", dt), span(20.0, 4.0)), every))
+        specs.append(
+            Spec(
+                f"drop_{density:g}",
+                "drop",
+                (("body__density", density), ("step__integrator", "implicit"), ("step__dt", dt), span(20.0, 4.0)),
+                every,
+            )
+        )
     for key, d, omega in (("damped_low", d_low, None), ("damped_high", d_high, None), ("damped_yaw", d_low, YAW_SPIN)):
         changes = (("fluid__damping", d), ("step__integrator", "implicit"), ("step__dt", dt), span(30.0, 8.0))
         specs.append(Spec(key, "damped", changes + ((("initial__omega", omega),) if omega else ()), every))
@@ -332,8 +346,17 @@ GRID_NAMES = {"ours": "floatsim, cell centres", "report": "report, area (s/N)^2"
 # ---- the viewer render ------------------------------------------------------------------------------------
 
 CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-VIEWS = {"side": ((1.7, -2.3, 1.3), (0.0, 0.0, -0.25)), "top": ((0.05, -0.6, 3.2), (0.0, 0.0, -0.3))}
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+VIEWS = {"side": ((1.3, -1.8, 1.0), (0.0, 0.0, -0.3), (0.0, 0.0, 1.0)), "top": ((0.0, 0.0, 2.4), (0.0, 0.0, -0.4), (0.0, 1.0, 0.0))}
+"""Camera position, look-at point and up direction of each render (the top view has +y up, +x right)."""
 
 
 def resting_scene_toml(trace: Trace) -> str:
@@ -341,7 +364,10 @@ def resting_scene_toml(trace: Trace) -> str:
     cfg, state = trace.spec.config(), trace.sim.state
     body = trace.sim.body
     q_input = quat_multiply(state.q_world_body, body.q_input_body * np.array([1.0, -1.0, -1.0, -1.0]))
-    vec = lambda v: "[" + ", ".join(f"{float(c):.17g}" for c in v) + "]"  # noqa: E731
+
+    def vec(v) -> str:
+        return "[" + ", ".join(f"{float(c):.17g}" for c in v) + "]"
+
     return (f'description = "Final pose of figures run {trace.spec.key}, at rest."\n\n[body]\nshape = "cube"\nsize = {cfg.body.size}\n'
             f"points_per_edge = {cfg.body.points_per_edge}\ndensity = {cfg.body.density}\n\n[fluid]\ndamping = {cfg.fluid.damping}\n\n"
             f"[initial]\nposition = {vec(state.x_world)}\norientation = {vec(q_input / np.linalg.norm(q_input))}\n\n[step]\ndt = {cfg.step.dt}\n")  # fmt: skip
@@ -356,7 +382,7 @@ def viewer_render(trace: Trace, paths: dict[str, Path]) -> str | None:
 
         from app.args import ViewArgs
         from app.main import start
-    except Exception as e:  # the viewer is optional here: any import problem means the matplotlib render
+    except Exception as e:  # noqa: BLE001 -- the viewer is optional here: any import problem means the matplotlib render
         return f"the viewer could not be imported ({type(e).__name__}: {e})"
     if not Path(CHROMIUM).is_file():
         return f"{CHROMIUM} is missing"
@@ -365,7 +391,8 @@ def viewer_render(trace: Trace, paths: dict[str, Path]) -> str | None:
         scene.write_text(resting_scene_toml(trace))
         viewer = None
         try:
-            viewer = start(ViewArgs(scene=str(scene), port=0))
+            with contextlib.redirect_stdout(io.StringIO()):  # viser's banner
+                viewer = start(ViewArgs(scene=str(scene), port=0))
             viewer.loop.post("pause", True)
             viewer.sync()
             with sync_playwright() as p:
@@ -383,19 +410,21 @@ def viewer_render(trace: Trace, paths: dict[str, Path]) -> str | None:
                     client = next(iter(viewer.server.get_clients().values()))
                     time.sleep(3.0)  # the environment map fades in
                     for name, path in paths.items():
-                        position, look_at = VIEWS[name]
+                        position, look_at, up = VIEWS[name]
+                        client.camera.up_direction = up
                         client.camera.position = position
                         client.camera.look_at = look_at
-                        time.sleep(1.0)
+                        time.sleep(2.0)  # the browser applies the camera on its next frames
                         image = client.get_render(450, 600, timeout=60.0)
                         Image.fromarray(image).save(path)
                 finally:
                     browser.close()
-        except Exception as e:  # a failed render must not lose the page: fall back to matplotlib
+        except Exception as e:  # noqa: BLE001 -- a failed render must not lose the page: fall back to matplotlib
             return f"the viewer render failed ({type(e).__name__}: {e})"
         finally:
             if viewer is not None:
-                viewer.stop()
+                with contextlib.redirect_stdout(io.StringIO()):  # and its goodbye
+                    viewer.stop()
     return None
 
 
@@ -488,12 +517,12 @@ class Page:
 The source report (`{SOURCE}`, "Simulation of a Cubic Floating Body Suspended in Viscous Fluid") simulates a hollow
 cube sampled by surface points in MATLAB. This page redoes each of its figures with floatsim's corrected model
 (`PHYSICS.md`) and says where and why the results differ. It is generated, numbers included, by
-`python -m sim figures{' --quick' if args.quick else ''}` (module `sim/figures.py`); the settings of every run are given as the
+`python -m sim figures{" --quick" if args.quick else ""}` (module `sim/figures.py`); the settings of every run are given as the
 equivalent `python -m sim run` command.{quick}
 
 Common to all runs: the report's ice cube, side s = {fmt(cube.s)} m, density {fmt(cube.density)} kg/m^3 (mass {fmt(cube.mass)} kg)
 unless stated, water rho = {fmt(cube.rho)} kg/m^3, g = {fmt(cube.g)} m/s^2, sampled by floatsim's default
-{body.n_samples} points (N = {traces['rest'].spec.config().body.points_per_edge} cells per edge on each face).
+{body.n_samples} points (N = {traces["rest"].spec.config().body.points_per_edge} cells per edge on each face).
 """)
 
     def samples(self, cube: Cube) -> None:
@@ -520,16 +549,18 @@ unless stated, water rho = {fmt(cube.rho)} kg/m^3, g = {fmt(cube.g)} m/s^2, samp
         ours = make_box((cube.s,) * 3, n_plot, cube.mass)
         fig = plt.figure(figsize=(11, 5.2))
         for k, (title, pts, normals, dropped) in enumerate((
-            (f"report: {n_plot} points per edge, edges and corners dropped\n{kept.sum()} points, total area "
-             f"{fmt(kept.sum() * (cube.s / n_plot) ** 2)} m² of {fmt(6 * cube.s ** 2)} m²", r[kept], nrm[kept], r[~kept]),
-            (f"floatsim: {n_plot} x {n_plot} cell centres per face\n{ours.n_samples} points, total area "
-             f"{fmt(ours.area.sum())} m² of {fmt(6 * cube.s ** 2)} m²", ours.r_body, ours.n_body, None),
+            ((f"report: {n_plot} points per edge, edges and corners dropped\n{kept.sum()} points, total area "
+              f"{fmt(kept.sum() * (cube.s / n_plot) ** 2)} m² of {fmt(6 * cube.s ** 2)} m²"), r[kept], nrm[kept], r[~kept]),
+            ((f"floatsim: {n_plot} x {n_plot} cell centres per face\n{ours.n_samples} points, total area "
+              f"{fmt(ours.area.sum())} m² of {fmt(6 * cube.s ** 2)} m²"), ours.r_body, ours.n_body, None),
         )):  # fmt: skip
             ax = fig.add_subplot(1, 2, k + 1, projection="3d")
             ax.scatter(*pts.T, s=12, color="tab:blue", depthshade=False, label="samples")
             ax.quiver(*pts.T, *(0.18 * normals).T, color="tab:red", linewidth=0.7, arrow_length_ratio=0.3, label="outward normals")
             if dropped is not None:
-                ax.scatter(*np.unique(dropped, axis=0).T, s=14, marker="x", color="0.55", depthshade=False, label="dropped (edges, corners)")
+                ax.scatter(
+                    *np.unique(dropped, axis=0).T, s=14, marker="x", color="0.55", depthshade=False, label="dropped (edges, corners)"
+                )
             ax.set_title(title, fontsize=10)
             ax.set_box_aspect((1, 1, 1))
             ax.view_init(elev=22, azim=-58)
@@ -546,8 +577,13 @@ unless stated, water rho = {fmt(cube.rho)} kg/m^3, g = {fmt(cube.g)} m/s^2, samp
         c_our = (np.arange(n_plot) + 0.5) / n_plot * cube.s - h
         side = cube.s / n_plot
         for ax, title, centres, keep in (
-            (axes[0], f"report, one face: {(n_plot - 2) ** 2} patches of (s/N)²\ncover {pct(((n_plot - 2) / n_plot) ** 2)} of it", c_rep, True),
-            (axes[1], f"floatsim, one face: {n_plot ** 2} cells of (s/N)²\ncover 100 % of it", c_our, False),
+            (
+                axes[0],
+                f"report, one face: {(n_plot - 2) ** 2} patches of (s/N)²\ncover {pct(((n_plot - 2) / n_plot) ** 2)} of it",
+                c_rep,
+                True,
+            ),
+            (axes[1], f"floatsim, one face: {n_plot**2} cells of (s/N)²\ncover 100 % of it", c_our, False),
         ):
             ax.add_patch(plt.Rectangle((-h, -h), cube.s, cube.s, fill=False, color="k", linewidth=1.5))
             for a in centres:
@@ -591,7 +627,9 @@ unless stated, water rho = {fmt(cube.rho)} kg/m^3, g = {fmt(cube.g)} m/s^2, samp
         for grid in ("report", "rescaled", "ours"):
             for n in table_n:
                 v = rows[n][grid]
-                table.append(f"| {GRID_NAMES[grid]} | {n} | {v['samples']} | {v['area_ratio']:.4f} | {v['buoyancy_ratio']:.4f} | {v['waterplane_ratio']:.4f} | {v['righting_ratio']:.4f} | {v['inertia_ratio']:.4f} |")
+                table.append(
+                    f"| {GRID_NAMES[grid]} | {n} | {v['samples']} | {v['area_ratio']:.4f} | {v['buoyancy_ratio']:.4f} | {v['waterplane_ratio']:.4f} | {v['righting_ratio']:.4f} | {v['inertia_ratio']:.4f} |"
+                )
         rep, res, our = r10["report"], r10["rescaled"], r10["ours"]
         self.add(f"""
 ## Figures 1-2: the point-sampled cube
@@ -618,21 +656,21 @@ the cells tile the face, edges and corners included, so nothing has to be droppe
 
 **Where and why they differ.** Dropping the edge and corner points leaves (N-2)^2 of the N^2 points per face, so
 the report's areas add up to 6 s^2 ((N-2)/N)^2, not 6 s^2: at N = {n_ex} the deficit is {fmt(deficit, 4)} m^2, exactly
-6 s^2 (1 - ((N-2)/N)^2) = {fmt(self.nums['grid_area_deficit_formula_N10'], 4)} m^2 ({pct(1 - rep['area_ratio'])} of the surface).
+6 s^2 (1 - ((N-2)/N)^2) = {fmt(self.nums["grid_area_deficit_formula_N10"], 4)} m^2 ({pct(1 - rep["area_ratio"])} of the surface).
 The bottom face alone carries the buoyancy of a level cube, so the buoyancy falls short by the same fraction: at
-the report's rest pose its grid gives {pct(rep['buoyancy_ratio'])} of rho g V_sub and a net force of {pct(rep['rest_force_rel'])} of the
+the report's rest pose its grid gives {pct(rep["buoyancy_ratio"])} of rho g V_sub and a net force of {pct(rep["rest_force_rel"])} of the
 weight, so the cube would not rest at z = {fmt(cube.z_rest)} m at all. Rescaling the areas to 6 s^2/n, as the
-report's introduction says, restores the level cube's buoyancy ({pct(res['buoyancy_ratio'], 4)}) but not its stability.
+report's introduction says, restores the level cube's buoyancy ({pct(res["buoyancy_ratio"], 4)}) but not its stability.
 The righting moment is rho g V_sub GM with GM = BM - BG, a small difference of two larger terms, and the kept points,
 which stop one spacing s/(N-1) short of every edge, weigh both wrongly: the water-plane moment behind BM comes out
-{pct(res['waterplane_ratio'])} of s^4/12 and the righting moment {pct(res['righting_ratio'])} of exact at N = {n_ex} (the uncorrected grid:
-{pct(rep['righting_ratio'])}). floatsim's cell centres give the buoyancy to round-off ({pct(our['buoyancy_ratio'], 6)}), the water-plane
-moment to the midpoint rule's 1 - 1/N^2 ({pct(our['waterplane_ratio'])}) and a righting moment of {pct(our['righting_ratio'])}. At N = {n_ex} the
+{pct(res["waterplane_ratio"])} of s^4/12 and the righting moment {pct(res["righting_ratio"])} of exact at N = {n_ex} (the uncorrected grid:
+{pct(rep["righting_ratio"])}). floatsim's cell centres give the buoyancy to round-off ({pct(our["buoyancy_ratio"], 6)}), the water-plane
+moment to the midpoint rule's 1 - 1/N^2 ({pct(our["waterplane_ratio"])}) and a righting moment of {pct(our["righting_ratio"])}. At N = {n_ex} the
 water line falls on a cell boundary; for other N it cuts a row of samples, which either count as wet or not, so the
-righting moment converges unevenly (figure 2, right): for N from 20 to 40 its error is at most {pct(worst['ours'])} for floatsim,
-{pct(worst['report'])} and {pct(worst['rescaled'])} for the report's grid with its two area rules. The inertia is isotropic for every grid,
-as the report says, but only floatsim's tends to (5/18) M s^2 ({fmt(our['inertia_ratio'], 4)} of it at N = {n_ex}, against
-{fmt(rep['inertia_ratio'], 4)} for the report's grid, whose points crowd towards the face centres).
+righting moment converges unevenly (figure 2, right): for N from 20 to 40 its error is at most {pct(worst["ours"])} for floatsim,
+{pct(worst["report"])} and {pct(worst["rescaled"])} for the report's grid with its two area rules. The inertia is isotropic for every grid,
+as the report says, but only floatsim's tends to (5/18) M s^2 ({fmt(our["inertia_ratio"], 4)} of it at N = {n_ex}, against
+{fmt(rep["inertia_ratio"], 4)} for the report's grid, whose points crowd towards the face centres).
 """)
 
     def rest(self, cube: Cube, traces: dict[str, Trace]) -> None:
@@ -670,16 +708,16 @@ as the report says, but only floatsim's tends to (5/18) M s^2 ({fmt(our['inertia
 ## Figure 3: the cube placed at its resting depth
 
 **Settings.** Left: {ours.spec.command()}. Right, the report's workaround: {spun.spec.command()}
-(an angular velocity of {fmt(n['spin_omega'])} rad/s about x; the report does not give its value).
+(an angular velocity of {fmt(n["spin_omega"])} rad/s about x; the report does not give its value).
 
 **The report.** Placed face up at z = -0.4 m (draft 0.9 m for density 900), the centre of mass shows "small
 oscillations" about -0.4, caused by "a very small initial velocity [that] must be added to avoid division by zero
 when calculating the rotation R".
 
-**floatsim.** Released with no velocity at all, the cube stays put: |z + 0.4| stays below {fmt(n['max_dz'])} m, |u| below
-{fmt(n['max_u'])} m/s, |F| below {fmt(n['max_F_rel'])} of the weight and |torque| below {fmt(n['max_T'])} N m over {fmt(ours.t[-1])} s (left, on a
-±10^-12 m scale). With the report's artificial spin (right) the cube rocks by up to {fmt(n['spin_max_tilt_deg'])}° and its centre
-moves between {fmt(n['spin_dz_min'])} and {fmt(n['spin_dz_max'])} m about -0.4.
+**floatsim.** Released with no velocity at all, the cube stays put: |z + 0.4| stays below {fmt(n["max_dz"])} m, |u| below
+{fmt(n["max_u"])} m/s, |F| below {fmt(n["max_F_rel"])} of the weight and |torque| below {fmt(n["max_T"])} N m over {fmt(ours.t[-1])} s (left, on a
+±10^-12 m scale). With the report's artificial spin (right) the cube rocks by up to {fmt(n["spin_max_tilt_deg"])}° and its centre
+moves between {fmt(n["spin_dz_min"])} and {fmt(n["spin_dz_max"])} m about -0.4.
 
 {image}
 
@@ -710,6 +748,9 @@ small |Omega| dt (`sim.rotation.rotation_quat`), so w = 0 is an ordinary case an
         integral = np.vstack([np.zeros(3), np.cumsum(0.5 * (ref.T[1:] + ref.T[:-1]) * dt_rec, axis=0)])
         n["torque_integral_rel"] = float(np.linalg.norm(ref.L - ref.L[0] - integral, axis=1).max() / L0)
         n["max_torque"] = float(ref.norm("T").max())
+        body, omega0 = ref.sim.body, np.asarray(ref.spec.config().initial.omega, float)
+        n["righting_per_rad"] = Cube().mass * ref.sim.params.g * Cube().GM  # M g GM, N m per radian of tilt
+        n["I_omega2"] = float(body.inertia[0] * (omega0 @ omega0))
         self.nums["spin"] = n
         fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.2))
         ax = axes[0]
@@ -742,22 +783,22 @@ small |Omega| dt (`sim.rotation.rotation_quat`), so w = 0 is an ordinary case an
 respect to time"; |L| "increases about halfway through, but only by a tiny amount", and less with a smaller time step.
 
 **floatsim.** |L| starts at I |Omega| = {fmt(L0, 4)} kg m^2/s and is not constant: with the implicit scheme it ranges over
-{fmt(ref.norm('L').min(), 4)}-{fmt(ref.norm('L').max(), 4)} kg m^2/s ({pct((ref.norm('L').max() - ref.norm('L').min()) / L0)} of |L(0)|) over {fmt(ref.t[-1])} s. The report's
-scheme (euler) follows the same curve; its largest distance from the implicit one is {fmt(coarse['max_dev_from_implicit'])} kg m^2/s at
-dt = {fmt(coarse['dt'])} s and {fmt(fine['max_dev_from_implicit'])} kg m^2/s at dt = {fmt(fine['dt'])} s, a ratio of {fmt(n['euler_dev_ratio'])} for halving dt:
+{fmt(ref.norm("L").min(), 4)}-{fmt(ref.norm("L").max(), 4)} kg m^2/s ({pct((ref.norm("L").max() - ref.norm("L").min()) / L0)} of |L(0)|) over {fmt(ref.t[-1])} s. The report's
+scheme (euler) follows the same curve; its largest distance from the implicit one is {fmt(coarse["max_dev_from_implicit"])} kg m^2/s at
+dt = {fmt(coarse["dt"])} s and {fmt(fine["max_dev_from_implicit"])} kg m^2/s at dt = {fmt(fine["dt"])} s, a ratio of {fmt(n["euler_dev_ratio"])} for halving dt:
 first order, as the scheme is. The change of L is the torque's doing: L(t) - L(0) equals the time integral of the
-recorded torque (peak {fmt(n['max_torque'], 4)} N m) to {fmt(n['torque_integral_rel'])} of |L(0)|. Without gravity (so without buoyancy
-or torque) |L| keeps its value {'exactly' if n['free_rel_dev'] == 0 else f"to {fmt(n['free_rel_dev'])} relative"}.
+recorded torque (peak {fmt(n["max_torque"], 4)} N m) to {fmt(n["torque_integral_rel"])} of |L(0)|. Without gravity (so without buoyancy
+or torque) |L| keeps its value {"exactly" if n["free_rel_dev"] == 0 else f"to {fmt(n['free_rel_dev'])} relative"}.
 
 {image}
 
 **Where and why they differ.** |L| is conserved only without torque, and a spinning cube half in water is not
 torque-free: as it rolls the submerged shape changes, the centre of buoyancy leaves the vertical through the
 centre of mass and the hydrostatic pressure exerts a real torque that changes L, in direction and in size. The
-report's expectation of constant |L| is the torque-free case (our control), and the change it saw is physics, not
-error; what does shrink with dt is only the scheme's first-order error on top of it. (Why the report's change was
-"tiny" cannot be told from the text: with any correct buoyancy the torque here is of order M g GM, comparable to
-I |Omega|^2.)
+report's expectation of constant |L| is the torque-free case (our control); with water, a change of |L| is physics,
+not error, and what shrinks with dt is only the scheme's first-order error on top of it. (Why the report's change was
+"tiny" cannot be told from the text: with a correct buoyancy the righting torque per radian of tilt, M g GM =
+{fmt(n["righting_per_rad"])} N m, is comparable to I |Omega|^2 = {fmt(n["I_omega2"])} N m, so changes of order 10 % are to be expected.)
 """)
 
     def force_at_rest(self, traces: dict[str, Trace]) -> None:
@@ -788,14 +829,14 @@ I |Omega|^2.)
 **The report.** At the resting pose gravity should balance buoyancy and the horizontal pressure forces cancel;
 its figure 6 shows "very tiny changes in ||F_total||".
 
-**floatsim.** |F_total| stays below {fmt(n['max_F'])} N, {fmt(n['max_F_rel'])} of the weight ({fmt(n['weight'], 5)} N), for the whole run: round-off.
+**floatsim.** |F_total| stays below {fmt(n["max_F"])} N, {fmt(n["max_F_rel"])} of the weight ({fmt(n["weight"], 5)} N), for the whole run: round-off.
 
 {image}
 
 **Where and why they differ.** Both see a balance, but for the report it depends on which of its two area rules
 the code used. With the areas of its section 1.1 the same pose is far from equilibrium: the net force is
-{pct(n['report_grid_F_rel'])} of the weight at N = 10 (dashed line; figures 1-2). With the introduction's rescaled areas the level
-cube balances ({fmt(n['rescaled_grid_F_rel'])} of the weight), so that is presumably what ran. floatsim's cell-centred grid
+{pct(n["report_grid_F_rel"])} of the weight at N = 10 (dashed line; figures 1-2). With the introduction's rescaled areas the level
+cube balances ({fmt(n["rescaled_grid_F_rel"])} of the weight), so that is presumably what ran. floatsim's cell-centred grid
 balances by construction at any N, and stays balanced because nothing moves.
 """)
 
@@ -809,7 +850,13 @@ balances by construction at any N, and stays balanced because nothing moves.
             density = tr.sim.body.mass / tr.sim.body.volume
             c = Cube(cube.s, density, cube.rho, cube.g)
             th = np.degrees(tilts(tr))
-            row = {"density": density, "z_min": float(tr.z.min()), "z_max": float(tr.z.max()), "z_end": float(tr.z[-1]), "max_tilt_deg": float(th.max())}
+            row = {
+                "density": density,
+                "z_min": float(tr.z.min()),
+                "z_max": float(tr.z.max()),
+                "z_end": float(tr.z[-1]),
+                "max_tilt_deg": float(th.max()),
+            }
             if density < cube.rho:
                 row["z_eq"] = c.z_rest
                 row["GM"] = c.GM
@@ -853,7 +900,8 @@ balances by construction at any N, and stays balanced because nothing moves.
                 n["unstable"]["rate_measured"] = rate
                 growth = (f" The {density:g} kg/m^3 cube is released exactly at its equilibrium and face up, which is unstable for it: "
                           f"a round-off tilt grows as exp({fmt(rate, 3)} t) (fit over tilts 10^-9 to 10^-3 rad), against sqrt(M g |GM| / I) = "
-                          f"{fmt(rate_pred, 3)} /s with the sampled GM = {fmt(gm_sampled, 3)} m, until the cube rolls over (right).")  # fmt: skip
+                          f"{fmt(rate_pred, 3)} /s with the sampled GM = {fmt(gm_sampled, 3)} m, until it is no longer small ({fmt(math.degrees(th.max()))}° by t = {fmt(tr.t[-1])} s, right). Its centre stays at z = 0 all the while: "
+                          "any plane through a cube's centre halves its volume.")  # fmt: skip
             else:
                 growth = (f" The {density:g} kg/m^3 cube is released exactly at its equilibrium and face up, which is unstable for it "
                           f"(sampled GM = {fmt(gm_sampled, 3)} m); a round-off tilt grows at sqrt(M g |GM| / I) = {fmt(rate_pred, 3)} /s, "
@@ -935,9 +983,14 @@ for density below {fmt(lo, 3)} or above {fmt(hi, 3)} kg/m^3 (GM = s^2/(12 D) + D
 
         # Figure 7: the resting pose, from the viewer if it can be driven, else matplotlib.
         paths = {name: self.assets / f"fig7_resting_pose_{name}.png" for name in VIEWS}
-        why = "the quick setting skips the browser" if args.quick else ("--no-viewer was given" if not args.viewer else viewer_render(yawed, paths))
+        why = (
+            "the quick setting skips the browser"
+            if args.quick
+            else ("--no-viewer was given" if not args.viewer else viewer_render(yawed, paths))
+        )
         if why is None:
-            source = "the live viewer (`app/`, viser in headless chromium, `client.get_render`), paused at the run's final pose"
+            source = ("the live viewer (`app/`, viser in headless chromium, `client.get_render`), paused at the run's final pose "
+                      "(samples blue under water, orange above; the top view has +x to the right, +y up, and the water grid's lines along x and y)")  # fmt: skip
             images = [self.image(p.name, f"Figure 7: resting pose in the viewer, {name} view") for name, p in paths.items()]
         else:
             source = f"matplotlib (the viewer render was not used: {why})"
@@ -950,10 +1003,10 @@ for density below {fmt(lo, 3)} or above {fmt(hi, 3)} kg/m^3 (GM = s^2/(12 D) + D
             label = f"d = {tr.sim.params.damping:g} N s/m³" + (f", ω0 = {YAW_SPIN}" if tr is yawed else "")
             axes[0].semilogy(tr.t, np.maximum(tr.norm("L"), 1e-14), style, color=colour, lw=0.9, label=label)
             axes[1].semilogy(tr.t, np.maximum(tr.norm("F"), 1e-14), style, color=colour, lw=0.9, label=label)
-        for ax, what in zip(axes, ("|L| (kg m²/s)", "|F_total| (N)")):
+        for ax, what, name in zip(axes, ("|L| (kg m²/s)", "|F_total| (N)"), ("L", "F")):
             ax.set_xlabel("t (s)")
             ax.set_ylabel(what)
-            ax.set_ylim(1e-12, None)
+            ax.set_ylim(max(1e-12, min(tr.norm(name).min() for tr in runs + [yawed]) / 3), None)
             ax.grid(alpha=0.3, which="both")
             ax.legend(fontsize=8)
         axes[0].set_title("angular momentum", fontsize=10)
@@ -963,8 +1016,14 @@ for density below {fmt(lo, 3)} or above {fmt(hi, 3)} kg/m^3 (GM = s^2/(12 D) + D
         def settled(v):
             return f"at rest after {fmt(v['settle'])} s" if v["settle"] is not None else f"not yet at rest at t = {fmt(v['t_end'])} s"
 
-        def pose(v):
-            return f"{v['face']}, z = {v['z_end']:.6f} m, tilt {fmt(v['tilt_end_deg'])}°, yaw {fmt(v['yaw_end_deg'], 4)}°"
+        def pose_row(tr, v):
+            omega = ", ".join(f"{w:g}" for w in tr.spec.config().initial.omega)
+            rest = fmt(v["settle"]) if v["settle"] is not None else f"not by {fmt(v['t_end'])}"
+            return (f"| {fmt(v['d'])} | ({omega}) | {rest} | {v['face']} | {v['z_end']:.6f} | {fmt(v['tilt_end_deg'])} | {fmt(v['yaw_end_deg'], 4)} |"
+                    f" {fmt(v['L_end'])} | {fmt(v['F_end'])} |")  # fmt: skip
+
+        poses = "\n".join(["| d (N s/m^3) | initial spin (rad/s) | at rest after (s) | final pose | z (m) | tilt (°) | yaw (°, mod 90) | final abs(L) (kg m^2/s) | final abs(F) (N) |",
+                           "|---|---|---|---|---|---|---|---|---|"] + [pose_row(tr, v) for tr, v in zip(runs + [yawed], (lo, hi, yw))])  # fmt: skip
 
         both = lo["settle"] is not None and hi["settle"] is not None
         speed = ""
@@ -972,12 +1031,21 @@ for density below {fmt(lo, 3)} or above {fmt(hi, 3)} kg/m^3 (GM = s^2/(12 D) + D
             speed = (": the heavier damping overdamps the roll, so it is no faster" if hi["settle"] >= 0.8 * lo["settle"]
                      else ": the heavier damping is faster")  # fmt: skip
         aligned = all(v["tilt_end_deg"] < 0.01 and abs(v["yaw_end_deg"]) < 0.01 for v in (lo, hi))
-        ending = (f"Both come to rest ({pose(lo)}; {pose(hi)}; yaw modulo the cube's 90° symmetry)"
-                  + (": face up and back in the axes' alignment." if aligned else ".")) if both else (
-                  f"At t = {fmt(lo['t_end'])} s they are still moving ({pose(lo)}; {pose(hi)}).")  # fmt: skip
-        turned = (f" but turned by {fmt(yw['yaw_end_deg'], 3)}° about the vertical: the report's \"slightly rotated position\"."
-                  if yw["settle"] is not None and abs(yw["yaw_end_deg"]) > 0.5 else ".")  # fmt: skip
+        ending = (("Both come to rest face up and back in the axes' alignment (table)." if aligned else "Both come to rest (table).")
+                  if both else f"At t = {fmt(lo['t_end'])} s they are still moving (table).")  # fmt: skip
+        turned = "."
+        if yw["settle"] is not None:
+            turned = (f", face up but turned by {fmt(yw['yaw_end_deg'], 3)}° about the vertical: the report's \"slightly rotated position\"."
+                      if abs(yw["yaw_end_deg"]) > 0.5 else ", face up.")  # fmt: skip
 
+        qw, qx, qy, qz = yw["q_end"]
+        quaternion = f"Its final quaternion is (w, x, y, z) = ({qw:.6g}, {qx:.3g}, {qy:.3g}, {qz:.6g})"
+        if math.hypot(qx, qy) < 1e-6:
+            quaternion += (
+                f": a turn about the vertical alone, by 2 atan2(|q_z|, |q_w|) = {fmt(math.degrees(2 * math.atan2(abs(qz), abs(qw))), 4)}°."
+            )
+        else:
+            quaternion += "."
         cmds = "; ".join(tr.spec.command() for tr in runs)
         self.add(f"""
 ## Figures 7-9: damping brings the cube to rest
@@ -991,27 +1059,29 @@ in a slightly rotated position, offset from its initial alignment with the xyz-a
 
 **floatsim.** Our damping force on a wet sample is -d a_k v_k with d in N s/m^3, the report's F_damp = -d v area.
 The report states neither its units nor how its masses and areas were scaled, so its constants cannot be
-converted; we use d = {fmt(lo['d'])} and {fmt(hi['d'])} N s/m^3, {fmt(DAMPING_SCALE)} times its 0.1 and 0.25 (the same ratio). What carries
-over between models is the damping ratio: at rest, with A_sub = {fmt(n['A_sub'])} m^2 wet, heave has zeta = d A_sub / (2 M omega) =
-{fmt(lo['zeta_heave'])} and {fmt(hi['zeta_heave'])} (omega = {fmt(omega_heave, 4)} rad/s), rolling zeta = {fmt(lo['zeta_roll'])} and {fmt(hi['zeta_roll'])}. The cube is {settled(lo)}
-with d = {fmt(lo['d'])} and {settled(hi)} with d = {fmt(hi['d'])}{speed}.
+converted; we use d = {fmt(lo["d"])} and {fmt(hi["d"])} N s/m^3, {fmt(DAMPING_SCALE)} times its 0.1 and 0.25 (the same ratio). What carries
+over between models is the damping ratio: at rest, with A_sub = {fmt(n["A_sub"])} m^2 wet, heave has zeta = d A_sub / (2 M omega) =
+{fmt(lo["zeta_heave"])} and {fmt(hi["zeta_heave"])} (omega = {fmt(omega_heave, 4)} rad/s), rolling zeta = {fmt(lo["zeta_roll"])} and {fmt(hi["zeta_roll"])}. The cube is {settled(lo)}
+with d = {fmt(lo["d"])} and {settled(hi)} with d = {fmt(hi["d"])}{speed}.
 
 {plot}
 
-{ending} With the added vertical spin the cube is {settled(yw)} ({pose(yw)}){turned}
-Figure 7 shows that final pose, rendered by {source}.
+{poses}
+
+{ending} With the added vertical spin (last row) the cube is {settled(yw)}{turned}
+{quaternion} Figure 7 shows that final pose, rendered by {source}.
 
 {chr(10).join(images)}
 
 **Why face up, and why "slightly rotated".** For the hollow cube of density 900 the centre of gravity G is the
-centre, {fmt(cube.BG)} s above the centre of buoyancy B (half the draft of {fmt(cube.draft)} s), so BG = {fmt(cube.BG)} s. The metacentre is
-BM = I_wp / V_sub = (s^4/12) / (0.9 s^3) = s/{fmt(1 / n['BM_over_s'], 3)} = {fmt(cube.BM, 4)} m above B, so GM = BM - BG = {fmt(cube.GM, 4)} m > 0: a
+centre, s/2 above the bottom; the centre of buoyancy B is at half the draft of {fmt(cube.draft / cube.s)} s, so BG = {fmt(cube.BG / cube.s)} s. The metacentre is
+BM = I_wp / V_sub = (s^4/12) / (0.9 s^3) = s/{fmt(1 / n["BM_over_s"], 3)} = {fmt(cube.BM, 4)} m above B, so GM = BM - BG = {fmt(cube.GM, 4)} m > 0: a
 tilt is righted, face up is stable. The sampled model agrees: a 1° tilt gives a righting moment M g GM sin(1°)
 with GM = {fmt(gm_sampled, 4)} m (the midpoint rule's (1 - 1/N^2) on I_wp). Turning about the vertical changes nothing that
-floats: at a 10° yaw the torque is {fmt(n['yaw_torque_rel'])} M g s and the force {fmt(n['yaw_force_rel'])} of the weight, round-off. Yaw is
+floats: at a 10° yaw the torque is {fmt(n["yaw_torque_rel"])} M g s and the force {fmt(n["yaw_force_rel"])} of the weight, round-off. Yaw is
 neutral, so the damping stops it wherever the motion leaves it. The spin (-1, 1, 0) keeps the motion mirror-symmetric
-about the vertical plane x = y, which allows only yaw 0 or 45° (mod 90°) (here {fmt(lo['yaw_end_deg'], 3)}° and {fmt(hi['yaw_end_deg'], 3)}°); a spin
-with a vertical part breaks the symmetry and leaves {fmt(yw['yaw_end_deg'], 3)}°. The report's small rotation is such a neutral
+about the vertical plane x = y, which allows only yaw 0 or 45° (mod 90°) (here {fmt(lo["yaw_end_deg"], 3)}° and {fmt(hi["yaw_end_deg"], 3)}°); a spin
+with a vertical part breaks the symmetry and leaves {fmt(yw["yaw_end_deg"], 3)}°. The report's small rotation is such a neutral
 yaw, left over from its motion; the text does not say which of its initial conditions or numerical errors set it.
 """)
 

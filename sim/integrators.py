@@ -7,7 +7,6 @@ only through the `Model`. Rotations are exact (quaternion exponentials), never l
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .forces import Model
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotate_body, rotate_world
@@ -145,6 +144,8 @@ class Adaptive:
         self._h: float | None = None  # last step size: the next interval starts from it
 
     def step(self, model: Model, s: State, dt: float) -> State:
+        from scipy.integrate import solve_ivp  # 0.6 s to import: only for the adaptive methods
+
         t_end = s.t + dt
         options = {"first_step": min(self._h, t_end - s.t)} if self._h else {}  # (t + dt) - t may be < dt
         sol = solve_ivp(lambda t, y: derivative(model, y), (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)

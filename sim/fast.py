@@ -77,6 +77,20 @@ def mtv(R, v):
 
 
 @njit(**JIT)
+def rotate_tensor(R, Q):
+    """R Q R^T for 3x3 matrices, written out (BLAS calls cost more than the arithmetic here)."""
+    out = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                for m in range(3):
+                    acc += R[i, k] * Q[k, m] * R[j, m]
+            out[i, j] = acc
+    return out
+
+
+@njit(**JIT)
 def omega_of(R, L, inertia):
     return mv(R, mtv(R, L) / inertia)
 
@@ -136,7 +150,7 @@ def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr, mom
             A = acc[0]
             S = mv(R, acc[1:4].copy())
             Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
-            rr = R @ Q @ R.T
+            rr = rotate_tensor(R, Q)
         return zn, zt, A, S, rr
     nv = verts.shape[0]
     lev = np.empty((nv, 3))

@@ -1,0 +1,26 @@
+"""`python -m app [--scene NAME|PATH] [--host H] [--port P]`: the live viewer, same as `floatsim view`."""
+
+from __future__ import annotations
+
+import sys
+
+import tyro
+
+from sim.config import ConfigError
+
+from .args import ViewArgs
+
+
+def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:
+    args = tyro.cli(ViewArgs, args=argv, prog=prog)
+    from .main import serve  # viser is imported only once the flags parsed
+
+    try:
+        return serve(args)
+    except ConfigError as e:  # a bad scene or address: one line, exit 2, before any server starts
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

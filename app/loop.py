@@ -1,0 +1,437 @@
+"""The simulation thread: owns the Simulation, applies queued commands between steps, paces to wall time, publishes snapshots.
+
+ARCHITECTURE rule 6: GUI callbacks only `post`; this one thread changes the simulation. No viser
+here, so the tests drive it without a browser or a server.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import math
+import queue
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import sim
+from sim.config import load_scene, with_overrides
+from sim.rotation import normalized, quat_multiply
+from sim.simulation import initial_state
+from sim.state import angular_momentum
+
+from . import limits
+
+NOTICE_SECONDS = 10.0
+"""How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What the user controls. Replaced whole by the loop; never mutated."""
+
+    scene: str
+    density: float
+    """Body density, kg/m^3."""
+    damping: float
+    """Viscous damping d, N s/m^3."""
+    dt: float
+    """Time step, s."""
+    integrator: str
+    points_per_edge: int
+    speed: float = 1.0
+    """Simulated seconds per wall-clock second asked for."""
+    omega0: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Angular velocity applied on Reset, world frame, rad/s."""
+    paused: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class Snapshot:
+    """One published state of the run: what the viewer draws and what tests read."""
+
+    frame: sim.Frame
+    settings: Settings
+    body: sim.Body
+    params: sim.Params
+    real_time_factor: float
+    """Simulated seconds per wall second over the last ~2 s (nan while paused or just started)."""
+    behind: bool
+    """The machine cannot keep up with the asked speed (steps were dropped or the rate is low)."""
+    notice: str
+    """A note for the user ('' when none): a clamped value, a divergence, a failed command."""
+    notice_id: int
+    """Counts notices raised, so a viewer can tell a new note from the same one."""
+    diverged: bool
+    epoch: int
+    """Counts resets, scene loads and body rebuilds (plots restart their history when it changes)."""
+    steps: int
+    """Steps taken since the loop started."""
+
+    @property
+    def density(self) -> float:
+        return self.settings.density
+
+    @property
+    def damping(self) -> float:
+        return self.settings.damping
+
+
+def settings_for(simulation: sim.Simulation, scene_name: str, speed: float = 1.0, paused: bool = False) -> Settings:
+    """The controls' values that describe a freshly built simulation."""
+    scene, body = simulation.scene, simulation.body
+    ppe = scene.body.points_per_edge if scene.body.shape != "mesh" else max(1, round(math.sqrt(scene.body.samples / 6)))
+    return Settings(
+        scene=scene_name,
+        density=body.mass / body.volume,
+        damping=simulation.params.damping,
+        dt=simulation.dt,
+        integrator=simulation.integrator.name,
+        points_per_edge=int(ppe),
+        speed=speed,
+        omega0=tuple(float(w) for w in scene.initial.omega),  # type: ignore[arg-type]
+        paused=paused,
+    )
+
+
+class SimLoop:
+    """Runs one Simulation on its own thread in (scaled) real time.
+
+    `post(name, value)` queues a command (thread-safe, never blocks); the thread applies queued
+    commands between steps. Hooks set with `attach`: `publish(snapshot)` is called on the thread
+    at `publish_hz`; `on_setting(field, value)` when the loop itself changes a setting (a clamp, a scene load,
+    a pause on divergence) so the GUI can show the value actually used.
+    """
+
+    def __init__(
+        self,
+        scene: sim.SceneConfig,
+        scene_name: str,
+        *,
+        publish_hz: float = 30.0,
+        budget: float = 0.7,
+        resync_after: float = 1.0,
+        fp_raise: bool = False,
+        scene_options: tuple[str, ...] = (),
+    ):
+        self._publish: Callable[[Snapshot], None] | None = None
+        self._on_setting: Callable[[str, Any], None] | None = None
+        self.period = 1.0 / float(publish_hz)
+        self._budget = budget * self.period
+        self._resync_after = resync_after
+        self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
+        self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
+        self._initial_scene = scene_name
+
+        self.sim = sim.Simulation(scene)
+        self.settings = settings_for(self.sim, scene_name)
+        self._queue: queue.Queue = queue.Queue()
+        self._lock = threading.Lock()
+        self._latest: Snapshot | None = None
+        self._thread: threading.Thread | None = None
+        self._stopping = False
+
+        self._anchor: tuple[float, float] | None = None  # (wall, sim t) that pacing counts from
+        self._history: collections.deque = collections.deque()  # (wall, sim t) for the real-time factor
+        self._behind_until = 0.0
+        self._step_cost = 1e-3  # seconds per step, running estimate
+        self._steps = 0
+        self._epoch = 0
+        self._diverged = False
+        self._notice, self._notice_id, self._notice_until = "", 0, 0.0
+        self._errors_logged: set[str] = set()
+        self._publish_now()
+
+    def attach(self, publish: Callable[[Snapshot], None] | None, on_setting: Callable[[str, Any], None] | None = None) -> None:
+        """Set the viewer's hooks (before `start`): they run on the simulation thread."""
+        self._publish, self._on_setting = publish, on_setting
+
+    # ---- any thread ------------------------------------------------------------------------
+
+    def post(self, name: str, value: Any = None) -> None:
+        """Queue a command for the simulation thread."""
+        self._queue.put((name, value))
+
+    def latest(self) -> Snapshot:
+        """The last published snapshot."""
+        with self._lock:
+            assert self._latest is not None
+            return self._latest
+
+    def sync(self, timeout: float = 10.0) -> Snapshot:
+        """Wait until every command posted before this call is applied, and return a fresh snapshot."""
+        done = threading.Event()
+        self.post("_sync", done)
+        if not done.wait(timeout):
+            raise TimeoutError(f"the simulation thread did not answer within {timeout} s")
+        return self.latest()
+
+    def start(self) -> SimLoop:
+        self._thread = threading.Thread(target=self._run, name="floatsim-sim", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stopping = True
+        self.post("_wake")
+        if self._thread is not None:
+            self._thread.join(timeout)
+
+    def is_alive(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    # ---- the simulation thread -------------------------------------------------------------
+
+    def _run(self) -> None:
+        with np.errstate(**self._fp):
+            next_tick = time.monotonic()
+            while not self._stopping:
+                try:
+                    commands = [self._queue.get(timeout=max(0.0, next_tick - time.monotonic()))]
+                except queue.Empty:
+                    commands = []
+                while True:
+                    try:
+                        commands.append(self._queue.get_nowait())
+                    except queue.Empty:
+                        break
+                barriers = []
+                for name, value in commands:
+                    if name == "_sync":
+                        barriers.append(value)
+                    elif name != "_wake":
+                        self._apply(name, value)
+                now = time.monotonic()
+                if now >= next_tick:
+                    next_tick = now + self.period
+                    self._guarded("advance", lambda now=now: self._advance(now))
+                    self._publish_now()
+                elif barriers:
+                    self._publish_now()
+                for event in barriers:
+                    event.set()
+
+    def _guarded(self, what: str, fn: Callable[[], None]) -> None:
+        """Run fn; on any error pause the run with a note instead of killing the thread."""
+        try:
+            fn()
+        except Exception as e:  # noqa: BLE001 - the thread must survive anything
+            self._log(what, e)
+            self._set("paused", True)
+            self._raise_notice(f"Paused: {what} failed: {type(e).__name__}: {e}", sticky=True)
+
+    def _log(self, what: str, e: Exception) -> None:
+        key = f"{what}:{type(e).__name__}"
+        if key not in self._errors_logged:  # once per kind, or a bad frame would flood the terminal
+            self._errors_logged.add(key)
+            print(f"floatsim viewer: {what} failed:", file=sys.stderr)
+            traceback.print_exception(e, file=sys.stderr)
+
+    def _publish_now(self) -> None:
+        try:
+            frame = self.sim.frame()
+        except Exception as e:  # noqa: BLE001
+            self._log("observe", e)
+            return
+        now = time.monotonic()
+        if self._notice and not self._diverged and now > self._notice_until:
+            self._notice = ""
+        snap = Snapshot(
+            frame=frame,
+            settings=self.settings,
+            body=self.sim.body,
+            params=self.sim.params,
+            real_time_factor=self._rate(),
+            behind=(not self.settings.paused) and (now < self._behind_until or self._rate() < 0.85 * self.settings.speed),
+            notice=self._notice,
+            notice_id=self._notice_id,
+            diverged=self._diverged,
+            epoch=self._epoch,
+            steps=self._steps,
+        )
+        with self._lock:
+            self._latest = snap
+        if self._publish is not None:
+            try:
+                self._publish(snap)
+            except Exception as e:  # noqa: BLE001
+                self._log("publish", e)
+
+    def _rate(self) -> float:
+        h = self._history
+        if len(h) < 2 or h[-1][0] - h[0][0] < 0.5:
+            return math.nan
+        return (h[-1][1] - h[0][1]) / (h[-1][0] - h[0][0])
+
+    def _restart_clock(self) -> None:
+        """Pacing starts afresh (after a pause, a reset, a new speed or dt)."""
+        self._anchor = None
+        self._history.clear()
+
+    def _advance(self, now: float) -> None:
+        """Take the steps that wall time x speed asks for, at most a tick's CPU budget of them."""
+        s = self.settings
+        if s.paused:
+            self._restart_clock()
+            return
+        t = self.sim.state.t
+        if self._anchor is None:
+            self._anchor = (now, t)
+            self._history.append((now, t))
+            return
+        wall0, t0 = self._anchor
+        target = t0 + (now - wall0) * s.speed
+        n = round((target - t) / self.sim.dt)
+        cap = max(1, int(self._budget / self._step_cost))
+        if n > 0:
+            n = min(n, cap)
+            started = time.perf_counter()
+            self._step(n)
+            self._step_cost = 0.7 * self._step_cost + 0.3 * (time.perf_counter() - started) / n
+        t = self.sim.state.t
+        if (target - t) / s.speed > self._resync_after:  # fell far behind: drop the debt, say so
+            self._anchor = (now, t)
+            self._behind_until = now + 3.0
+        self._history.append((now, t))
+        while len(self._history) > 2 and now - self._history[0][0] > 2.0:
+            self._history.popleft()
+
+    def _step(self, n: int) -> None:
+        try:
+            self.sim.step(n)
+            self._steps += n
+        except (sim.SimulationDiverged, FloatingPointError) as e:
+            message = str(e)
+            if isinstance(e, FloatingPointError):
+                message = (f"simulation diverged at t = {self.sim.state.t:.6g} s: floating-point {e}; "
+                           "likely cause: the time step is too large for this damping or integrator: try a smaller dt or 'implicit'")  # fmt: skip
+            message = message.replace("--integrator", "integrator").replace("--dt", "time step")  # GUI words for the CLI flags
+            self._diverged = True
+            self._set("paused", True)
+            self._restart_clock()
+            self._raise_notice(f"Paused: {message}. Change the setting it names, then press Reset.", sticky=True)
+
+    def _raise_notice(self, text: str, sticky: bool = False) -> None:
+        self._notice = text
+        self._notice_id += 1
+        self._notice_until = math.inf if sticky else time.monotonic() + NOTICE_SECONDS
+
+    def _set(self, field: str, value: Any, tell: bool = True) -> None:
+        """Change one setting; `tell` the GUI when the loop, not the user, chose the value."""
+        self.settings = dataclasses.replace(self.settings, **{field: value})
+        if tell and self._on_setting is not None:
+            try:
+                self._on_setting(field, value)
+            except Exception as e:  # noqa: BLE001
+                self._log("GUI update", e)
+
+    def _apply(self, name: str, value: Any) -> None:
+        handler = getattr(self, f"_cmd_{name}", None)
+        if handler is None:
+            self._raise_notice(f"Unknown command {name!r} ignored.")
+            return
+        try:
+            handler(value)
+        except Exception as e:  # noqa: BLE001 - a bad command must not stop the run
+            self._log(f"command {name}", e)
+            self._raise_notice(f"Could not apply {name} = {value!r}: {type(e).__name__}: {e}")
+
+    def _clamped(self, field: str, value: Any, clamp=limits.clamp) -> Any:
+        used, note = clamp(field, value, getattr(self.settings, field))
+        if note:
+            self._raise_notice(note)
+        self._set(field, used, tell=note is not None)
+        return used
+
+    # ---- commands (one per control) --------------------------------------------------------
+
+    def _cmd_density(self, value) -> None:
+        self.sim.set_density(self._clamped("density", value))
+
+    def _cmd_damping(self, value) -> None:
+        self.sim.set_params(damping=self._clamped("damping", value))
+
+    def _cmd_dt(self, value) -> None:
+        self.sim.set_dt(self._clamped("dt", value))
+        self._restart_clock()
+
+    def _cmd_speed(self, value) -> None:
+        self._clamped("speed", value)
+        self._restart_clock()
+
+    def _cmd_omega0(self, value) -> None:
+        self._clamped("omega0", value, limits.clamp_vector3)
+
+    def _cmd_integrator(self, value) -> None:
+        if value not in sim.INTEGRATORS:
+            self._raise_notice(f"Integrator: {value!r} is not one of {', '.join(sim.INTEGRATORS)}; kept {self.settings.integrator}.")
+            self._set("integrator", self.settings.integrator)
+            return
+        self.sim.set_integrator(value)
+        self._set("integrator", value, tell=False)
+
+    def _cmd_pause(self, value) -> None:
+        paused = bool(value)
+        if not paused:
+            self._diverged = False
+            if self._notice_until == math.inf:
+                self._notice = ""
+        self._set("paused", paused, tell=False)
+        self._restart_clock()
+
+    def _cmd_step(self, _value=None) -> None:
+        self._diverged = False
+        self._step(1)
+
+    def _cmd_reset(self, _value=None) -> None:
+        """The scene's initial pose and velocities, with the current parameters and initial ω."""
+        scene = with_overrides(self.sim.scene, initial__omega=self.settings.omega0)
+        self.sim.reset(initial_state(self.sim.body, scene))
+        if self._diverged:  # the run was paused by the divergence, not by the user: resume
+            self._diverged = False
+            self._set("paused", False)
+        if self._notice_until == math.inf:
+            self._notice = ""
+        self._epoch += 1
+        self._restart_clock()
+
+    def _cmd_points_per_edge(self, value) -> None:
+        """Rebuild the body with N x N samples per face, keeping the parameters and the motion."""
+        n = self._clamped("points_per_edge", value, limits.clamp_int)
+        old = self.sim
+        s = self.settings
+        body_change = {"body__samples": 6 * n * n} if old.scene.body.shape == "mesh" else {"body__points_per_edge": n}
+        scene = with_overrides(
+            old.scene, body__density=s.density, fluid__damping=s.damping, step__dt=s.dt, step__integrator=s.integrator, **body_change
+        )
+        new = sim.Simulation(scene)
+        state, frame = old.state, old.frame()
+        # Same world orientation of the shape as given (the principal frame may differ slightly), same omega.
+        q_input = normalized(quat_multiply(state.q_world_body, old.body.q_input_body * np.array([1.0, -1.0, -1.0, -1.0])))
+        q = normalized(quat_multiply(q_input, new.body.q_input_body))
+        carried = dataclasses.replace(state, q_world_body=q, L_world=np.zeros(3))
+        carried = dataclasses.replace(carried, L_world=angular_momentum(new.body, carried.R_world_body, frame.omega_world))
+        new.reset(carried)
+        self.sim = new
+        self._epoch += 1
+
+    def _cmd_scene(self, value) -> None:
+        """Load another preset with its own parameters (speed and pause are kept)."""
+        if value not in self.scene_options:
+            self._raise_notice(f"Scene: {value!r} is not one of {', '.join(self.scene_options)}; kept {self.settings.scene}.")
+            self._set("scene", self.settings.scene)
+            return
+        self.sim = sim.Simulation(load_scene(value))
+        old, self.settings = self.settings, settings_for(self.sim, value, self.settings.speed, self.settings.paused)
+        for field in dataclasses.fields(Settings):
+            if getattr(old, field.name) != getattr(self.settings, field.name) and field.name != "scene":
+                self._set(field.name, getattr(self.settings, field.name))
+        self._diverged = False
+        self._epoch += 1
+        self._restart_clock()

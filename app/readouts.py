@@ -1,0 +1,87 @@
+"""Numbers and live plots in the GUI: time, height, |F|, |L|, energy, real-time factor, with a warning when the machine lags.
+
+The plots keep a fixed window sampled at `PLOT_HZ` (a decimation of the published frames) and
+replace their data whole: uPlot has no append, so the window bounds what each update costs.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import time
+
+import numpy as np
+import viser
+
+from .loop import Snapshot
+
+PLOT_HZ = 10.0
+WINDOW = 200
+"""Samples per plot: 20 s of wall time at PLOT_HZ."""
+SERIES = (
+    ("z", "z (m)", "#1c7ed6", lambda f: f.x_world[2]),
+    ("L", "|L| (kg·m²/s)", "#2b8a3e", lambda f: float(np.linalg.norm(f.L_world))),
+    ("F", "|F| (N)", "#c92a2a", lambda f: float(np.linalg.norm(f.force_world))),
+    ("E", "E total (J)", "#7048e8", lambda f: f.E_total),
+)
+
+
+class Readouts:
+    """A markdown block of numbers and one uPlot per quantity; `update` runs on the simulation thread."""
+
+    def __init__(self, server: viser.ViserServer):
+        gui = server.gui
+        with gui.add_folder("Readouts"):
+            self.text = gui.add_markdown("")
+        self.plots = {}
+        with gui.add_folder("Plots"):
+            for key, label, colour, _ in SERIES:
+                self.plots[key] = gui.add_uplot(
+                    (np.zeros(1), np.zeros(1)),
+                    ({"label": "t (s)"}, {"label": label, "stroke": colour, "width": 1.5}),
+                    scales={"x": {"time": False}},
+                    legend={"show": True},
+                    aspect=2.2,
+                )
+        self._history: collections.deque = collections.deque(maxlen=WINDOW)
+        self._epoch = -1
+        self._last = -math.inf
+        self._last_text = ""
+
+    def update(self, snap: Snapshot) -> None:
+        now = time.monotonic()
+        if now - self._last < 1.0 / PLOT_HZ:
+            return
+        self._last = now
+        text = describe(snap)
+        if text != self._last_text:
+            self.text.content = self._last_text = text
+        frame = snap.frame
+        if snap.epoch != self._epoch:
+            self._epoch = snap.epoch
+            self._history.clear()
+        if self._history and self._history[-1][0] == frame.t:
+            return  # paused: nothing new to draw
+        self._history.append((frame.t, *(f(frame) for *_, f in SERIES)))
+        data = np.array(self._history, dtype=float).T
+        data[~np.isfinite(data)] = np.nan
+        for i, (key, *_) in enumerate(SERIES):
+            self.plots[key].data = (data[0], data[i + 1])
+
+
+def describe(snap: Snapshot) -> str:
+    """The readout text of a snapshot."""
+    f, s = snap.frame, snap.settings
+    rate = snap.real_time_factor
+    state = "paused" if s.paused else (f"{rate:.2f}× real time" if math.isfinite(rate) else "starting")
+    lines = [
+        f"t = **{f.t:.2f} s** · z = **{f.x_world[2]:+.3f} m**",
+        f"|F| = **{np.linalg.norm(f.force_world):.4g} N** · |L| = **{np.linalg.norm(f.L_world):.4g} kg·m²/s**",
+        f"E total = **{f.E_total:.6g} J** · mass {snap.body.mass:.4g} kg",
+        f"Speed: {state} (asked {s.speed:g}×) · {snap.body.n_samples} samples",
+    ]
+    if snap.behind:
+        lines.append(
+            f"**⚠ This machine cannot keep up with {s.speed:g}× real time**: lower the speed, the points per edge, or pick a faster integrator."
+        )
+    return "\n\n".join(lines)

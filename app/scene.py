@@ -1,0 +1,101 @@
+"""The 3D scene: water, the body's frame with its mesh and samples as children, force arrows; `show` streams a snapshot.
+
+ARCHITECTURE rule 7: the mesh and the sample points live in the body frame and are sent once per
+body; each frame moves only the `/body` pose. Sample colours (wet or dry) go out only while the
+points are shown, at most `COLOUR_HZ` times a second, and only when the wet set changed.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import viser
+
+import sim
+
+from .controls import Layers
+from .loop import Snapshot
+
+COLOUR_HZ = 5.0
+ARROW_HZ = 10.0
+WET = np.array([30, 110, 230], np.uint8)
+DRY = np.array([245, 150, 40], np.uint8)
+
+
+class SceneView:
+    """Scene nodes of one viewer; `show` runs on the simulation thread only."""
+
+    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body):
+        self.server, self.layers = server, layers
+        scene = server.scene
+        size = max(8.0, 8.0 * body.radius)
+        self.water = scene.add_grid(
+            "/water", width=size, height=size, plane="xy", cell_size=0.5, section_size=2.0,
+            cell_color=(120, 170, 220), section_color=(60, 120, 190), plane_color=(40, 120, 200), plane_opacity=0.35, shadow_opacity=0.2,
+        )  # fmt: skip
+        self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
+        self.arrows = scene.add_arrows(
+            "/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
+        )
+        server.initial_camera.position = (2.6 * size / 8, -3.4 * size / 8, 1.9 * size / 8)
+        server.initial_camera.look_at = (0.0, 0.0, -0.3)
+        self.body: sim.Body | None = None
+        self.mesh = self.points = None
+        self._wet: np.ndarray | None = None  # wet set last sent
+        self._colour_time = self._arrow_time = -np.inf
+        self.colour_updates = 0
+        self.set_body(body)
+
+    def set_body(self, body: sim.Body) -> None:
+        """(Re)send the body's geometry; only when the body itself changes (scene, points per edge)."""
+        self.body = body
+        scene = self.server.scene
+        self.mesh = scene.add_mesh_simple(
+            "/body/mesh", body.mesh_vertices, body.mesh_faces, color=(215, 235, 250), flat_shading=True, visible=self.layers.mesh.value
+        )
+        # Lift the points a little off the faces so the opaque mesh does not hide half of each one.
+        lifted = body.r_body + 0.01 * body.radius * body.n_body
+        size = 0.3 * np.sqrt(body.area.mean())  # a third of the sample spacing
+        self.points = scene.add_point_cloud(
+            "/body/points", lifted, np.tile(DRY, (body.n_samples, 1)), point_size=float(size), precision="float32",
+            point_shape="circle", visible=self.layers.points.value,
+        )  # fmt: skip
+        self._wet = None
+        self._colour_time = -np.inf
+
+    def show(self, snap: Snapshot) -> None:
+        """Move the body to the snapshot's pose, plus throttled colours and arrows."""
+        if snap.body is not self.body:
+            self.set_body(snap.body)
+        layers, now = self.layers, time.monotonic()
+        for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.water, layers.water), (self.arrows, layers.forces)):
+            if node.visible != box.value:
+                node.visible = box.value
+        frame = snap.frame
+        with self.server.atomic():
+            self.frame.position = frame.x_world
+            self.frame.wxyz = frame.q_world_body
+            if layers.points.value and now - self._colour_time >= 1.0 / COLOUR_HZ:
+                self._send_colours(frame.wet_index, now)
+            if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
+                self._send_arrows(snap, now)
+
+    def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
+        if self._wet is not None and np.array_equal(self._wet, wet_index):
+            return
+        colours = np.tile(DRY, (self.body.n_samples, 1))
+        colours[wet_index] = WET
+        self.points.colors = colours
+        self._wet, self._colour_time = wet_index.copy(), now
+        self.colour_updates += 1
+
+    def _send_arrows(self, snap: Snapshot, now: float) -> None:
+        """Net force at the centre of mass (1 m per body weight) and torque (1 m per weight x radius)."""
+        frame, body = snap.frame, snap.body
+        weight = body.mass * (snap.params.g or 9.81)  # without gravity keep the scale of an ordinary weight
+        x = frame.x_world
+        ends = np.array([[x, x + frame.force_world / weight], [x, x + frame.torque_world / (weight * body.radius)]])
+        if np.isfinite(ends).all():
+            self.arrows.points = ends
+        self._arrow_time = now

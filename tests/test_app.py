@@ -1,0 +1,407 @@
+"""The viewer without a browser: start it in-process, drive its GUI handles from Python, assert on the simulation.
+
+Setting `handle.value` runs the handle's callbacks synchronously (as a browser message would, on
+a pool thread); they post to the simulation thread, and `app.sync()` waits until it applied them.
+The physics runs with strict=True: np.errstate(all="raise", under="ignore") on the simulation
+thread (conftest.py does the same for the test thread), so a NaN or an overflow pauses the run
+with a notice, which these tests would see.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("viser")
+
+import sim
+from app.args import ViewArgs
+from app.main import start
+from app.readouts import describe
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture
+def make_app():
+    apps = []
+
+    def make(scene="damped", paused=False, **kwargs):
+        app = start(ViewArgs(scene=scene, port=0), strict=True, **kwargs)
+        apps.append(app)
+        if paused:
+            app.controls.paused.value = True
+            app.sync()
+        return app
+
+    yield make
+    for app in apps:
+        app.stop()
+
+
+def wait_for(app, condition, timeout=30.0, what="condition"):
+    """Poll fresh snapshots until condition(snapshot) holds."""
+    deadline = time.monotonic() + timeout
+    while True:
+        snap = app.sync()
+        if condition(snap):
+            return snap
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what}; last: t={snap.frame.t}, z={snap.frame.x_world[2]}, notice={snap.notice!r}")
+        time.sleep(0.05)
+
+
+# ---- start -------------------------------------------------------------------------------------
+
+
+def test_start_serves_the_client_on_localhost(make_app):
+    app = make_app()
+    assert app.port == app.server.get_port() != 0
+    assert app.url == f"http://127.0.0.1:{app.port}"
+    assert app.server.get_host() == "127.0.0.1"
+    with urllib.request.urlopen(app.url, timeout=10) as response:
+        assert response.status == 200
+        assert b"<html" in response.read().lower()
+
+
+def test_busy_port_moves_to_the_next(make_app):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        busy = s.getsockname()[1]
+        app = start(ViewArgs(scene="rest", port=busy), strict=True)
+        try:
+            assert app.port > busy
+            assert app.url.endswith(f":{app.port}")
+        finally:
+            app.stop()
+
+
+def test_bad_scene_is_a_config_error_before_any_server():
+    with pytest.raises(sim.ConfigError, match="unknown scene 'nope'"):
+        start(ViewArgs(scene="nope", port=0))
+
+
+@pytest.mark.parametrize("argv", [["-m", "app", "--scene", "nope"], ["-m", "app.cli", "view", "--scene", "nope"]])
+def test_cli_bad_scene_exits_2_with_one_line(argv):
+    out = subprocess.run([sys.executable, *argv], cwd=ROOT, capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "unknown scene 'nope'" in lines[0], out.stderr
+
+
+def test_serve_prints_url_and_stops_cleanly_on_ctrl_c():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "app", "--port", "0", "--scene", "rest"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        url = None
+        deadline = time.monotonic() + 30
+        while url is None and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if line.startswith("floatsim viewer: http://127.0.0.1:"):
+                url = line.split()[2]
+        assert url is not None, "no URL line printed"
+        with urllib.request.urlopen(url, timeout=10) as response:
+            assert response.status == 200
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=20)
+        assert proc.returncode == 0, err
+        assert "Traceback" not in err, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_loop_needs_no_viser():
+    code = "import sys, sim, app.loop; l = app.loop.SimLoop(sim.load_scene('rest'), 'rest').start(); s = l.sync(); l.stop(); assert 'viser' not in sys.modules; print(s.frame.t)"
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60, check=False)
+    assert out.returncode == 0, out.stderr
+
+
+# ---- pacing ------------------------------------------------------------------------------------
+
+
+def test_runs_at_the_asked_speed(make_app):
+    app = make_app("rest")
+    app.controls.speed.value = 2.0
+    t0, w0 = app.sync().frame.t, time.monotonic()
+    time.sleep(1.5)
+    snap = app.sync()
+    rate = (snap.frame.t - t0) / (time.monotonic() - w0)
+    assert rate < 2.2, rate  # never faster than asked
+    if not snap.behind:  # a loaded machine may not keep up, but then it must say so
+        assert rate > 1.6, rate
+        assert 1.6 < snap.real_time_factor < 2.2
+    else:
+        assert snap.real_time_factor < 1.7
+
+
+def test_falling_behind_resyncs_and_warns_but_stays_responsive(make_app):
+    app = make_app("spin")  # moving: every step evaluates the forces afresh
+    app.controls.points_per_edge.value = 30  # 5400 samples
+    app.controls.speed.value = 10.0
+    app.controls.integrator.value = "rk4"
+    app.controls.dt.value = 0.0005  # 20000 rk4 steps per wall second: far beyond this machine
+    snap = wait_for(app, lambda s: s.behind and math.isfinite(s.real_time_factor), what="the behind flag and a measured rate")
+    assert snap.real_time_factor < 0.5 * 10.0
+    assert "cannot keep up" in describe(snap)
+    started = time.monotonic()
+    app.sync()
+    assert time.monotonic() - started < 2.0  # commands are still applied promptly (a tick costs ~1/30 s of CPU)
+    wall0, t0 = time.monotonic(), snap.frame.t
+    time.sleep(1.0)
+    assert (app.sync().frame.t - t0) / (time.monotonic() - wall0) < 10.0
+
+
+def test_pacing_drops_the_debt_instead_of_racing_to_catch_up():
+    """The loop's pacing on a fake clock (no thread): a 10 s stall is not made up afterwards."""
+    from app.loop import SimLoop
+
+    loop = SimLoop(sim.load_scene("spin"), "spin")
+    dt, now = loop.sim.dt, time.monotonic()
+    loop._advance(now)  # anchors the clock
+    loop._step_cost = 1.0  # pretend steps are slow: one per tick
+    loop._advance(now + 10.0)  # 10 s later 2000 steps are due; one is taken
+    assert loop.sim.state.t == pytest.approx(dt)
+    loop._publish_now()
+    assert loop.latest().behind
+    loop._step_cost = 1e-6  # fast again: a loop that kept its debt would now take ~2000 steps at once
+    loop._advance(now + 10.1)
+    assert loop.sim.state.t == pytest.approx(dt + 0.1, abs=1.5 * dt)
+    loop._advance(now + 10.2)
+    assert loop.sim.state.t == pytest.approx(dt + 0.2, abs=1.5 * dt)
+
+
+# ---- controls change the running simulation ----------------------------------------------------
+
+
+def test_density_sets_mass_and_the_body_floats_to_the_new_equilibrium(make_app):
+    app = make_app("rest")
+    start_z = app.sync().frame.x_world[2]
+    assert start_z == pytest.approx(-0.4)
+    c = app.controls
+    c.density.value = 500.0
+    c.damping.value = 1500.0  # about critical for the heave: settles within a few seconds
+    c.integrator.value = "implicit"
+    c.speed.value = 5.0
+    snap = app.sync()
+    assert snap.density == 500.0 and snap.damping == 1500.0
+    assert snap.body.mass == pytest.approx(500.0 * snap.body.volume)
+    assert snap.params.damping == 1500.0
+    # Equilibrium of a 1 m cube of density rho_b: centre at z = 0.5 - rho_b / 1000 = 0.0.
+    snap = wait_for(app, lambda s: s.frame.t > 8.0, timeout=60, what="8 s of simulated time")
+    assert snap.frame.x_world[2] == pytest.approx(0.0, abs=0.01)
+    assert np.linalg.norm(snap.frame.u_world) < 0.02
+    assert snap.notice == "" and not snap.diverged
+
+
+def test_density_and_damping_keep_velocities(make_app):
+    app = make_app("spin", paused=True)
+    c = app.controls
+    before = app.sync().frame
+    c.density.value = 450.0
+    c.damping.value = 321.0
+    after = app.sync().frame
+    np.testing.assert_allclose(after.omega_world, before.omega_world, rtol=1e-12)
+    np.testing.assert_allclose(after.u_world, before.u_world, rtol=1e-12)
+    np.testing.assert_allclose(after.L_world, 0.5 * before.L_world, rtol=1e-12)  # L = I omega, I scales with the mass
+    assert after.t == before.t
+    assert app.latest().params.damping == 321.0
+
+
+def test_dt_integrator_and_step(make_app):
+    app = make_app("drop", paused=True)
+    c = app.controls
+    c.dt.value = 0.002
+    c.integrator.value = "rk4"
+    t0 = app.sync().frame.t
+    c.step.value = True
+    c.step.value = True
+    snap = app.sync()
+    assert snap.frame.t == pytest.approx(t0 + 0.004, abs=1e-12)
+    assert snap.settings.integrator == "rk4" and snap.settings.dt == 0.002
+    assert snap.settings.paused
+    time.sleep(0.3)
+    assert app.sync().frame.t == snap.frame.t  # paused: only Step advances
+
+
+def test_reset_restores_the_initial_pose_keeping_parameters(make_app):
+    app = make_app("drop")
+    c = app.controls
+    c.density.value = 600.0
+    c.omega0.value = (0.0, 0.0, 2.0)
+    wait_for(app, lambda s: s.frame.t > 0.5 and abs(s.frame.x_world[2]) > 0.01, what="the body to move")
+    c.paused.value = True
+    c.reset.value = True
+    snap = app.sync()
+    assert snap.frame.t == 0.0
+    np.testing.assert_allclose(snap.frame.x_world, [0.0, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(snap.frame.q_world_body, [1.0, 0.0, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(snap.frame.u_world, 0.0, atol=1e-15)
+    np.testing.assert_allclose(snap.frame.omega_world, [0.0, 0.0, 2.0], rtol=1e-12)  # initial omega applies on reset
+    assert snap.density == 600.0 and snap.body.mass == pytest.approx(600.0 * snap.body.volume)
+
+
+def test_points_per_edge_rebuilds_the_body_and_keeps_the_state(make_app):
+    app = make_app("spin", paused=True)
+    before = app.sync()
+    app.controls.density.value = 700.0
+    app.controls.points_per_edge.value = 4
+    snap = app.sync()
+    assert snap.body.n_samples == 6 * 4 * 4 and snap.body is not before.body
+    assert snap.density == 700.0 and snap.body.mass == pytest.approx(700.0)
+    assert snap.frame.t == before.frame.t
+    np.testing.assert_allclose(snap.frame.x_world, before.frame.x_world)
+    np.testing.assert_allclose(snap.frame.q_world_body, before.frame.q_world_body, atol=1e-12)
+    np.testing.assert_allclose(snap.frame.omega_world, before.frame.omega_world, rtol=1e-9)
+    assert app.scene.body is snap.body  # the viewer sent the new geometry
+
+
+def test_scene_dropdown_loads_the_preset_and_shows_its_values(make_app):
+    app = make_app("damped")
+    app.controls.speed.value = 3.0
+    app.controls.scene.value = "spin"
+    snap = app.sync()
+    assert snap.settings.scene == "spin"
+    assert snap.frame.t == 0.0 and snap.damping == 0.0 and snap.settings.speed == 3.0
+    np.testing.assert_allclose(snap.frame.x_world, [0.0, 0.0, -0.4])
+    assert app.controls.damping.value == 0.0
+    assert app.controls.omega0.value == (-1.0, 1.0, 0.0)
+
+
+# ---- bad input and faults ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "field, sent, used",
+    [
+        ("density", float("nan"), 900.0),
+        ("density", -5.0, 1.0),
+        ("density", 1e300, 1e5),
+        ("damping", -1.0, 0.0),
+        ("damping", float("inf"), 1e7),
+        ("dt", 0.0, 1e-5),
+        ("speed", 1e9, 100.0),
+        ("points_per_edge", 1000, 40),
+    ],
+)
+def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, used):
+    app = make_app("damped")
+    getattr(app.controls, field).value = sent
+    snap = app.sync()
+    assert getattr(snap.settings, field) == used
+    assert getattr(app.controls, field).value == used  # the GUI shows what is used
+    assert snap.notice and snap.notice.split(":")[0] in ("Density", "Damping", "Time step", "Speed", "Points per edge")
+    assert app.controls.notice.visible and snap.notice in app.controls.notice.content
+    assert app.loop.is_alive()
+    snap = wait_for(app, lambda s, n=snap.steps: s.steps > n + 10, what="the run to go on")
+    assert not snap.diverged and np.isfinite(snap.frame.x_world).all()
+
+
+def test_wrong_kinds_of_input_are_refused(make_app):
+    app = make_app("damped", paused=True)
+    integrator = app.latest().settings.integrator
+    app.loop.post("density", "heavy")
+    app.loop.post("omega0", (float("nan"), 0.0, 1.0))
+    app.loop.post("integrator", "leapfrog")
+    app.loop.post("scene", "../../etc/passwd")
+    app.loop.post("no such command", 1)
+    snap = app.sync()
+    assert snap.density == 900.0 and snap.settings.omega0 == (-1.0, 1.0, 0.0)
+    assert snap.settings.integrator == integrator and snap.settings.scene == "damped"
+    assert "Unknown command" in snap.notice
+    assert snap.notice_id >= 5
+    assert app.loop.is_alive()
+
+
+def test_divergence_pauses_and_reset_recovers(make_app):
+    app = make_app("drop")
+    c = app.controls
+    c.integrator.value = "euler"
+    c.dt.value = 0.05
+    c.damping.value = 1e6
+    snap = wait_for(app, lambda s: s.diverged, what="divergence")
+    assert snap.settings.paused and c.paused.value is True
+    assert "diverged" in snap.notice and app.controls.notice.visible
+    assert np.isfinite(snap.frame.x_world).all() and np.isfinite(snap.frame.L_world).all()
+    assert app.loop.is_alive()
+    t_stuck = snap.frame.t
+    time.sleep(0.3)
+    assert app.sync().frame.t == t_stuck  # paused, not crashing in a loop
+
+    c.damping.value = 100.0
+    c.dt.value = 0.005
+    c.integrator.value = "splitting"
+    c.reset.value = True
+    snap = app.sync()
+    assert not snap.diverged and not snap.settings.paused and c.paused.value is False
+    assert snap.notice == ""
+    snap = wait_for(app, lambda s: s.frame.t > 0.2, what="the run to resume")
+    assert np.isfinite(snap.frame.x_world).all() and not snap.diverged
+
+
+# ---- streaming ---------------------------------------------------------------------------------
+
+
+def _record_messages(app):
+    """Every message the server queues from now on (type name, node name, update keys)."""
+    sent = []
+    ws = app.server._websock_server
+    queue_message = ws.queue_message
+
+    def spy(message):
+        sent.append((type(message).__name__, getattr(message, "name", None), tuple(getattr(message, "updates", {}) or ())))
+        return queue_message(message)
+
+    ws.queue_message = spy
+    return sent
+
+
+def test_colours_only_while_points_shown_throttled_and_geometry_sent_once(make_app):
+    app = make_app("spin")  # tumbles through the water line: the wet set changes nearly every frame
+    app.layers.points.value = False
+    app.sync()
+    time.sleep(0.2)
+    sent = _record_messages(app)
+
+    def count(kind):
+        if kind == "colours":
+            return sum(1 for m in sent if m[1] == "/body/points" and "colors" in m[2])
+        return sum(1 for m in sent if m[1] == "/body" and m[0] == "SetPositionMessage")
+
+    deadline = time.monotonic() + 30
+    while count("poses") < 30 and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert count("poses") >= 30, sent[:10]  # the pose streams (~30 Hz)...
+    assert count("colours") == 0  # ...but no colours while the points are hidden
+
+    app.layers.points.value = True
+    sent.clear()
+    started = time.monotonic()
+    while count("colours") < 6 and time.monotonic() < started + 30:
+        time.sleep(0.05)
+    elapsed = time.monotonic() - started
+    assert count("colours") >= 6
+    assert count("colours") <= 5.0 * elapsed + 1.5  # at most 5 Hz
+    assert not [m for m in sent if m[0] in ("PointCloudMessage", "MeshMessage")]  # geometry is not resent
+
+
+def test_colours_mark_the_wet_samples(make_app):
+    app = make_app("rest", paused=True)
+    time.sleep(0.3)
+    app.sync()
+    colours = app.scene.points.colors
+    wet = app.latest().frame.wet_index
+    assert 0 < len(wet) < app.latest().body.n_samples
+    is_wet = np.all(colours == [30, 110, 230], axis=1)
+    assert set(np.flatnonzero(is_wet)) == set(wet.tolist())

@@ -16,6 +16,7 @@ from .compare import CompareArgs, compare
 from .config import ConfigError, load_scene, with_overrides
 from .figures import FiguresArgs, figures
 from .progress import progress_bar
+from .report import ReportArgs, report
 from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from .sweep import SweepArgs, sweep
 
@@ -91,6 +92,8 @@ def run(args: RunArgs) -> int:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
     scene = scene_from_args(args)
     sim = Simulation(scene)
+    for warning in sim.warnings():
+        print(f"floatsim: warning: {warning}", file=sys.stderr)
     announce_compile(sim)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
     out = open(args.out, "w") if args.out else None
@@ -116,7 +119,7 @@ def run(args: RunArgs) -> int:
         if out:
             out.close()
     if error:
-        print(f"floatsim: {error} (kept {rows} rows)", file=sys.stderr)
+        print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
     wall = time.perf_counter() - started
     last = sim.frame()
     steps = round(last.t / sim.dt)
@@ -148,7 +151,7 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | Non
 
 
 COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench),
-            "figures": (FiguresArgs, figures)}  # fmt: skip
+            "report": (ReportArgs, report), "figures": (FiguresArgs, figures)}  # fmt: skip
 
 
 def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:

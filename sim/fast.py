@@ -277,36 +277,60 @@ def exact_modes(K, h):
 
 
 @njit(**JIT)
-def damping_flow(K, lam, V, R, u, L, h, mass, inertia, exact):
-    """(u, L) after h of damping alone at a frozen pose, as in integrators.damping_flow."""
+def damping_flow(K, R, u, L, h, mass, inertia):
+    """(u, L) after h of damping alone by one explicit midpoint step, as in integrators.damping_flow."""
     sqrt_m = math.sqrt(mass)
     w_half = np.sqrt(inertia)
     y = np.empty(6)
     y[:3] = sqrt_m * u
     y[3:] = mv(R, mtv(R, L) / w_half)
-    if exact and lam[0] < 0.0:  # mild damping (see exact_modes): exp(-hK) y by its Taylor series
-        term = y.copy()
-        scale = np.abs(y).max()
+    y_mid = y - 0.5 * h * mat6v(K, y)
+    y = y - h * mat6v(K, y_mid)
+    return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
+
+
+@njit(**JIT)
+def forced_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
+    """(u, L) after h under the loads (F, T) and the damping together at a frozen pose, exactly,
+    as in integrators.forced_damping_flow: y(h) = exp(-hK) y0 + h phi(hK) W f."""
+    if not wet:
+        return u + h * F / mass, L + h * T
+    sqrt_m = math.sqrt(mass)
+    w_half = np.sqrt(inertia)
+    y = np.empty(6)
+    y[:3] = sqrt_m * u
+    y[3:] = mv(R, mtv(R, L) / w_half)
+    gv = np.empty(6)
+    gv[:3] = F / sqrt_m
+    gv[3:] = mv(R, mtv(R, T) / w_half)
+    if lam[0] < 0.0:  # mild (see exact_modes): both series, sum (-hK)^n y/n! + h (-hK)^n g/(n+1)!
+        a = y.copy()
+        b = h * gv
+        out = a + b
+        scale = max(np.abs(y).max(), np.abs(b).max())
         for n in range(1, 40):
-            term = (-h / n) * mat6v(K, term)
-            y = y + term
-            if np.abs(term).max() <= 1e-17 * scale:
+            a = (-h / n) * mat6v(K, a)
+            b = (-h / (n + 1)) * mat6v(K, b)
+            out += a + b
+            if max(np.abs(a).max(), np.abs(b).max()) <= 1e-17 * scale:
                 break
-    elif exact:  # stiff: through the eigenmodes, each decaying by exp(-h lambda) <= 1
+        y = out
+    else:  # stiff: through the eigenmodes
         c = np.zeros(6)
         for j in range(6):
-            acc = 0.0
+            cy = 0.0
+            cg = 0.0
             for i in range(6):
-                acc += V[i, j] * y[i]
-            c[j] = acc * math.exp(-h * max(lam[j], 0.0))
+                cy += V[i, j] * y[i]
+                cg += V[i, j] * gv[i]
+            x = h * max(lam[j], 0.0)
+            phi = -math.expm1(-x) / x if x > 1e-12 else 1.0 - 0.5 * x
+            c[j] = math.exp(-x) * cy + h * phi * cg
         for i in range(6):
             acc = 0.0
             for j in range(6):
                 acc += V[i, j] * c[j]
             y[i] = acc
-    else:
-        y_mid = y - 0.5 * h * mat6v(K, y)
-        y = y - h * mat6v(K, y_mid)
     return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
 
 
@@ -379,10 +403,10 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d, flags, acc)
             Fn, Tn = twist_loads(Fc, Tc, Dn, wetn, u, omega_of(Rn, L, inertia))
             un, Ln = u + dt * Fn / mass, L + dt * Tn
-        elif scheme <= 2:  # splitting / implicit: B(h) A(h) C(dt) A(h) B(h), loads carried over
+        elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
             if wet:
-                un, Ln = damping_flow(K, lam, V, R, un, Ln, h, mass, inertia, scheme == 2)
+                un, Ln = damping_flow(K, R, un, Ln, h, mass, inertia)
             un, Ln = un + h * F / mass, Ln + h * T
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
@@ -391,9 +415,17 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, rho, g, d):
             un, Ln = un + h * Fc / mass, Ln + h * Tc
             if wetn:
                 K = damping_modes(Dn, Rn, mass, inertia)
-                if scheme == 2:  # the same modes serve the next step's first half, at this pose
-                    lam, V = exact_modes(K, h)
-                un, Ln = damping_flow(K, lam, V, Rn, un, Ln, h, mass, inertia, scheme == 2)
+                un, Ln = damping_flow(K, Rn, un, Ln, h, mass, inertia)
+        elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = loads and damping solved exactly together
+            un, Ln = forced_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet)
+            xn = x + dt * un
+            qn = free_rotation(q, Ln, dt, inertia)
+            Rn = quat_to_matrix(qn)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, rho, g, d, flags, acc)
+            if wetn:  # the same modes serve the next step's first half, at this pose
+                K = damping_modes(Dn, Rn, mass, inertia)
+                lam, V = exact_modes(K, h)
+            un, Ln = forced_flow(K, lam, V, Rn, un, Ln, Fc, Tc, h, mass, inertia, wetn)
         else:  # rk4 on (x, q, u, L), q renormalised
             k1 = derivative(kind, y, geom, mass, inertia, rho, g, d, flags, acc)
             k2 = derivative(kind, y + 0.5 * dt * k1, geom, mass, inertia, rho, g, d, flags, acc)

@@ -27,34 +27,23 @@ def free_rotation(model: Model, q: np.ndarray, L: np.ndarray, h: float) -> np.nd
     return normalized(q)
 
 
-def damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L, h: float, exact: bool):
-    """Advance (u, L) by h under the damping alone, pose frozen: d(Mu, L)/dt = -D (u, omega).
-
-    exact=True solves this linear system exactly via the symmetric eigenproblem of
-    K = W D W, W = diag(M, R I R^T)^(-1/2): every mode decays by exp(-h lambda) <= 1, so any
-    damping coefficient and any h stay stable and never overshoot (L-stable, monotone).
-    exact=False takes one explicit midpoint step (second order, stable only for h lambda <= 2).
-    """
+def damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L, h: float):
+    """Advance (u, L) by h under the damping alone, pose frozen: d(Mu, L)/dt = -D (u, omega), by
+    one explicit midpoint step in y = Mg^(1/2) v, K = W D W, W = diag(M, R I R^T)^(-1/2) (second
+    order; stable while h lambda_max(K) <= 2)."""
     if D is None:
         return u, L
     body = model.body
     sqrt_m = np.sqrt(body.mass)
     w_half = np.sqrt(body.inertia)
-    # y = Mg^(1/2) v, with Mg^(1/2) = diag(sqrt(M), R sqrt(I) R^T)
     y = np.concatenate([sqrt_m * u, R @ ((R.T @ L) / w_half)])
     W = np.zeros((6, 6))
     W[:3, :3] = np.eye(3) / sqrt_m
     W[3:, 3:] = (R / w_half) @ R.T
     K = W @ D @ W
-    if exact:
-        lam, V = np.linalg.eigh(K)
-        y = V @ (np.exp(-h * np.maximum(lam, 0.0)) * (V.T @ y))
-    else:
-        y_mid = y - 0.5 * h * (K @ y)
-        y = y - h * (K @ y_mid)
-    u_new = y[:3] / sqrt_m
-    L_new = R @ (w_half * (R.T @ y[3:]))
-    return u_new, L_new
+    y_mid = y - 0.5 * h * (K @ y)
+    y = y - h * (K @ y_mid)
+    return y[:3] / sqrt_m, R @ (w_half * (R.T @ y[3:]))
 
 
 class Euler:
@@ -62,6 +51,7 @@ class Euler:
     at the new pose, then kick u and L with them. First order."""
 
     name, order, adaptive = "euler", 1, False
+    heave_limit, damping_limit = 2.0, 2.0  # stable while dt omega_heave and dt lambda_max stay below these
 
     def step(self, model: Model, s: State, dt: float) -> State:
         x = s.x_world + dt * s.u_world
@@ -76,10 +66,10 @@ class Euler:
 class Splitting:
     """Symmetric (Strang) splitting: half damping, half kick, drift with exact rotation, half kick,
     half damping. Symplectic and second order without damping; with damping each half damping
-    substep is an explicit midpoint step (second order, stability limited by dt d A_sub / M)."""
+    substep is an explicit midpoint step (second order, stable while dt lambda_max <= 4)."""
 
     name, order, adaptive = "splitting", 2, False
-    exact_damping = False
+    heave_limit, damping_limit = 2.0, 4.0
 
     def step(self, model: Model, s: State, dt: float) -> State:
         h = 0.5 * dt
@@ -87,7 +77,7 @@ class Splitting:
         x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
         R = quat_to_matrix(q)
         wet = model.wetted(x, R)
-        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h, self.exact_damping)
+        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h)
         F, T = model.conservative(wet)
         u, L = u + h * F / M, L + h * T
         x = x + dt * u
@@ -96,16 +86,53 @@ class Splitting:
         wet = model.wetted(x, R)
         F, T = model.conservative(wet)
         u, L = u + h * F / M, L + h * T
-        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h, self.exact_damping)
+        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h)
         return State(s.t + dt, x, q, u, L)
 
 
+def forced_damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L, F, T, h: float):
+    """Advance (u, L) by h under the pose-dependent loads (F, T) and the damping together, pose
+    frozen: d(M u, L)/dt = (F, T) - D (u, omega), a linear system with a constant forcing, solved
+    exactly. In y = Mg^(1/2) v with K = W D W: y(h) = exp(-hK) y0 + h phi(hK) W f,
+    phi(x) = (1 - e^-x) / x. Each mode decays by exp(-h lambda) <= 1 (stable for any damping, no
+    overshoot) and relaxes to its exact terminal velocity, so an overdamped body creeps at the
+    physical speed. With no damping it is the plain kick."""
+    body = model.body
+    if D is None:
+        return u + h * F / body.mass, L + h * T
+    sqrt_m, w_half = np.sqrt(body.mass), np.sqrt(body.inertia)
+    y = np.concatenate([sqrt_m * u, R @ ((R.T @ L) / w_half)])
+    g = np.concatenate([F / sqrt_m, R @ ((R.T @ T) / w_half)])
+    W = np.zeros((6, 6))
+    W[:3, :3] = np.eye(3) / sqrt_m
+    W[3:, 3:] = (R / w_half) @ R.T
+    lam, V = np.linalg.eigh(W @ D @ W)
+    x = h * np.maximum(lam, 0.0)
+    phi = np.where(x > 1e-12, -np.expm1(-x) / np.where(x > 1e-12, x, 1.0), 1.0 - 0.5 * x)
+    y = V @ (np.exp(-x) * (V.T @ y) + h * phi * (V.T @ g))
+    return y[:3] / sqrt_m, R @ (w_half * (R.T @ y[3:]))
+
+
 class ImplicitSplitting(Splitting):
-    """The splitting with each damping substep solved exactly (exponential of the 6x6 linear
-    damping system at a frozen pose): second order, and stable for any damping coefficient."""
+    """Strang splitting of the pose (drift with exact rotation) and the momenta (pose-dependent
+    loads and damping together, solved exactly at a frozen pose): second order, stable for any
+    damping coefficient, and an overdamped body creeps at its physical speed."""
 
     name = "implicit"
-    exact_damping = True
+    damping_limit = float("inf")
+
+    def step(self, model: Model, s: State, dt: float) -> State:
+        h = 0.5 * dt
+        x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
+        R = quat_to_matrix(q)
+        wet = model.wetted(x, R)
+        u, L = forced_damping_flow(model, model.damping_matrix(wet), R, u, L, *model.conservative(wet), h)
+        x = x + dt * u
+        q = free_rotation(model, q, L, dt)
+        R = quat_to_matrix(q)
+        wet = model.wetted(x, R)
+        u, L = forced_damping_flow(model, model.damping_matrix(wet), R, u, L, *model.conservative(wet), h)
+        return State(s.t + dt, x, q, u, L)
 
 
 def derivative(model: Model, y: np.ndarray) -> np.ndarray:
@@ -122,6 +149,7 @@ class RK4:
     """Classical fourth-order Runge-Kutta on (x, q, u, L); q is renormalised after each step."""
 
     name, order, adaptive = "rk4", 4, False
+    heave_limit, damping_limit = 2.0 * 2**0.5, 2.785  # where RK4's stability region meets the axes
 
     def step(self, model: Model, s: State, dt: float) -> State:
         y = s.as_vector()
@@ -137,6 +165,7 @@ class Adaptive:
 
     adaptive = True
     method, order = "RK45", 5
+    heave_limit = damping_limit = float("inf")  # error control picks stable steps
 
     def __init__(self, rtol: float = 1e-8, atol: float = 1e-10):
         self.name = self.method.lower()

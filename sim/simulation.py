@@ -11,7 +11,7 @@ import numpy as np
 
 from .body import Body, make_body
 from .config import SceneConfig
-from .forces import Model, Params, hydrostatic_energy
+from .forces import Model, Params, damping_matrix, hydrostatic_energy, wetted
 from .integrators import make_integrator
 from .rotation import normalized, quat_multiply
 from .state import State, angular_momentum, angular_velocity
@@ -195,20 +195,39 @@ class Simulation:
         self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
 
     def stability_numbers(self) -> dict[str, float]:
-        """The explicit schemes' stability numbers from PHYSICS.md, for the current body and dt:
-        dt * omega_heave (with water-plane area ~ V^(2/3)) and dt * d * A / M (whole surface wet)."""
+        """The explicit stability numbers of PHYSICS.md for the current body and dt: dt * omega_heave
+        (water-plane area ~ V^(2/3)) and dt * lambda_max, the fastest damping rate: the largest
+        eigenvalue of diag(M, I)^(-1/2) D diag(M, I)^(-1/2) with the whole surface wet (sway and roll
+        couple, so it exceeds d A / M)."""
         body, p = self.body, self.params
         omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
-        return {"heave": self.dt * omega, "damping": self.dt * p.damping * float(body.area.sum()) / body.mass}
+        rate = 0.0
+        if p.damping > 0 and p.rho > 0:
+            all_wet = wetted(body, np.array([0.0, 0.0, -1e9]), np.eye(3))
+            w = np.concatenate([np.full(3, body.mass), body.inertia]) ** -0.5
+            rate = float(np.linalg.eigvalsh(w[:, None] * damping_matrix(p, all_wet) * w[None, :]).max())
+        return {"heave": self.dt * omega, "damping": self.dt * rate}
+
+    def warnings(self) -> list[str]:
+        """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up)."""
+        n, integ = self.stability_numbers(), self.integrator
+        out = []
+        if n["damping"] > integ.damping_limit:
+            out.append(f"dt*lambda_max = {n['damping']:.3g} is past the damping limit {integ.damping_limit:.3g} of '{integ.name}': "
+                       f"use --integrator implicit or --dt below {self.dt * integ.damping_limit / n['damping']:.3g}")  # fmt: skip
+        if n["heave"] > integ.heave_limit:
+            out.append(f"dt*omega_heave = {n['heave']:.3g} is past the heave limit {integ.heave_limit:.3g} of '{integ.name}': "
+                       f"use --dt below {self.dt * integ.heave_limit / n['heave']:.3g}")  # fmt: skip
+        return out
 
     def _diagnose(self, t: float, what: str) -> str:
-        numbers = self.stability_numbers()
-        name = self.integrator.name
-        if numbers["damping"] > 1.0 and name not in ("implicit", "radau"):
-            cause = (f"dt = {self.dt:g} s is too large for this damping with '{name}' (dt*d*A/M = {numbers['damping']:.3g}, "
-                     "explicit limit about 2): use --integrator implicit or a smaller --dt")  # fmt: skip
-        elif numbers["heave"] > 0.5:
-            cause = f"dt = {self.dt:g} s is too large for this body's heave oscillation (dt*omega = {numbers['heave']:.3g}): use a smaller --dt"
+        numbers, integ = self.stability_numbers(), self.integrator
+        if numbers["damping"] > 0.5 * integ.damping_limit:
+            cause = (f"dt = {self.dt:g} s is too large for this damping with '{integ.name}' (dt*lambda_max = {numbers['damping']:.3g}, "
+                     f"its limit {integ.damping_limit:.3g}): use --integrator implicit or a smaller --dt")  # fmt: skip
+        elif numbers["heave"] > 0.5 * integ.heave_limit:
+            cause = (f"dt = {self.dt:g} s is too large for this body's heave oscillation (dt*omega = {numbers['heave']:.3g}, "
+                     f"limit {integ.heave_limit:.3g}): use a smaller --dt")  # fmt: skip
         else:
             cause = "try a smaller --dt or another --integrator"
         return f"simulation diverged at t = {t:.6g} s: {what}; likely cause: {cause}"

@@ -127,7 +127,6 @@ class SimLoop:
         self._resync_after = resync_after
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
-        self._initial_scene = scene_name
 
         self.sim = sim.Simulation(scene)
         self.settings = settings_for(self.sim, scene_name)
@@ -140,7 +139,7 @@ class SimLoop:
         self._anchor: tuple[float, float] | None = None  # (wall, sim t) that pacing counts from
         self._history: collections.deque = collections.deque()  # (wall, sim t) for the real-time factor
         self._behind_until = 0.0
-        self._step_cost = 1e-3  # seconds per step, running estimate
+        self._step_cost = self._budget  # seconds per step, running estimate (unknown yet: one-step chunks)
         self._steps = 0
         self._epoch = 0
         self._diverged = False
@@ -288,12 +287,8 @@ class SimLoop:
         wall0, t0 = self._anchor
         target = t0 + (now - wall0) * s.speed
         n = round((target - t) / self.sim.dt)
-        cap = max(1, int(self._budget / self._step_cost))
         if n > 0:
-            n = min(n, cap)
-            started = time.perf_counter()
-            self._step(n)
-            self._step_cost = 0.7 * self._step_cost + 0.3 * (time.perf_counter() - started) / n
+            self._step_within_budget(n)
         t = self.sim.state.t
         if (target - t) / s.speed > self._resync_after:  # fell far behind: drop the debt, say so
             self._anchor = (now, t)
@@ -301,6 +296,29 @@ class SimLoop:
         self._history.append((now, t))
         while len(self._history) > 2 and now - self._history[0][0] > 2.0:
             self._history.popleft()
+
+    def _step_within_budget(self, n: int) -> None:
+        """Up to n steps in chunks of about a quarter of the tick's budget; stop once the budget is spent.
+
+        The chunk size comes from the measured cost per step, which a new integrator or body makes
+        wrong: `_cost_unknown` starts those with one-step chunks, so a slow scheme cannot stall a tick.
+        """
+        started = time.perf_counter()
+        done = 0
+        while done < n and not self.settings.paused:
+            k = min(n - done, max(1, int(0.25 * self._budget / self._step_cost)))
+            chunk_started = time.perf_counter()
+            self._step(k)
+            done += k
+            cost = (time.perf_counter() - chunk_started) / k
+            self._step_cost = cost if k == 1 else 0.5 * self._step_cost + 0.5 * cost
+            if time.perf_counter() - started > self._budget:
+                break
+
+    def _cost_unknown(self) -> None:
+        """After a new integrator or body: measure the cost afresh, and start pacing afresh (no debt from the old one)."""
+        self._step_cost = self._budget
+        self._restart_clock()
 
     def _step(self, n: int) -> None:
         try:
@@ -375,6 +393,7 @@ class SimLoop:
             return
         self.sim.set_integrator(value)
         self._set("integrator", value, tell=False)
+        self._cost_unknown()
 
     def _cmd_pause(self, value) -> None:
         paused = bool(value)
@@ -420,6 +439,7 @@ class SimLoop:
         new.reset(carried)
         self.sim = new
         self._epoch += 1
+        self._cost_unknown()
 
     def _cmd_scene(self, value) -> None:
         """Load another preset with its own parameters (speed and pause are kept)."""
@@ -434,4 +454,4 @@ class SimLoop:
                 self._set(field.name, getattr(self.settings, field.name))
         self._diverged = False
         self._epoch += 1
-        self._restart_clock()
+        self._cost_unknown()

@@ -106,7 +106,9 @@ def serve(args: ViewArgs) -> int:
     print(f"floatsim viewer: {app.url}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
     done = threading.Event()
     if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, lambda *_: done.set())
+        # Both set explicitly: a shell starts background jobs with SIGINT ignored, and Ctrl-C must still stop us.
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, lambda *_: done.set())
     try:
         while not done.wait(0.5):
             pass

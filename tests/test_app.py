@@ -151,16 +151,13 @@ def test_falling_behind_resyncs_and_warns_but_stays_responsive(make_app):
     app.controls.points_per_edge.value = 30  # 5400 samples
     app.controls.speed.value = 10.0
     app.controls.integrator.value = "rk4"
-    app.controls.dt.value = 0.0005  # 20000 rk4 steps per wall second: far beyond this machine
+    app.controls.dt.value = 1e-5  # a million rk4 steps per wall second: far beyond any machine
     snap = wait_for(app, lambda s: s.behind and math.isfinite(s.real_time_factor), what="the behind flag and a measured rate")
     assert snap.real_time_factor < 0.5 * 10.0
     assert "cannot keep up" in describe(snap)
     started = time.monotonic()
     app.sync()
     assert time.monotonic() - started < 2.0  # commands are still applied promptly (a tick costs ~1/30 s of CPU)
-    wall0, t0 = time.monotonic(), snap.frame.t
-    time.sleep(1.0)
-    assert (app.sync().frame.t - t0) / (time.monotonic() - wall0) < 10.0
 
 
 def test_pacing_drops_the_debt_instead_of_racing_to_catch_up():
@@ -170,12 +167,13 @@ def test_pacing_drops_the_debt_instead_of_racing_to_catch_up():
     loop = SimLoop(sim.load_scene("spin"), "spin")
     dt, now = loop.sim.dt, time.monotonic()
     loop._advance(now)  # anchors the clock
-    loop._step_cost = 1.0  # pretend steps are slow: one per tick
+    budget = loop._budget
+    loop._budget = 0.0  # pretend the machine is slow: one step per tick
     loop._advance(now + 10.0)  # 10 s later 2000 steps are due; one is taken
     assert loop.sim.state.t == pytest.approx(dt)
     loop._publish_now()
     assert loop.latest().behind
-    loop._step_cost = 1e-6  # fast again: a loop that kept its debt would now take ~2000 steps at once
+    loop._budget = budget  # fast again: a loop that kept its debt would now take ~2000 steps at once
     loop._advance(now + 10.1)
     assert loop.sim.state.t == pytest.approx(dt + 0.1, abs=1.5 * dt)
     loop._advance(now + 10.2)

@@ -28,6 +28,7 @@ LABELS = {
     "step": "Step",
     "reset": "Reset",
     "scene": "Scene",
+    "forces": "Force model",
 }
 
 
@@ -52,13 +53,15 @@ class Controls:
         with gui.add_folder("Body and water"):
             self.density = _slider(gui, LABELS["density"], 1.0, 5000.0, 1.0, settings.density)
             self.damping = _slider(gui, LABELS["damping"], 0.0, 5000.0, 1.0, settings.damping)
-            self.points_per_edge = _slider(gui, LABELS["points_per_edge"], 1, 30, 1, settings.points_per_edge)
+            self.points_per_edge = _slider(gui, LABELS["points_per_edge"], 1, 60, 1, settings.points_per_edge)
+            self.forces = gui.add_dropdown(LABELS["forces"], sim.forces.FORCE_MODELS, initial_value=settings.forces,
+                                           hint="points: summed over the samples (the report's model); panels: exact over the clipped triangles")  # fmt: skip
             self.omega0 = gui.add_vector3(LABELS["omega0"], settings.omega0, step=0.1, hint="Angular velocity given on Reset, world frame")
         with gui.add_folder("Integration"):
             self.dt = _slider(gui, LABELS["dt"], 0.0005, 0.05, 0.0005, settings.dt)
             self.integrator = gui.add_dropdown(LABELS["integrator"], tuple(sim.INTEGRATORS), initial_value=settings.integrator)
 
-        for name in ("density", "damping", "dt", "speed", "points_per_edge", "omega0", "integrator", "scene"):
+        for name in ("density", "damping", "dt", "speed", "points_per_edge", "omega0", "integrator", "scene", "forces"):
             self._bind(name, name)
         self._bind("paused", "pause")
         self.step.on_click(lambda _: self._post("step", None))

@@ -24,7 +24,7 @@ RANGES = {
     "damping": Range("Damping", 0.0, 1.0e7, "N·s/m³"),
     "dt": Range("Time step", 1.0e-5, 0.1, "s"),
     "speed": Range("Speed", 0.01, 100.0, "×"),
-    "points_per_edge": Range("Points per edge", 1, 40),
+    "points_per_edge": Range("Points per edge", 1, 100),
     "omega0": Range("Initial ω", -100.0, 100.0, "rad/s"),
 }
 

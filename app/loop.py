@@ -50,6 +50,8 @@ class Settings:
     omega0: tuple[float, float, float] = (0.0, 0.0, 0.0)
     """Angular velocity applied on Reset, world frame, rad/s."""
     paused: bool = False
+    forces: str = "points"
+    """Force model: 'points' or 'panels'."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,6 +99,7 @@ def settings_for(simulation: sim.Simulation, scene_name: str, speed: float = 1.0
         speed=speed,
         omega0=tuple(float(w) for w in scene.initial.omega),  # type: ignore[arg-type]
         paused=paused,
+        forces=simulation.params.forces,
     )
 
 
@@ -395,6 +398,14 @@ class SimLoop:
         self._set("integrator", value, tell=False)
         self._cost_unknown()
 
+    def _cmd_forces(self, value) -> None:
+        if value not in sim.forces.FORCE_MODELS:
+            self._raise_notice(f"Force model: {value!r} is not one of {', '.join(sim.forces.FORCE_MODELS)}; kept {self.settings.forces}.")
+            self._set("forces", self.settings.forces)
+            return
+        self.sim.set_params(forces=value)
+        self._set("forces", value, tell=False)
+
     def _cmd_pause(self, value) -> None:
         paused = bool(value)
         if not paused:
@@ -427,7 +438,8 @@ class SimLoop:
         s = self.settings
         body_change = {"body__samples": 6 * n * n} if old.scene.body.shape == "mesh" else {"body__points_per_edge": n}
         scene = with_overrides(
-            old.scene, body__density=s.density, fluid__damping=s.damping, step__dt=s.dt, step__integrator=s.integrator, **body_change
+            old.scene, body__density=s.density, fluid__damping=s.damping, fluid__forces=s.forces, step__dt=s.dt, step__integrator=s.integrator,
+            **body_change,
         )
         new = sim.Simulation(scene)
         state, frame = old.state, old.frame()

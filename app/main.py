@@ -80,6 +80,24 @@ def check_address(host: str, port: int) -> None:
             raise ConfigError(f"cannot listen on --host {host!r}: {e.strerror}") from None
 
 
+def warm_kernels() -> None:
+    """Compile (first run on a machine) or load the physics kernels before the simulation thread needs
+    them, so a first launch never stalls a running viewer; say so when it takes a while."""
+    from sim.simulation import default_backend
+
+    if default_backend() != "numba":
+        return
+    from sim.fast import warm_up
+
+    note = threading.Timer(1.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about 30 s)...",
+                                              file=sys.stderr, flush=True))  # fmt: skip
+    note.start()
+    try:
+        warm_up()
+    finally:
+        note.cancel()
+
+
 def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> ViewerApp:
     """Load the scene (a bad one raises ConfigError before any server starts), start server and simulation thread.
 
@@ -87,6 +105,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     """
     scene = load_scene(args.scene)
     check_address(args.host, args.port)
+    warm_kernels()
     presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options)

@@ -20,16 +20,6 @@ from pathlib import Path
 
 import tyro
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 @dataclass
@@ -59,8 +49,10 @@ def browse(url: str, seconds: float) -> None:
     """The child process: keep one page open on the viewer (small viewport, as a laptop tab would be throttled to)."""
     from playwright.sync_api import sync_playwright
 
+    from app.browser import launch
+
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+        browser = launch(p)
         page = browser.new_page(viewport={"width": 800, "height": 600})
         page.goto(url + "/?fixedDpr=0.5", timeout=60_000)
         page.wait_for_selector("canvas", timeout=60_000)

@@ -8,8 +8,6 @@ own point grid (`report_grid`), rebuilt for the comparison of figures 1-2; its f
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 import tempfile
@@ -345,16 +343,6 @@ GRID_NAMES = {"ours": "floatsim, cell centres", "report": "report, area (s/N)^2"
 
 # ---- the viewer render ------------------------------------------------------------------------------------
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 VIEWS = {"side": ((1.3, -1.8, 1.0), (0.0, 0.0, -0.3), (0.0, 0.0, 1.0)), "top": ((0.0, 0.0, 2.4), (0.0, 0.0, -0.4), (0.0, 1.0, 0.0))}
 """Camera position, look-at point and up direction of each render (the top view has +y up, +x right)."""
 
@@ -374,58 +362,16 @@ def resting_scene_toml(trace: Trace) -> str:
 
 
 def viewer_render(trace: Trace, paths: dict[str, Path]) -> str | None:
-    """Screenshots of the live viewer (app/) showing the final pose, paused, one per view in VIEWS, through
-    viser's client.get_render in headless chromium. Returns None on success, else why not."""
+    """Pictures of the final pose from the live viewer, one per view in VIEWS. Returns None on success, else
+    why not. The one place sim reaches for app/: optional and lazy, with a matplotlib render as the fallback."""
     try:
-        from PIL import Image
-        from playwright.sync_api import sync_playwright
-
-        from app.args import ViewArgs
-        from app.main import start
-    except Exception as e:  # noqa: BLE001 -- the viewer is optional here: any import problem means the matplotlib render
+        from app.render import render_scene
+    except Exception as e:  # noqa: BLE001 -- any import problem means the matplotlib render
         return f"the viewer could not be imported ({type(e).__name__}: {e})"
-    if not Path(CHROMIUM).is_file():
-        return f"{CHROMIUM} is missing"
     with tempfile.TemporaryDirectory() as tmp:
         scene = Path(tmp) / "resting_pose.toml"
         scene.write_text(resting_scene_toml(trace))
-        viewer = None
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):  # viser's banner
-                viewer = start(ViewArgs(scene=str(scene), port=0))
-            viewer.loop.post("pause", True)
-            viewer.sync()
-            with sync_playwright() as p:
-                browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-                try:
-                    page = browser.new_page(viewport={"width": 800, "height": 600})
-                    page.set_default_timeout(60_000)
-                    page.goto(viewer.url)
-                    page.wait_for_selector("canvas")
-                    deadline = time.monotonic() + 30.0
-                    while not viewer.server.get_clients():
-                        if time.monotonic() > deadline:
-                            return "no browser client connected to the viewer within 30 s"
-                        time.sleep(0.1)
-                    client = next(iter(viewer.server.get_clients().values()))
-                    time.sleep(3.0)  # the environment map fades in
-                    for name, path in paths.items():
-                        position, look_at, up = VIEWS[name]
-                        client.camera.up_direction = up
-                        client.camera.position = position
-                        client.camera.look_at = look_at
-                        time.sleep(2.0)  # the browser applies the camera on its next frames
-                        image = client.get_render(450, 600, timeout=60.0)
-                        Image.fromarray(image).save(path)
-                finally:
-                    browser.close()
-        except Exception as e:  # noqa: BLE001 -- a failed render must not lose the page: fall back to matplotlib
-            return f"the viewer render failed ({type(e).__name__}: {e})"
-        finally:
-            if viewer is not None:
-                with contextlib.redirect_stdout(io.StringIO()):  # and its goodbye
-                    viewer.stop()
-    return None
+        return render_scene(str(scene), VIEWS, paths)
 
 
 # ---- the command ------------------------------------------------------------------------------------------

@@ -290,7 +290,7 @@ def test_scene_dropdown_loads_the_preset_and_shows_its_values(make_app):
         ("damping", float("inf"), 1e7),
         ("dt", 0.0, 1e-5),
         ("speed", 1e9, 100.0),
-        ("points_per_edge", 1000, 40),
+        ("points_per_edge", 1000, 100),
     ],
 )
 def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, used):
@@ -403,3 +403,19 @@ def test_colours_mark_the_wet_samples(make_app):
     assert 0 < len(wet) < app.latest().body.n_samples
     is_wet = np.all(colours == [30, 110, 230], axis=1)
     assert set(np.flatnonzero(is_wet)) == set(wet.tolist())
+
+
+def test_force_model_dropdown_switches_the_running_model(make_app):
+    """points -> panels applies between steps; the tilted cube's buoyancy becomes the exact one, and
+    a rebuild of the body keeps the chosen model. A bad value is refused with a note."""
+    app = make_app("rest", paused=True)
+    assert app.sync().params.forces == "points"
+    app.controls.forces.value = "panels"
+    snap = app.sync()
+    assert snap.params.forces == "panels" and snap.settings.forces == "panels"
+    assert snap.frame.x_world[2] == pytest.approx(-0.4, abs=1e-12)  # the state is kept
+    app.controls.points_per_edge.value = 4
+    assert app.sync().params.forces == "panels"
+    app.loop.post("forces", "voxels")
+    snap = app.sync()
+    assert snap.params.forces == "panels" and "Force model" in snap.notice

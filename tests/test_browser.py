@@ -10,21 +10,10 @@ from __future__ import annotations
 import io
 import os
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 def _require(ok: bool, reason: str) -> None:
@@ -34,21 +23,16 @@ def _require(ok: bool, reason: str) -> None:
         pytest.skip(reason)
 
 
-def _playwright():
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        _require(False, "playwright is not installed (pip install playwright; never `playwright install`)")
-    return sync_playwright
-
-
 @pytest.fixture
 def browser_page():
-    _require(Path(CHROMIUM).is_file(), f"{CHROMIUM} not found (apt-get install chromium)")
-    sync_playwright = _playwright()
-    pytest.importorskip("viser")
+    from app.browser import launch, missing
+
+    why = missing()
+    _require(why is None, why or "")
+    from playwright.sync_api import sync_playwright
+
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+        browser = launch(p)
         try:
             page = browser.new_page(viewport={"width": 800, "height": 600})
             page.set_default_timeout(60_000)

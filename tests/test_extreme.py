@@ -9,7 +9,7 @@ from sim import Simulation, SimulationDiverged, load_scene, with_overrides
 
 
 def trajectory(sim, steps, every=1):
-    z, frames = [], []
+    frames = []
     for _ in range(steps // every):
         sim.step(every)
         frames.append(sim.frame())

@@ -7,7 +7,7 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from sim import Simulation, load_scene, with_overrides
-from sim.forces import Params, hydrostatic_energy, wetted_panels
+from sim.forces import hydrostatic_energy, wetted_panels
 from sim.rotation import quat_to_matrix, rotate_world
 
 

@@ -467,3 +467,31 @@ def advance_many(Y, n_steps, dt, scheme, kind, geom, masses, inertias, rho, g, d
     for b in range(Y.shape[0]):
         out[b], done[b] = advance(Y[b], n_steps, dt, scheme, kind, geom, masses[b], inertias[b], rho, g, ds[b])
     return out, done
+
+
+@njit(**JIT)
+def observe_points(x, R, u, w, r, nrm, area, mass, rho, g, d, wet):
+    """The frame's diagnostics for the sampled model in one pass, as simulation.observe computes them
+    with numpy: total force and torque (pressure, damping at (u, w), gravity), hydrostatic energy,
+    wet area and submerged volume; marks the wet samples in `wet`."""
+    F = np.zeros(3)
+    T = np.zeros(3)
+    F[2] = -mass * g
+    e_hyd = 0.0
+    a_sub = 0.0
+    v_sub = 0.0
+    rg = rho * g
+    for k in range(r.shape[0]):
+        lever = mv(R, r[k])
+        z = x[2] + lever[2]
+        wet[k] = z < 0.0
+        if z < 0.0:
+            normal = mv(R, nrm[k])
+            a = area[k]
+            f = (rg * z * a) * normal - (d * a) * (u + cross(w, lever))
+            F += f
+            T += cross(lever, f)
+            e_hyd += -0.5 * rg * z * z * a * normal[2]
+            a_sub += a
+            v_sub += z * a * normal[2]
+    return F, T, e_hyd, a_sub, v_sub

@@ -64,12 +64,25 @@ class Frame:
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume]  # fmt: skip
 
 
-def observe(model: Model, state: State) -> Frame:
-    """All diagnostics of a state, from one set of wet samples."""
+def observe(model: Model, state: State, compiled: bool = False) -> Frame:
+    """All diagnostics of a state, from one set of wet samples (for the sampled model with
+    compiled=True, from one pass of the compiled kernel: the same numbers to round-off)."""
     body, params = model.body, model.params
     R = state.R_world_body
-    wet = model.wetted(state.x_world, R)
     omega = angular_velocity(body, R, state.L_world)
+    if compiled and params.forces == "points":
+        from .fast import observe_points
+
+        wet = np.empty(body.n_samples, dtype=bool)
+        d = params.damping if model.has_damping else 0.0
+        rho = params.rho if model.needs_wet else 0.0
+        F, T, e_hyd, a_sub, v_sub = observe_points(state.x_world, R, state.u_world, omega, body.r_body, body.n_body, body.area,
+                                                   body.mass, rho, params.g, d, wet)  # fmt: skip
+        return Frame(state.t, state.x_world, state.q_world_body, state.u_world, omega, state.L_world, F, T,
+                     E_kin=0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world),
+                     E_grav=body.mass * params.g * float(state.x_world[2]), E_hyd=e_hyd if model.has_pressure else 0.0,
+                     submerged_area=a_sub, submerged_volume=v_sub, wet_index=np.flatnonzero(wet))  # fmt: skip
+    wet = model.wetted(state.x_world, R)
     F, T = model.loads(wet, state.u_world, omega)
     return Frame(
         t=state.t,
@@ -124,6 +137,8 @@ class Simulation:
     def __init__(self, scene: SceneConfig, body: Body | None = None, backend: str | None = None):
         self.scene = scene
         self.backend = backend or default_backend()
+        self._frame_key: tuple | None = None
+        self._frame: Frame | None = None
         body = body or make_body(scene.body, scene.base_dir)
         fluid = scene.fluid
         self.model = Model(body, Params(fluid.rho, fluid.g, fluid.damping, fluid.forces))
@@ -141,7 +156,11 @@ class Simulation:
         return self.model.params
 
     def frame(self) -> Frame:
-        return observe(self.model, self.state)
+        """Diagnostics of the current state (computed once per state and model)."""
+        key = (self.state, self.model)
+        if self._frame_key != key:
+            self._frame, self._frame_key = observe(self.model, self.state, self.backend == "numba"), key
+        return self._frame
 
     @property
     def compiled(self) -> bool:

@@ -473,25 +473,36 @@ def advance_many(Y, n_steps, dt, scheme, kind, geom, masses, inertias, rho, g, d
 def observe_points(x, R, u, w, r, nrm, area, mass, rho, g, d, wet):
     """The frame's diagnostics for the sampled model in one pass, as simulation.observe computes them
     with numpy: total force and torque (pressure, damping at (u, w), gravity), hydrostatic energy,
-    wet area and submerged volume; marks the wet samples in `wet`."""
-    F = np.zeros(3)
-    T = np.zeros(3)
-    F[2] = -mass * g
-    e_hyd = 0.0
-    a_sub = 0.0
-    v_sub = 0.0
+    wet area and submerged volume; marks the wet samples in `wet`. Scalar loop, no allocations."""
+    R00, R01, R02, R10, R11, R12, R20, R21, R22 = R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
+    F0 = F1 = T0 = T1 = T2 = e_hyd = a_sub = v_sub = 0.0
+    F2 = -mass * g
     rg = rho * g
     for k in range(r.shape[0]):
-        lever = mv(R, r[k])
-        z = x[2] + lever[2]
+        a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
+        lz = R20 * a0 + R21 * a1 + R22 * a2
+        z = x[2] + lz
         wet[k] = z < 0.0
         if z < 0.0:
-            normal = mv(R, nrm[k])
+            lx = R00 * a0 + R01 * a1 + R02 * a2
+            ly = R10 * a0 + R11 * a1 + R12 * a2
+            b0, b1, b2 = nrm[k, 0], nrm[k, 1], nrm[k, 2]
+            nx = R00 * b0 + R01 * b1 + R02 * b2
+            ny = R10 * b0 + R11 * b1 + R12 * b2
+            nz = R20 * b0 + R21 * b1 + R22 * b2
             a = area[k]
-            f = (rg * z * a) * normal - (d * a) * (u + cross(w, lever))
-            F += f
-            T += cross(lever, f)
-            e_hyd += -0.5 * rg * z * z * a * normal[2]
+            p = rg * z * a
+            da = d * a
+            fx = p * nx - da * (u[0] + w[1] * lz - w[2] * ly)
+            fy = p * ny - da * (u[1] + w[2] * lx - w[0] * lz)
+            fz = p * nz - da * (u[2] + w[0] * ly - w[1] * lx)
+            F0 += fx
+            F1 += fy
+            F2 += fz
+            T0 += ly * fz - lz * fy
+            T1 += lz * fx - lx * fz
+            T2 += lx * fy - ly * fx
+            e_hyd += -0.5 * rg * z * z * a * nz
             a_sub += a
-            v_sub += z * a * normal[2]
-    return F, T, e_hyd, a_sub, v_sub
+            v_sub += z * a * nz
+    return np.array([F0, F1, F2]), np.array([T0, T1, T2]), e_hyd, a_sub, v_sub

@@ -96,24 +96,41 @@ def omega_of(R, L, inertia):
 
 
 @njit(**JIT)
-def _accumulate(P, Z, normal, acc_zn, acc_zt, acc_S, acc_rr, need_rr):
-    """Add one triangle's exact wet integrals (P: 3x3 levers, Z: vertex heights <= 0). Returns its area."""
-    e1 = P[1] - P[0]
-    e2 = P[2] - P[0]
-    c = cross(e1, e2)
-    area = 0.5 * (c[0] * normal[0] + c[1] * normal[1] + c[2] * normal[2])
-    sz = Z[0] + Z[1] + Z[2]
-    sr = P[0] + P[1] + P[2]
+def _crossing(a, b, x2):
+    """Where the edge a->b (levers; heights x2 + a[2], x2 + b[2] of opposite signs) crosses z = 0."""
+    za, zb = x2 + a[2], x2 + b[2]
+    t = za / (za - zb)
+    return (a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t)
+
+
+@njit(**JIT)
+def _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr):
+    """Add one wet triangle's exact integrals (levers p0, p1, p2; heights x2 + p[2], clipped to <= 0)
+    to the sums zn, zt, S, rr in place: integral f g dA = A/12 (sum f_i g_i + sum f_i sum g_i). Returns its area."""
+    e10, e11, e12 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    e20, e21, e22 = p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]
+    area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+    z0, z1, z2 = min(x2 + p0[2], 0.0), min(x2 + p1[2], 0.0), min(x2 + p2[2], 0.0)
+    sz = z0 + z1 + z2
+    s0, s1, s2 = p0[0] + p1[0] + p2[0], p0[1] + p1[1] + p2[1], p0[2] + p1[2] + p2[2]
     w = area / 12.0
     za = area * sz / 3.0
-    zl = w * (Z[0] * P[0] + Z[1] * P[1] + Z[2] * P[2] + sz * sr)
-    acc_zn += za * normal
-    acc_zt += cross(zl, normal)
+    l0 = w * (z0 * p0[0] + z1 * p1[0] + z2 * p2[0] + sz * s0)
+    l1 = w * (z0 * p0[1] + z1 * p1[1] + z2 * p2[1] + sz * s1)
+    l2 = w * (z0 * p0[2] + z1 * p1[2] + z2 * p2[2] + sz * s2)
+    zn[0] += za * nx
+    zn[1] += za * ny
+    zn[2] += za * nz
+    zt[0] += l1 * nz - l2 * ny
+    zt[1] += l2 * nx - l0 * nz
+    zt[2] += l0 * ny - l1 * nx
     if need_rr:
-        acc_S += area * (sr / 3.0)
+        S[0] += area * s0 / 3.0
+        S[1] += area * s1 / 3.0
+        S[2] += area * s2 / 3.0
         for i in range(3):
             for j in range(3):
-                acc_rr[i, j] += w * (P[0, i] * P[0, j] + P[1, i] * P[1, j] + P[2, i] * P[2, j] + sr[i] * sr[j])
+                rr[i, j] += w * (p0[i] * p0[j] + p1[i] * p1[j] + p2[i] * p2[j] + (s0, s1, s2)[i] * (s0, s1, s2)[j])
     return area
 
 
@@ -154,46 +171,40 @@ def wet_integrals(kind, x, R, r, nrm, area, verts, faces, fnormals, need_rr, mom
         return zn, zt, A, S, rr
     nv = verts.shape[0]
     lev = np.empty((nv, 3))
-    zv = np.empty(nv)
-    for v in range(nv):
-        lev[v] = mv(R, verts[v])
-        zv[v] = x[2] + lev[v, 2]
-    P = np.empty((3, 3))
-    Z = np.empty(3)
+    for v in range(nv):  # vertex levers and heights, once per evaluation
+        for i in range(3):
+            lev[v, i] = R[i, 0] * verts[v, 0] + R[i, 1] * verts[v, 1] + R[i, 2] * verts[v, 2]
+    x2 = x[2]
     for f in range(faces.shape[0]):
-        a0, a1, a2 = faces[f, 0], faces[f, 1], faces[f, 2]
-        below = (zv[a0] < 0.0) + (zv[a1] < 0.0) + (zv[a2] < 0.0)
+        ids = (faces[f, 0], faces[f, 1], faces[f, 2])
+        below = (x2 + lev[ids[0], 2] < 0.0) + (x2 + lev[ids[1], 2] < 0.0) + (x2 + lev[ids[2], 2] < 0.0)
         if below == 0:
             continue
-        normal = mv(R, fnormals[f])
-        if below == 3:
-            P[0], P[1], P[2] = lev[a0], lev[a1], lev[a2]
-            Z[0], Z[1], Z[2] = min(zv[a0], 0.0), min(zv[a1], 0.0), min(zv[a2], 0.0)
-            A += _accumulate(P, Z, normal, zn, zt, S, rr, need_rr)
-            continue
+        b0, b1, b2 = fnormals[f, 0], fnormals[f, 1], fnormals[f, 2]
+        nx = R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2
+        ny = R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2
+        nz = R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2
         # roll so the odd vertex (alone under water, or alone above it) comes first
-        ids = (a0, a1, a2)
         first = 0
-        for i in range(3):
-            if (zv[ids[i]] < 0.0) == (below == 1):
-                first = i
-                break
+        if below != 3:
+            for i in range(3):
+                if (x2 + lev[ids[i], 2] < 0.0) == (below == 1):
+                    first = i
+                    break
         v0, v1, v2 = ids[first], ids[(first + 1) % 3], ids[(first + 2) % 3]
-        p0, p1, p2 = lev[v0], lev[v1], lev[v2]
-        z0, z1, z2 = zv[v0], zv[v1], zv[v2]
-        e01 = p0 + (p1 - p0) * (z0 / (z0 - z1))
-        e20 = p2 + (p0 - p2) * (z2 / (z2 - z0))
+        p0 = (lev[v0, 0], lev[v0, 1], lev[v0, 2])
+        p1 = (lev[v1, 0], lev[v1, 1], lev[v1, 2])
+        p2 = (lev[v2, 0], lev[v2, 1], lev[v2, 2])
+        if below == 3:
+            A += _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+            continue
+        e01 = _crossing(p0, p1, x2)
+        e20 = _crossing(p2, p0, x2)
         if below == 1:
-            P[0], P[1], P[2] = p0, e01, e20
-            Z[0], Z[1], Z[2] = min(x[2] + p0[2], 0.0), min(x[2] + e01[2], 0.0), min(x[2] + e20[2], 0.0)
-            A += _accumulate(P, Z, normal, zn, zt, S, rr, need_rr)
-        else:
-            P[0], P[1], P[2] = e01, p1, p2
-            Z[0], Z[1], Z[2] = min(x[2] + e01[2], 0.0), min(x[2] + p1[2], 0.0), min(x[2] + p2[2], 0.0)
-            A += _accumulate(P, Z, normal, zn, zt, S, rr, need_rr)
-            P[0], P[1], P[2] = e01, p2, e20
-            Z[0], Z[1], Z[2] = min(x[2] + e01[2], 0.0), min(x[2] + p2[2], 0.0), min(x[2] + e20[2], 0.0)
-            A += _accumulate(P, Z, normal, zn, zt, S, rr, need_rr)
+            A += _triangle(p0, e01, e20, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+        else:  # quadrilateral e01 -> p1 -> p2 -> e20
+            A += _triangle(e01, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+            A += _triangle(e01, p2, e20, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
     return zn, zt, A, S, rr
 
 

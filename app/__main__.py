@@ -20,6 +20,9 @@ def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:
     except ConfigError as e:  # a bad scene or address: one line, exit 2, before any server starts
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C before the server is up (e.g. while the kernels compile)
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ from pathlib import Path
 import tyro
 
 
-
 @dataclass
 class SoakArgs:
     """Run the viewer with a headless browser client and sample memory and speed."""

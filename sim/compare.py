@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .progress import progress_bar
 from .config import load_scene, with_overrides
+from .progress import progress_bar
 from .simulation import Simulation
 
 

@@ -238,32 +238,28 @@ def pose_loads(kind, x, R, geom, mass, rho, g, d, flags, acc):
 
 
 @njit(**JIT)
+def matmul6(A, B):
+    """A B for 6x6 matrices, written out (a BLAS call costs more than the arithmetic here)."""
+    out = np.zeros((6, 6))
+    for i in range(6):
+        for j in range(6):
+            acc = 0.0
+            for k in range(6):
+                acc += A[i, k] * B[k, j]
+            out[i, j] = acc
+    return out
+
+
+@njit(**JIT)
 def damping_modes(D, R, mass, inertia):
-    """Eigen-decomposition of K = W D W, W = diag(M, R I R^T)^(-1/2), and W's rotation block."""
-    B = np.empty((3, 3))  # R diag(I^-1/2) R^T
-    for i in range(3):
-        for j in range(3):
-            B[i, j] = R[i, 0] * R[j, 0] / math.sqrt(inertia[0]) + R[i, 1] * R[j, 1] / math.sqrt(inertia[1]) + R[i, 2] * R[j, 2] / math.sqrt(inertia[2])
+    """K = W D W with W = diag(M, R I R^T)^(-1/2): the damping matrix in mass-normalised coordinates,
+    whose eigenvalues are the damping rates."""
     W = np.zeros((6, 6))
     for i in range(3):
         W[i, i] = 1.0 / math.sqrt(mass)
-        for j in range(3):
-            W[3 + i, 3 + j] = B[i, j]
-    K = np.zeros((6, 6))
-    WD = np.zeros((6, 6))
-    for i in range(6):
-        for j in range(6):
-            acc = 0.0
-            for k in range(6):
-                acc += W[i, k] * D[k, j]
-            WD[i, j] = acc
-    for i in range(6):
-        for j in range(6):
-            acc = 0.0
-            for k in range(6):
-                acc += WD[i, k] * W[k, j]
-            K[i, j] = acc
-    return K
+        for j in range(3):  # R diag(I^-1/2) R^T
+            W[3 + i, 3 + j] = R[i, 0] * R[j, 0] / math.sqrt(inertia[0]) + R[i, 1] * R[j, 1] / math.sqrt(inertia[1]) + R[i, 2] * R[j, 2] / math.sqrt(inertia[2])
+    return matmul6(matmul6(W, D), W)
 
 
 @njit(**JIT)

@@ -13,7 +13,6 @@ import numpy as np
 from .body import Body
 from .rotation import skew
 
-
 FORCE_MODELS = ("points", "panels")
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from viewer import wait_for
 
 pytest.importorskip("viser")
 
@@ -46,18 +47,6 @@ def make_app():
     yield make
     for app in apps:
         app.stop()
-
-
-def wait_for(app, condition, timeout=30.0, what="condition"):
-    """Poll fresh snapshots until condition(snapshot) holds."""
-    deadline = time.monotonic() + timeout
-    while True:
-        snap = app.sync()
-        if condition(snap):
-            return snap
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}; last: t={snap.frame.t}, z={snap.frame.x_world[2]}, notice={snap.notice!r}")
-        time.sleep(0.05)
 
 
 # ---- start -------------------------------------------------------------------------------------

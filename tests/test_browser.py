@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 import pytest
-
+from viewer import wait_for
 
 
 def _require(ok: bool, reason: str) -> None:
@@ -49,17 +49,6 @@ def app():
     viewer = start(ViewArgs(scene="rest", port=0), strict=True, publish_hz=20.0)
     yield viewer
     viewer.stop()
-
-
-def wait_for(app, condition, timeout=30.0, what="condition"):
-    deadline = time.monotonic() + timeout
-    while True:
-        snap = app.sync()
-        if condition(snap):
-            return snap
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}: t={snap.frame.t}, z={snap.frame.x_world[2]}, density={snap.density}")
-        time.sleep(0.1)
 
 
 def control_row(page, label: str):

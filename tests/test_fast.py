@@ -5,7 +5,6 @@ import pytest
 
 from sim import Simulation, SimulationDiverged, load_scene, with_overrides
 
-
 CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
          for integrator in ["euler", "splitting", "implicit", "rk4"] for forces in ["points", "panels"]
          if integrator == "implicit" or "fluid__damping" not in changes]  # explicit ones diverge there (tested below)  # fmt: skip

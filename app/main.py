@@ -89,7 +89,7 @@ def warm_kernels() -> None:
         return
     from sim.fast import warm_up
 
-    note = threading.Timer(1.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about 30 s)...",
+    note = threading.Timer(5.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about 30 s)...",
                                               file=sys.stderr, flush=True))  # fmt: skip
     note.start()
     try:

@@ -311,17 +311,31 @@ def forced_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
     gv[:3] = F / sqrt_m
     gv[3:] = mv(R, mtv(R, T) / w_half)
     if lam[0] < 0.0:  # mild (see exact_modes): both series, sum (-hK)^n y/n! + h (-hK)^n g/(n+1)!
-        a = y.copy()
-        b = h * gv
-        out = a + b
-        scale = max(np.abs(y).max(), np.abs(b).max())
-        for n in range(1, 40):
-            a = (-h / n) * mat6v(K, a)
-            b = (-h / (n + 1)) * mat6v(K, b)
-            out += a + b
-            if max(np.abs(a).max(), np.abs(b).max()) <= 1e-17 * scale:
+        a = y.copy()  # term of the first series
+        b = h * gv  # term of the second
+        ka = np.empty(6)
+        kb = np.empty(6)
+        scale = 0.0
+        for i in range(6):
+            y[i] = a[i] + b[i]
+            scale = max(scale, abs(a[i]), abs(b[i]))
+        for n in range(1, 40):  # in place: this runs twice a step
+            ca, cb = -h / n, -h / (n + 1)
+            for i in range(6):
+                sa = 0.0
+                sb = 0.0
+                for j in range(6):
+                    sa += K[i, j] * a[j]
+                    sb += K[i, j] * b[j]
+                ka[i] = ca * sa
+                kb[i] = cb * sb
+            biggest = 0.0
+            for i in range(6):
+                a[i], b[i] = ka[i], kb[i]
+                y[i] += a[i] + b[i]
+                biggest = max(biggest, abs(a[i]), abs(b[i]))
+            if biggest <= 1e-17 * scale:
                 break
-        y = out
     else:  # stiff: through the eigenmodes
         c = np.zeros(6)
         for j in range(6):
@@ -343,12 +357,25 @@ def forced_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
 
 @njit(**JIT)
 def free_rotation(q, L, h, inertia):
+    """integrators.free_rotation as scalar code: the DLM split, each sub-step a rotation about one
+    body axis by h L_body[axis] / I[axis], with L_body[axis] = (column `axis` of R) . L."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
     for axis, frac in ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5)):
-        Lb = mtv(quat_to_matrix(q), L)
-        v = np.zeros(3)
-        v[axis] = frac * h * Lb[axis] / inertia[axis]
-        q = quat_mul(q, rotation_quat(v))
-    return normalized(q)
+        if axis == 0:
+            lb = (1 - 2 * (y * y + z * z)) * L[0] + 2 * (x * y + w * z) * L[1] + 2 * (x * z - w * y) * L[2]
+        elif axis == 1:
+            lb = 2 * (x * y - w * z) * L[0] + (1 - 2 * (x * x + z * z)) * L[1] + 2 * (y * z + w * x) * L[2]
+        else:
+            lb = 2 * (x * z + w * y) * L[0] + 2 * (y * z - w * x) * L[1] + (1 - 2 * (x * x + y * y)) * L[2]
+        half = 0.5 * frac * h * lb / inertia[axis]
+        c, s = math.cos(half), math.sin(half)
+        if axis == 0:  # q * (c, s, 0, 0)
+            w, x, y, z = w * c - x * s, w * s + x * c, y * c + z * s, z * c - y * s
+        elif axis == 1:  # q * (c, 0, s, 0)
+            w, x, y, z = w * c - y * s, x * c - z * s, w * s + y * c, z * c + x * s
+        else:  # q * (c, 0, 0, s)
+            w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, w * s + z * c
+    return normalized(np.array([w, x, y, z]))
 
 
 @njit(**JIT)

@@ -57,7 +57,10 @@ STAB_GROWTH = 1e3
 # (dt*lambda below it, lambda the fastest damping rate). Symplectic Euler and Stoermer-Verlet: 2 on the
 # oscillator; RK4: 2 sqrt 2 on the imaginary axis, 2.785 on the negative real axis; the splitting's
 # damping substeps are explicit midpoint steps of dt/2, stable to dt*lambda = 4; 'implicit' solves damping exactly.
-LIMIT_CONSTANTS = {"euler": (2.0, 2.0), "splitting": (2.0, 4.0), "implicit": (2.0, math.inf), "rk4": (2 * math.sqrt(2), 2.785)}
+def limit_constants(method: str) -> tuple[float, float]:
+    """The integrator's declared stability limits on dt omega_heave and dt lambda_max."""
+    cls = INTEGRATORS[method]
+    return cls.heave_limit, cls.damping_limit
 
 
 @dataclass(frozen=True)
@@ -502,7 +505,7 @@ def largest_stable_dt(method: str, density: float, d: float, cfg: Settings) -> t
     u = upright(density)
     e_rest = Simulation(with_overrides(scene, initial__position=(0.0, 0.0, u["z"]), initial__velocity=(0.0, 0.0, 0.0),
                                        initial__omega=(0.0, 0.0, 0.0))).frame().E_total  # fmt: skip
-    c_heave, c_damp = LIMIT_CONSTANTS[method]
+    c_heave, c_damp = limit_constants(method)
     lam = d * u["A_sub"] / u["M"]
     guess = min(c_heave / u["omega"], c_damp / lam if lam > 0 else math.inf, cfg.stab_cap)
     runs = 0
@@ -549,12 +552,6 @@ class StabilityMap:
     lam_max: dict[tuple[float, float], float]
     """(density, d) -> rate of the fastest damping mode, 1/s."""
     runs: int
-
-    def predicted(self, method: str, density: float, d: float) -> float:
-        """The linear limit with the method's constants on omega and on the fastest damping rate."""
-        c_heave, c_damp = LIMIT_CONSTANTS[method]
-        lam = self.lam_max[density, d]
-        return min(c_heave / upright(density)["omega"], c_damp / lam if lam > 0 else math.inf)
 
     def damping_dominated(self, density: float, d: float) -> bool:
         lam = self.lam_max[density, d]
@@ -1343,7 +1340,7 @@ def _stability_discussion(data: ReportData) -> str:
     lines = [(f"`implicit` is stable at every tried (d, density) for every dt up to {min(imp):.3g} s, its smallest measured limit; "
               "its only limit is the heave one, independent of d.")]  # fmt: skip
     for method in FIXED:
-        c_heave, c_damp = LIMIT_CONSTANTS[method]
+        c_heave, c_damp = limit_constants(method)
         heave = [st.limits[method, de, d] * upright(de)["omega"] for de in st.density for d in st.damping
                  if d == 0 and st.limits[method, de, d] < cfg.stab_cap]  # fmt: skip
         damp = [st.limits[method, de, d] * st.lam_max[de, d] for de in st.density for d in st.damping

@@ -1,10 +1,10 @@
-"""The `floatsim` command: the headless subcommands of `sim.cli` plus `view`, which alone imports viser."""
+"""`floatsim view`: the viewer as a subcommand of the `floatsim` console script (registered as a plugin in pyproject.toml)."""
 
 from __future__ import annotations
 
 import sys
 
-from sim.cli import COMMANDS, dispatch
+from sim.commands import floatsim
 
 from .args import ViewArgs
 
@@ -15,9 +15,5 @@ def view(args: ViewArgs) -> int:
     return serve(args)
 
 
-def main(argv: list[str] | None = None) -> int:
-    return dispatch({**COMMANDS, "view": (ViewArgs, view)}, argv, prog="floatsim")
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(floatsim())

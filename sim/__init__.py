@@ -1,4 +1,4 @@
-"""floatsim's physics: rigid bodies sampled on their surface, floating in water. No viewer imports."""
+"""floatsim's physics: rigid bodies sampled on their surface, floating in water. No viewer, plotting or CLI imports."""
 
 import os
 
@@ -7,11 +7,14 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from .body import Body, make_body  # noqa: E402
-from .config import ConfigError, SceneConfig, load_scene, with_overrides
-from .forces import Model, Params
+from .config import PARAMS, FluidConfig, SceneConfig, load_scene, with_overrides
+from .errors import ConfigError, SimulationDiverged
+from .forces import TERMS, Model
 from .integrators import INTEGRATORS, make_integrator
-from .simulation import CSV_COLUMNS, Frame, Simulation, SimulationDiverged, observe
+from .parameters import Param
+from .simulation import CSV_COLUMNS, Frame, Simulation, observe
 from .state import State
+from .water import StillWater
 
-__all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "load_scene", "with_overrides", "Model", "Params",
-           "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip
+__all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "FluidConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
+           "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip

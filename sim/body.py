@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import BodyConfig, ConfigError
+from .errors import ConfigError
 
 
 @dataclass(frozen=True, eq=False)

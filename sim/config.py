@@ -1,4 +1,9 @@
-"""Typed scene configuration, TOML presets and validation: the one place bad input becomes a clear error."""
+"""Scene configuration: TOML presets, overrides and validation, the one place bad input becomes a clear error.
+
+Each table of a scene ([body], [fluid], [initial], [step]) is a frozen dataclass generated from its
+parameter declarations (`parameters.Param`); [fluid] also holds every force term's own parameters
+(`forces.TERMS`), so a new term's coefficient is a scene key, a flag and a control at once.
+"""
 
 from __future__ import annotations
 
@@ -8,70 +13,72 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .errors import ConfigError
+from .forces import TERMS
+from .integrators import INTEGRATORS
+from .parameters import Param
+from .surface import FORCE_MODELS
+
 SCENES_DIR = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 
-
-class ConfigError(ValueError):
-    """A user mistake in a scene or a flag; its message is one line meant for the user."""
-
-
-@dataclass(frozen=True)
-class BodyConfig:
-    shape: str = "cube"
-    """'cube' (side `size`), 'box' (sides `extents`) or 'mesh' (watertight file `mesh`)."""
-    size: float = 1.0
-    """Cube side, m."""
-    extents: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    """Box sides along body x, y, z, m (shape 'box')."""
-    points_per_edge: int = 10
-    """Cube/box: N, giving N x N cell-centred samples per face."""
-    mesh: str = ""
-    """Mesh file (shape 'mesh'), relative to the scene file or the working directory."""
-    samples: int = 600
-    """Mesh: target number of samples (triangles are subdivided until there are at least this many)."""
-    density: float | None = 900.0
-    """Mass / enclosed volume, kg/m^3 (the report's ice cube: 900). Ignored when `mass` is set."""
-    mass: float | None = None
-    """Total mass, kg; overrides `density` when given."""
-
-
-@dataclass(frozen=True)
-class FluidConfig:
-    rho: float = 1000.0
-    """Water density, kg/m^3."""
-    g: float = 9.81
-    """Gravitational acceleration, m/s^2."""
-    damping: float = 0.0
-    """Viscous damping coefficient d, N s/m^3 (force -d * area * velocity on wet samples)."""
-    forces: str = "points"
-    """'points': water forces summed over the samples (the report's model); 'panels': integrated
-    exactly over the mesh's triangles clipped at the water line."""
-
-
-@dataclass(frozen=True)
-class InitialConfig:
-    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Centre of mass, world frame, m."""
-    orientation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
-    """Body-to-world rotation as a unit quaternion (w, x, y, z)."""
-    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Centre-of-mass velocity, world frame, m/s."""
-    omega: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Angular velocity, world frame, rad/s."""
+BODY = (
+    Param("body", "shape", "cube", "Body shape: cube (side `size`), box (sides `extents`) or mesh (a watertight file)",
+          kind="choice", choices=("cube", "box", "mesh"), name="body shape"),
+    Param("body", "size", 1.0, "Cube side", "m", lo=0.0, lo_open=True, hi=1e3, name="cube size"),
+    Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=0.0, lo_open=True, hi=1e3, kind="vector", size=3,
+          name="box extents"),
+    Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=100, kind="int",
+          name="points per edge", gui=(1, 60, 1)),
+    Param("body", "mesh", "", "Mesh file (shape mesh), relative to the scene file or the working directory", kind="text", name="mesh file"),
+    Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
+          kind="int", name="mesh samples"),
+    Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=0.0, lo_open=True,
+          least=1.0, hi=1e5, kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
+    Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=0.0, lo_open=True, hi=1e12, kind="optional"),
+)
+FLUID = (
+    Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),
+    Param("fluid", "g", 9.81, "Gravitational acceleration", "m/s^2", lo=0.0, hi=1e3, name="gravity g"),
+    Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model) or panels (exactly "
+          "over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model"),
+    *(p for term in TERMS for p in term.params),
+)
+INITIAL = (
+    Param("initial", "position", (0.0, 0.0, 0.0), "Centre of mass, world frame", "m", lo=-1e7, hi=1e7, kind="vector", size=3,
+          name="initial position", flag=False),
+    Param("initial", "orientation", (1.0, 0.0, 0.0, 0.0), "Body-to-world rotation as a unit quaternion (w, x, y, z)", lo=-1.0, hi=1.0,
+          kind="vector", size=4, name="initial orientation q0", flag=False),
+    Param("initial", "velocity", (0.0, 0.0, 0.0), "Centre-of-mass velocity, world frame", "m/s", lo=-1e4, hi=1e4, kind="vector", size=3,
+          name="initial velocity u0", flag=False),
+    Param("initial", "omega", (0.0, 0.0, 0.0), "Angular velocity, world frame", "rad/s", lo=-1e3, hi=1e3, kind="vector", size=3,
+          name="initial angular velocity omega0", label="Initial ω", flag=False),
+)
+STEP = (
+    Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator"),
+    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=0.0, lo_open=True, least=1e-5, hi=1.0,
+          gui=(0.0005, 0.05, 0.0005), label="Time step"),
+    Param("step", "t_end", 30.0, "Simulated duration", "s", lo=0.0, hi=1e7),
+    Param("step", "rtol", 1e-8, "Relative tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1.0),
+    Param("step", "atol", 1e-10, "Absolute tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1e3),
+)
+SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP}
+PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
+"""Every scene parameter by 'section.key'."""
 
 
-@dataclass(frozen=True)
-class StepConfig:
-    integrator: str = "implicit"
-    """Integrator name (see `sim.integrators.INTEGRATORS`)."""
-    dt: float = 0.005
-    """Time step, s (the output interval for the adaptive solve_ivp methods)."""
-    t_end: float = 30.0
-    """Simulated duration, s."""
-    rtol: float = 1e-8
-    """Relative tolerance of the adaptive methods."""
-    atol: float = 1e-10
-    """Absolute tolerance of the adaptive methods."""
+def _section(name: str, params: tuple[Param, ...]):
+    fields = [(p.key, object, field(default=p.default, metadata={"param": p})) for p in params]
+    cls = dataclasses.make_dataclass(name, fields, frozen=True)
+    cls.__module__ = __name__
+    cls.__doc__ = f"The [{params[0].section}] table of a scene: " + ", ".join(f"{p.key} ({p.unit or p.kind})" for p in params) + "."
+    return cls
+
+
+BodyConfig = _section("BodyConfig", BODY)
+FluidConfig = _section("FluidConfig", FLUID)
+InitialConfig = _section("InitialConfig", INITIAL)
+StepConfig = _section("StepConfig", STEP)
+SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig}
 
 
 @dataclass(frozen=True)
@@ -84,6 +91,11 @@ class SceneConfig:
     step: StepConfig = field(default_factory=StepConfig)
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
+
+    def value(self, qualname: str):
+        """A parameter's value by 'section.key'."""
+        section, key = qualname.split(".")
+        return getattr(getattr(self, section), key)
 
 
 def available_scenes() -> list[str]:
@@ -101,100 +113,59 @@ def load_scene(name_or_path: str) -> SceneConfig:
         raise ConfigError(f"scene file not found: {name_or_path}")
     try:
         data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as e:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise ConfigError(f"{path}: not valid TOML: {e}") from None
     data.setdefault("name", path.stem)
-    scene = _from_dict(SceneConfig, data, str(path))
-    return validate(dataclasses.replace(scene, base_dir=str(path.parent)))
+    return validate(dataclasses.replace(_from_dict(data, str(path)), base_dir=str(path.parent)))
 
 
-def _from_dict(cls, data: dict, where: str):
-    """Build a (nested) config dataclass from a TOML table, refusing unknown keys."""
-    if not isinstance(data, dict):
-        raise ConfigError(f"{where}: expected a table for {cls.__name__}")
-    fields = {f.name: f for f in dataclasses.fields(cls)}
+def _from_dict(data: dict, where: str) -> SceneConfig:
+    """A SceneConfig from a TOML document, refusing unknown keys by name."""
+    known = [f.name for f in dataclasses.fields(SceneConfig) if f.name != "base_dir"]
     kwargs = {}
     for key, value in data.items():
-        if key not in fields:
-            raise ConfigError(f"{where}: unknown key '{key}' (known: {', '.join(fields)})")
-        sub = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig}.get(key)
-        if cls is SceneConfig and sub is not None:
-            value = _from_dict(sub, value, f"{where} [{key}]")
-        elif isinstance(value, list):
-            value = tuple(value)
+        if key not in known:
+            raise ConfigError(f"{where}: unknown key '{key}' (known: {', '.join(known)})")
+        if key in SECTION_TYPES:
+            if not isinstance(value, dict):
+                raise ConfigError(f"{where}: [{key}] must be a table")
+            params = {p.key for p in SECTIONS[key]}
+            for k in value:
+                if k not in params:
+                    raise ConfigError(f"{where} [{key}]: unknown key '{k}' (known: {', '.join(sorted(params))})")
+            value = SECTION_TYPES[key](**{k: tuple(v) if isinstance(v, list) else v for k, v in value.items()})
         kwargs[key] = value
-    return cls(**kwargs)
-
-
-def _number(value, what: str, *, positive=False, nonneg=False, integer=False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ConfigError(f"{what} must be a number, got {value!r}")
-    if not math.isfinite(value):
-        raise ConfigError(f"{what} must be finite, got {value}")
-    if integer and int(value) != value:
-        raise ConfigError(f"{what} must be a whole number, got {value}")
-    if positive and value <= 0:
-        raise ConfigError(f"{what} must be > 0, got {value}")
-    if nonneg and value < 0:
-        raise ConfigError(f"{what} must be >= 0, got {value}")
-    return value
-
-
-def _vector(value, what: str, n: int) -> tuple[float, ...]:
-    if not isinstance(value, (tuple, list)) or len(value) != n:
-        raise ConfigError(f"{what} must have {n} numbers, got {value!r}")
-    return tuple(float(_number(v, what)) for v in value)
+    return SceneConfig(**kwargs)
 
 
 def validate(scene: SceneConfig) -> SceneConfig:
-    """Check every field; raise ConfigError with a one-line message on the first problem."""
-    from .integrators import INTEGRATORS  # late import: integrators need no config
-
-    b, f, i, s = scene.body, scene.fluid, scene.initial, scene.step
-    if b.shape not in ("cube", "box", "mesh"):
-        raise ConfigError(f"body shape must be 'cube', 'box' or 'mesh', got {b.shape!r}")
-    _number(b.size, "cube size", positive=True)
-    for e in _vector(b.extents, "box extents", 3):
-        _number(e, "box extents", positive=True)
-    _number(b.points_per_edge, "points per edge", integer=True)
-    if b.points_per_edge < 1:
-        raise ConfigError(f"points per edge must be >= 1, got {b.points_per_edge}")
-    _number(b.samples, "mesh samples", integer=True, positive=True)
+    """Check every field against its declaration, then the rules between fields; raise ConfigError
+    with a one-line message on the first problem. Vectors come back as tuples of floats."""
+    checked = {}
+    for name, params in SECTIONS.items():
+        section = getattr(scene, name)
+        checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
+    b, i = checked["body"], checked["initial"]
     if b.shape == "mesh" and not b.mesh:
         raise ConfigError("body shape 'mesh' needs a mesh file")
-    if b.mass is not None:
-        _number(b.mass, "mass", positive=True)
-    elif b.density is not None:
-        _number(b.density, "density", positive=True)
-    else:
+    if b.mass is None and b.density is None:
         raise ConfigError("give the body a density or a mass")
-    _number(f.rho, "water density rho", nonneg=True)
-    _number(f.g, "gravity g", nonneg=True)
-    _number(f.damping, "damping", nonneg=True)
-    if f.forces not in ("points", "panels"):
-        raise ConfigError(f"forces must be 'points' or 'panels', got {f.forces!r}")
-    _vector(i.position, "initial position", 3)
-    q = _vector(i.orientation, "initial orientation q0", 4)
-    if abs(math.sqrt(sum(c * c for c in q)) - 1.0) > 1e-6:
-        raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {q} with norm {math.sqrt(sum(c * c for c in q)):.6g}")
-    _vector(i.velocity, "initial velocity u0", 3)
-    _vector(i.omega, "initial angular velocity omega0", 3)
-    if s.integrator not in INTEGRATORS:
-        raise ConfigError(f"unknown integrator '{s.integrator}'; choose one of: {', '.join(INTEGRATORS)}")
-    _number(s.dt, "dt", positive=True)
-    _number(s.t_end, "t_end", nonneg=True)
-    _number(s.rtol, "rtol", positive=True)
-    _number(s.atol, "atol", positive=True)
-    return scene
+    norm = math.sqrt(sum(c * c for c in i.orientation))
+    if abs(norm - 1.0) > 1e-6:
+        raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g}")
+    return dataclasses.replace(scene, **checked)
 
 
 def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:
-    """Return `scene` with the given section fields replaced, e.g. body__density=500; validated."""
+    """Return `scene` with the given section fields replaced, e.g. body__density=500; validated.
+    None means 'keep' (an unset flag)."""
     sections: dict[str, dict] = {}
     for key, value in changes.items():
         if value is None:
             continue
         section, name = key.split("__")
+        if section not in SECTION_TYPES or name not in {p.key for p in SECTIONS[section]}:
+            raise ConfigError(f"unknown scene parameter '{section}.{name}'")
         sections.setdefault(section, {})[name] = value
     if "density" in sections.get("body", {}):
         sections["body"]["mass"] = None  # an explicit density wins over a preset's mass

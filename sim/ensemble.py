@@ -6,13 +6,17 @@ import numpy as np
 
 from .body import make_body
 from .config import ConfigError, SceneConfig
-from .simulation import Frame, SimulationDiverged, with_mass
+from .simulation import Frame, SimulationDiverged, body_mass, with_mass
 from .state import State
+
+SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.samples", "fluid.rho", "fluid.g", "fluid.forces",
+          "step.integrator", "step.dt")  # fmt: skip
+"""What the bodies of an ensemble must share; they may differ in mass, term coefficients and initial state."""
 
 
 class Ensemble:
-    """B bodies sharing shape, water, integrator and dt; each has its own density (or mass), damping
-    and initial state. Fixed-step integrators run B x K steps in one compiled call; a body that
+    """B bodies sharing shape, water, integrator and dt; each has its own density (or mass), force
+    term coefficients (damping, drag, ...) and initial state. Fixed-step integrators run B x K steps in one compiled call; a body that
     diverges stops at its last good state and is reported, the others go on."""
 
     def __init__(self, scenes: list[SceneConfig], backend: str | None = None):
@@ -20,17 +24,15 @@ class Ensemble:
             raise ConfigError("an ensemble needs at least one body")
         base = scenes[0]
         for s in scenes[1:]:
-            same = (s.body.shape, s.body.size, s.body.extents, s.body.points_per_edge, s.body.mesh, s.body.samples, s.fluid.rho, s.fluid.g, s.fluid.forces, s.step.integrator, s.step.dt)
-            if same != (base.body.shape, base.body.size, base.body.extents, base.body.points_per_edge, base.body.mesh, base.body.samples,
-                        base.fluid.rho, base.fluid.g, base.fluid.forces, base.step.integrator, base.step.dt):  # fmt: skip
-                raise ConfigError("ensemble bodies must share shape, water, force model, integrator and dt; they may differ in density, damping and initial state")
+            if any(s.value(key) != base.value(key) for key in SHARED):
+                raise ConfigError("ensemble bodies must share shape, water, force model, integrator and dt; they may differ in density, "
+                                  "force coefficients and initial state")  # fmt: skip
         from .simulation import Simulation, default_backend
 
         shape = make_body(base.body, base.base_dir)
         self.sims = []
         for s in scenes:
-            mass = s.body.mass if s.body.mass is not None else s.body.density * shape.volume
-            self.sims.append(Simulation(s, body=with_mass(shape, mass), backend=backend))
+            self.sims.append(Simulation(s, body=with_mass(shape, body_mass(s, shape.volume)), backend=backend))
         self.shape = shape
         self.dt = float(base.step.dt)
         self.backend = backend or default_backend()
@@ -58,16 +60,19 @@ class Ensemble:
                 self.diverged[i] = str(e)
 
     def _step_compiled(self, live: list[int], n: int) -> None:
-        from . import fast
+        from . import kernels
 
         sims = [self.sims[i] for i in live]
-        p = sims[0].params
         Y = np.array([s.state.as_vector() for s in sims])
         masses = np.array([s.body.mass for s in sims])
         inertias = np.array([s.body.inertia for s in sims])
-        ds = np.array([s.params.damping for s in sims])
-        scheme = fast.SCHEMES[sims[0].integrator.name]
-        Y, done = fast.advance_many(Y, n, self.dt, scheme, fast.MODELS[p.forces], self.shape.packed, masses, inertias, p.rho, p.g, ds)
+        packed = [kernels.pack(s.model) for s in sims]
+        terms = 0
+        for mask, _ in packed:  # a term some body leaves out has a zero coefficient there: it adds nothing
+            terms |= mask
+        coefs = np.array([coef for _, coef in packed])
+        scheme = kernels.SCHEMES[sims[0].integrator.name]
+        Y, done = kernels.advance_many(Y, n, self.dt, scheme, kernels.MODELS[sims[0].params.forces], self.shape.packed, masses, inertias, terms, coefs)
         for i, s, y, k in zip(live, sims, Y, done):
             before = s.state
             s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])

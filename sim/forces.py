@@ -1,249 +1,246 @@
-"""Hydrostatic pressure, viscous damping and gravity on a sampled body, as pure functions of the pose.
+"""Force terms and their registry: one function per physical term, each declaring its parameters.
 
-All vectors are world frame, SI units. Torques are about the centre of mass. The wet samples of a
-pose are found once (`wetted`) and every term and diagnostic reads the same arrays.
+A term is `(body, water, fluid, wet, twist, t) -> Load`: the force and the torque about the centre
+of mass in the world frame, for the wet surface of one pose (`surface.WetSurface`), a twist
+(u, omega) stacked as (6,) and a time. A term that depends on the twist also gives its Jacobian:
+D = -d(load)/d(twist), 6x6, and affine = load + D twist, so load(v) ~ affine - D v near the twist.
+The implicit scheme solves that linear model exactly over each half step (stable for any
+coefficient); the other schemes just evaluate the term.
+
+Adding a term: its function here, its line in TERMS (with its Param declarations), and its compiled
+twin in kernels/forces.py. Config, CLI flags, viewer controls and clamps read the declarations.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from .body import Body
+from .parameters import Param
 from .rotation import skew
-
-FORCE_MODELS = ("points", "panels")
-
-
-@dataclass(frozen=True)
-class Params:
-    """Fluid and field parameters; replaced whole between steps when the user changes them."""
-
-    rho: float = 1000.0
-    """Water density, kg/m^3."""
-    g: float = 9.81
-    """Gravitational acceleration, m/s^2."""
-    damping: float = 0.0
-    """Viscous damping coefficient d, N s/m^3."""
-    forces: str = "points"
-    """How water forces are integrated over the surface: 'points' (the samples, the report's
-    model) or 'panels' (the mesh's triangles clipped at the water line, integrated exactly)."""
+from .surface import WET_SURFACE, WetSurface, empty_surface
 
 
-@dataclass(frozen=True, eq=False)
-class Wetted:
-    """The wet surface at one pose as elements (samples, or clipped triangles), world frame, with
-    the integrals every force term and diagnostic needs. For a sample they are its value times its
-    area (the midpoint rule); for a clipped triangle they are exact, since depth and velocity are
-    linear over it."""
-
-    area: np.ndarray
-    """(m,) wet area of each element, m^2."""
-    normal: np.ndarray
-    """(m, 3) outward unit normals."""
-    lever: np.ndarray
-    """(m, 3) element centroid relative to the centre of mass, m."""
-    z_area: np.ndarray
-    """(m,) integral of z dA, m^3 (all z < 0: depth h = -z)."""
-    z_lever: np.ndarray
-    """(m, 3) integral of z r dA, m^4 (r relative to the centre of mass)."""
-    z2_area: np.ndarray
-    """(m,) integral of z^2 dA, m^4."""
-    rr: np.ndarray | None
-    """(3, 3) sum of the integrals of r r^T dA, m^4; only computed when damping is on."""
-    index: np.ndarray
-    """(m,) which of the body's samples (or mesh triangles) each element comes from."""
-
-    @property
-    def submerged_area(self) -> float:
-        return float(self.area.sum())
-
-    @property
-    def submerged_volume(self) -> float:
-        """Divergence theorem with the field (0, 0, z): V = integral of z nu_z dA over the wet
-        surface (the water-plane cut has z = 0 and adds nothing)."""
-        return float(self.z_area @ self.normal[:, 2])
+class Load(NamedTuple):
+    force: np.ndarray
+    """(3,) N, world frame."""
+    torque: np.ndarray
+    """(3,) N m about the centre of mass, world frame."""
+    D: np.ndarray | None = None
+    """(6, 6) -d(force, torque)/d(u, omega) for terms that depend on the twist, else None."""
+    affine: np.ndarray | None = None
+    """(6,) (force, torque) + D (u, omega): the load of the linearised term at zero twist."""
 
 
-EMPTY = Wetted(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)), np.zeros(0), np.zeros((3, 3)), np.zeros(0, int))
+ZERO = np.zeros(3)
 
 
-def wetted(body: Body, x: np.ndarray, R: np.ndarray, need_rr: bool = True) -> Wetted:
-    """The submerged samples (z < 0) of `body` at centre of mass `x` and orientation `R`."""
-    z_all = x[2] + body.r_body @ R[2]
-    index = np.flatnonzero(z_all < 0.0)
-    lever = body.r_body[index] @ R.T
-    area, z = body.area[index], z_all[index]
-    za = z * area
-    return Wetted(
-        area=area,
-        normal=body.n_body[index] @ R.T,
-        lever=lever,
-        z_area=za,
-        z_lever=za[:, None] * lever,
-        z2_area=za * z,
-        rr=(lever * area[:, None]).T @ lever if need_rr else None,
-        index=index,
-    )
+def _relative_velocity(water, wet: WetSurface, twist: np.ndarray, t: float) -> np.ndarray:
+    """(m, 3) velocity of each node relative to the water, m/s."""
+    return twist[:3] + np.cross(twist[3:], wet.lever) - water.velocity(wet.point, t)
 
 
-def _edge_point(a: np.ndarray, b: np.ndarray, za: np.ndarray, zb: np.ndarray) -> np.ndarray:
-    """Where the edge a->b crosses z = 0 (rows; za and zb of opposite signs)."""
-    return a + (b - a) * (za / (za - zb))[:, None]
+def _wrench(wet: WetSurface, f: np.ndarray) -> np.ndarray:
+    """(6,) total force and torque about the centre of mass of node forces f (m, 3)."""
+    return np.concatenate([f.sum(axis=0), np.cross(wet.lever, f).sum(axis=0)])
 
 
-def wetted_panels(body: Body, x: np.ndarray, R: np.ndarray, need_rr: bool = True) -> Wetted:
-    """The mesh's triangles clipped at z = 0, with their exact wet integrals.
-
-    A triangle with one vertex under water keeps a triangle, one with two keeps a quadrilateral
-    (split in two); rolling the vertices to put the odd one first keeps the winding, hence the
-    outward normal. Over a triangle, for linear f and g: integral f g dA = A/12 (sum f_i g_i + sum f_i sum g_i).
-    """
-    lever_v = body.mesh_vertices @ R.T
-    z_v = x[2] + lever_v[:, 2]
-    faces = body.mesh_faces
-    zf = z_v[faces]
-    below = zf < 0.0
-    count = below.sum(axis=1)
-    tris, owners = [], []
-    whole = np.flatnonzero(count == 3)
-    tris.append(lever_v[faces[whole]])
-    owners.append(whole)
-    for n_below in (1, 2):
-        sel = np.flatnonzero(count == n_below)
-        if not len(sel):
-            continue
-        # put the odd vertex (the one under water for n=1, above it for n=2) first
-        first = np.argmax(below[sel] if n_below == 1 else ~below[sel], axis=1)
-        order = (first[:, None] + np.arange(3)) % 3
-        v = np.take_along_axis(faces[sel], order, axis=1)
-        p0, p1, p2 = lever_v[v[:, 0]], lever_v[v[:, 1]], lever_v[v[:, 2]]
-        z0, z1, z2 = z_v[v[:, 0]], z_v[v[:, 1]], z_v[v[:, 2]]
-        e01, e20 = _edge_point(p0, p1, z0, z1), _edge_point(p2, p0, z2, z0)
-        if n_below == 1:
-            tris.append(np.stack([p0, e01, e20], axis=1))
-            owners.append(sel)
-        else:  # quadrilateral e01 -> p1 -> p2 -> e20
-            tris += [np.stack([e01, p1, p2], axis=1), np.stack([e01, p2, e20], axis=1)]
-            owners += [sel, sel]
-    P = np.concatenate(tris)
-    index = np.concatenate(owners)
-    if not len(P):
-        return EMPTY
-    Z = x[2] + P[:, :, 2]
-    np.minimum(Z, 0.0, out=Z)  # edge points are exactly on the water line
-    normal = body.face_normals[index] @ R.T
-    area = 0.5 * np.einsum("ki,ki->k", np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), normal)
-    sz, sr = Z.sum(axis=1), P.sum(axis=1)
-    w = area / 12.0
-    rr = None
-    if need_rr:
-        rr = np.einsum("k,kvi,kvj->ij", w, P, P) + np.einsum("k,ki,kj->ij", w, sr, sr)
-    return Wetted(
-        area=area,
-        normal=normal,
-        lever=sr / 3.0,
-        z_area=area * sz / 3.0,
-        z_lever=w[:, None] * (np.einsum("kv,kvi->ki", Z, P) + sz[:, None] * sr),
-        z2_area=w * (np.einsum("kv,kv->k", Z, Z) + sz * sz),
-        rr=rr,
-        index=index,
-    )
+def gravity(body, water, fluid, wet, twist, t) -> Load:
+    """-M g z_hat at the centre of mass (no torque)."""
+    return Load(np.array([0.0, 0.0, -body.mass * water.g]), ZERO)
 
 
-def pressure(params: Params, wet: Wetted) -> tuple[np.ndarray, np.ndarray]:
-    """Hydrostatic force: the integral of -rho g h nu dA = rho g z nu dA, and its torque."""
-    rg = params.rho * params.g
-    force = rg * (wet.z_area @ wet.normal)
-    torque = rg * np.cross(wet.z_lever, wet.normal).sum(axis=0)
-    return force, torque
+def pressure(body, water, fluid, wet, twist, t) -> Load:
+    """The water's pressure on the wet surface: the integral of -p nu dA, and its torque."""
+    f = -(wet.weight * water.pressure(wet.point, t))[:, None] * wet.normal
+    w = _wrench(wet, f)
+    return Load(w[:3], w[3:])
 
 
-def damping_matrix(params: Params, wet: Wetted) -> np.ndarray:
-    """6x6 symmetric positive semi-definite D with (F, T) = -D (u, omega) for the damping term.
+DAMPING = Param("fluid", "damping", 0.0, "Viscous damping coefficient d: a wet element feels -d a v_rel", "N s/m^3",
+                lo=0.0, hi=1.0e7, label="Damping d", gui=(0.0, 5000.0, 1.0))  # fmt: skip
+
+
+def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:
+    """6x6 symmetric positive semi-definite D with (F, T) = -D (u, omega) in still water.
 
     The force is -d times the integral of v = u + omega x r over the wet surface, so
     F = -d (A u + omega x S) and T = -d (S x u + J omega), with S = integral of r dA and
-    J = integral of (|r|^2 Id - r r^T) dA. Linear in (u, omega) at a fixed pose: the implicit
-    scheme's handle.
-    """
-    S = wet.area @ wet.lever
+    J = integral of (|r|^2 Id - r r^T) dA."""
+    w, r = wet.weight, wet.lever
+    S = w @ r
+    rr = (r * w[:, None]).T @ r
     D = np.empty((6, 6))
-    D[:3, :3] = wet.area.sum() * np.eye(3)
+    D[:3, :3] = w.sum() * np.eye(3)
     D[:3, 3:] = -skew(S)
     D[3:, :3] = skew(S)
-    D[3:, 3:] = np.trace(wet.rr) * np.eye(3) - wet.rr
-    return params.damping * D
+    D[3:, 3:] = np.trace(rr) * np.eye(3) - rr
+    return fluid.damping * D
 
 
-def damping(params: Params, wet: Wetted, u: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Viscous force: the integral of -d v dA over the wet surface, and its torque."""
-    loads = -damping_matrix(params, wet) @ np.concatenate([u, omega])
-    return loads[:3], loads[3:]
+def damping(body, water, fluid, wet, twist, t) -> Load:
+    """Linear viscous damping: the integral of -d v_rel dA, linear in the twist."""
+    D = damping_matrix(fluid, wet)
+    affine = _wrench(wet, fluid.damping * wet.weight[:, None] * water.velocity(wet.point, t))
+    load = affine - D @ twist
+    return Load(load[:3], load[3:], D, affine)
 
 
-def gravity(body: Body, params: Params) -> np.ndarray:
-    """-M g z_hat at the centre of mass (no torque)."""
-    return np.array([0.0, 0.0, -body.mass * params.g])
+DRAG_COEFFICIENT = Param("fluid", "drag_coefficient", 0.0, "Quadratic (pressure) drag coefficient C_d: a wet element moving into the "
+                         "water feels -(1/2) rho C_d a (v_rel . n)^2 n", lo=0.0, hi=100.0, label="Drag C_d", gui=(0.0, 5.0, 0.05))  # fmt: skip
+
+# Dunavant's 6-point rule (degree 4) on a triangle: barycentric nodes and weights (sum 1). Drag's
+# torque integrand (v.n)^2 r is cubic over a clipped panel, so this is exact there.
+DUNAVANT4 = np.array([[0.108103018168070, 0.445948490915965, 0.445948490915965], [0.445948490915965, 0.108103018168070, 0.445948490915965],
+                      [0.445948490915965, 0.445948490915965, 0.108103018168070], [0.816847572980459, 0.091576213509771, 0.091576213509771],
+                      [0.091576213509771, 0.816847572980459, 0.091576213509771], [0.091576213509771, 0.091576213509771, 0.816847572980459]])  # fmt: skip
+DUNAVANT4_WEIGHTS = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
 
 
-def hydrostatic_energy(params: Params, wet: Wetted) -> float:
-    """U_b = rho g * integral over the submerged volume of (-z) dV = -(rho g / 2) * integral of z^2 nu_z dA."""
-    return float(-0.5 * params.rho * params.g * (wet.z2_area @ wet.normal[:, 2]))
+def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> WetSurface:
+    """Nodes of the part of the wet surface that moves into the water (v_rel . n > 0).
+
+    Points: the wet samples doing so. Panels: each wet triangle clipped again where v_rel . n
+    (linear over a flat panel of a rigid body in still water) changes sign, with a degree-4 rule."""
+    from .surface import clip_triangles, triangle_areas
+
+    if wet.triangles is None:
+        return wet
+    if not len(wet.triangles):
+        return empty_surface(wet.x)
+    n = wet.triangle_normal
+    vn = np.einsum("kvi,ki->kv", twist[:3] + np.cross(twist[3:], wet.triangles) - water.velocity(wet.x + wet.triangles, t), n)
+    T, owner = clip_triangles(wet.triangles, -vn)
+    area = triangle_areas(T, n[owner])
+    lever = np.einsum("qv,kvi->kqi", DUNAVANT4, T).reshape(-1, 3)
+    weight = (area[:, None] * DUNAVANT4_WEIGHTS).ravel()
+    return WetSurface(wet.x, wet.x + lever, lever, weight, np.repeat(n[owner], 6, axis=0), np.repeat(owner, 6))
+
+
+def drag(body, water, fluid, wet, twist, t) -> Load:
+    """Quadratic drag: -(1/2) rho C_d (v_rel . n)^2 n per unit area where v_rel . n > 0, zero elsewhere."""
+    nodes = _advancing_nodes(water, wet, twist, t)
+    vn = np.einsum("ki,ki->k", _relative_velocity(water, nodes, twist, t), nodes.normal)
+    c = water.rho * fluid.drag_coefficient * nodes.weight * np.maximum(vn, 0.0)  # d|f|/d(v.n) per node
+    f = (-0.5 * c * vn)[:, None] * nodes.normal
+    load = _wrench(nodes, f)
+    g = np.hstack([nodes.normal, np.cross(nodes.lever, nodes.normal)])  # d(v.n)/d(u, omega)
+    D = (g * c[:, None]).T @ g
+    return Load(load[:3], load[3:], D, load + D @ twist)
+
+
+@dataclass(frozen=True)
+class Term:
+    name: str
+    function: Callable[..., Load]
+    params: tuple[Param, ...] = ()
+    """Its parameters (in the [fluid] table): the scene schema, flags and controls come from these."""
+    twist: bool = False
+    """Whether it depends on the twist (then it gives D and affine)."""
+    used: Callable[[Any], bool] | None = None
+    """Whether a scene's fluid section uses it; default: water present and every parameter nonzero."""
+
+    def is_used(self, fluid) -> bool:
+        if self.used is not None:
+            return self.used(fluid)
+        return fluid.rho != 0.0 and all(getattr(fluid, p.key) != 0 for p in self.params)
+
+
+TERMS: tuple[Term, ...] = (
+    Term("gravity", gravity, used=lambda f: f.g != 0.0),
+    Term("pressure", pressure, used=lambda f: f.rho * f.g != 0.0),
+    Term("damping", damping, (DAMPING,), twist=True),
+    Term("drag", drag, (DRAG_COEFFICIENT,), twist=True),
+)
+"""Every force term, in the order the compiled kernels number them (bit i of their `terms` mask)."""
 
 
 class Model:
-    """A body with its parameters: the scene's force terms, and only those (no damping when d = 0).
+    """A body in water with the scene's force terms, and only those a scene uses.
 
-    Caches the wet samples of the last pose asked for, so an integrator step that ends where the
-    next begins, and the frame read in between, find the samples once.
-    """
+    Caches the wet surface of the last pose asked for, so an integrator step that ends where the
+    next begins, and the frame read in between, find it once."""
 
-    def __init__(self, body: Body, params: Params):
-        self.body = body
-        self.params = params
-        self.has_gravity = params.g != 0.0
-        self.has_pressure = params.rho * params.g != 0.0
-        self.has_damping = params.damping != 0.0 and params.rho != 0.0
-        self.needs_wet = self.has_pressure or self.has_damping
-        self._weight = gravity(body, params)
-        self._cache_key: bytes | None = None
-        self._cache: Wetted | None = None
-        self._wetted = wetted_panels if params.forces == "panels" else wetted
+    def __init__(self, body, water, fluid):
+        self.body, self.water, self.fluid = body, water, fluid
+        self.terms = tuple(term for term in TERMS if term.is_used(fluid))
+        self.pose_terms = tuple(term for term in self.terms if not term.twist)
+        self.twist_terms = tuple(term for term in self.terms if term.twist)
+        self.needs_wet = any(term.name != "gravity" for term in self.terms)
+        self._wet_surface = WET_SURFACE[fluid.forces]
+        self._cache_key: tuple | None = None
+        self._cache: WetSurface | None = None
 
     @property
-    def terms(self) -> tuple[str, ...]:
-        names = ("gravity", self.has_gravity), ("pressure", self.has_pressure), ("damping", self.has_damping)
-        return tuple(n for n, on in names if on)
+    def params(self):
+        return self.fluid
 
-    def wetted(self, x: np.ndarray, R: np.ndarray) -> Wetted:
+    @property
+    def term_names(self) -> tuple[str, ...]:
+        return tuple(term.name for term in self.terms)
+
+    def has(self, name: str) -> bool:
+        return any(term.name == name for term in self.terms)
+
+    def wetted(self, x: np.ndarray, R: np.ndarray, t: float = 0.0) -> WetSurface:
         if not self.needs_wet:
-            return EMPTY
-        key = x.tobytes() + R.tobytes()
+            return empty_surface(x)
+        key = (x.tobytes(), R.tobytes(), t if not self.water.is_still else 0.0)
         if key != self._cache_key:
-            self._cache, self._cache_key = self._wetted(self.body, x, R, self.has_damping), key
+            self._cache, self._cache_key = self._wet_surface(self.body, self.water, x, R, t), key
         return self._cache
 
-    def conservative(self, wet: Wetted) -> tuple[np.ndarray, np.ndarray]:
-        """Gravity plus pressure: the forces that depend on the pose only."""
-        force, torque = self._weight.copy(), np.zeros(3)
-        if self.has_pressure and len(wet.area):
-            fp, tp = pressure(self.params, wet)
-            force += fp
-            torque += tp
+    def _sum(self, terms, wet, twist, t) -> tuple[np.ndarray, np.ndarray]:
+        force, torque = np.zeros(3), np.zeros(3)
+        for term in terms:
+            load = term.function(self.body, self.water, self.fluid, wet, twist, t)
+            force += load.force
+            torque += load.torque
         return force, torque
 
-    def damping_matrix(self, wet: Wetted) -> np.ndarray | None:
-        if not self.has_damping or not len(wet.area):
+    def pose_loads(self, wet: WetSurface, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Force and torque of the terms that depend on the pose only (gravity, pressure)."""
+        return self._sum(self.pose_terms, wet, None, t)
+
+    def twist_loads(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Force and torque of the terms that depend on the twist (damping, drag)."""
+        if not len(wet.weight):
+            return np.zeros(3), np.zeros(3)
+        return self._sum(self.twist_terms, wet, twist, t)
+
+    def loads(self, wet: WetSurface, u: np.ndarray, omega: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Total force and torque for a pose's wet surface and a twist (u, omega)."""
+        force, torque = self.pose_loads(wet, t)
+        fv, tv = self.twist_loads(wet, np.concatenate([u, omega]), t)
+        return force + fv, torque + tv
+
+    def linearised(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, np.ndarray | None]:
+        """(f, D): the loads near `twist` as f - D (u, omega), f (6,), D (6, 6) or None (no twist terms wet)."""
+        force, torque = self.pose_loads(wet, t)
+        f = np.concatenate([force, torque])
+        if not self.twist_terms or not len(wet.weight):
+            return f, None
+        D = np.zeros((6, 6))
+        for term in self.twist_terms:
+            load = term.function(self.body, self.water, self.fluid, wet, twist, t)
+            D += load.D
+            f = f + load.affine
+        return f, D
+
+    def damping_matrix(self, wet: WetSurface) -> np.ndarray | None:
+        """The linear damping term's D (None when the scene has no damping or nothing is wet)."""
+        if not self.has("damping") or not len(wet.weight):
             return None
-        return damping_matrix(self.params, wet)
+        return damping_matrix(self.fluid, wet)
 
-    def loads(self, wet: Wetted, u: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Total force and torque on the body for a pose's wet samples and a twist (u, omega)."""
-        force, torque = self.conservative(wet)
-        if self.has_damping and len(wet.area):
-            fd, td = damping(self.params, wet, u, omega)
-            force += fd
-            torque += td
-        return force, torque
+    def hydrostatic_energy(self, wet: WetSurface) -> float:
+        return hydrostatic_energy(self.water, wet) if self.has("pressure") else 0.0
+
+
+def hydrostatic_energy(water, wet: WetSurface) -> float:
+    """U_b = rho g * integral over the submerged volume of (-z) dV = -(rho g / 2) * integral of z^2 nu_z dA (still water)."""
+    z = wet.point[:, 2]
+    return float(-0.5 * water.rho * water.g * (wet.weight * z * z) @ wet.normal[:, 2])

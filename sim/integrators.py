@@ -27,23 +27,16 @@ def free_rotation(model: Model, q: np.ndarray, L: np.ndarray, h: float) -> np.nd
     return normalized(q)
 
 
-def damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L, h: float):
-    """Advance (u, L) by h under the damping alone, pose frozen: d(Mu, L)/dt = -D (u, omega), by
-    one explicit midpoint step in y = Mg^(1/2) v, K = W D W, W = diag(M, R I R^T)^(-1/2) (second
-    order; stable while h lambda_max(K) <= 2)."""
-    if D is None:
+def twist_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
+    """Advance (u, L) by h under the twist-dependent loads alone (damping, drag), pose frozen, by one
+    explicit midpoint step: second order; for linear damping stable while h lambda_max <= 2."""
+    if not model.twist_terms or not len(wet.weight):
         return u, L
-    body = model.body
-    sqrt_m = np.sqrt(body.mass)
-    w_half = np.sqrt(body.inertia)
-    y = np.concatenate([sqrt_m * u, R @ ((R.T @ L) / w_half)])
-    W = np.zeros((6, 6))
-    W[:3, :3] = np.eye(3) / sqrt_m
-    W[3:, 3:] = (R / w_half) @ R.T
-    K = W @ D @ W
-    y_mid = y - 0.5 * h * (K @ y)
-    y = y - h * (K @ y_mid)
-    return y[:3] / sqrt_m, R @ (w_half * (R.T @ y[3:]))
+    M = model.body.mass
+    F, T = model.twist_loads(wet, np.concatenate([u, angular_velocity(model.body, R, L)]), t)
+    u_mid, L_mid = u + 0.5 * h * F / M, L + 0.5 * h * T
+    F, T = model.twist_loads(wet, np.concatenate([u_mid, angular_velocity(model.body, R, L_mid)]), t)
+    return u + h * F / M, L + h * T
 
 
 class Euler:
@@ -58,15 +51,15 @@ class Euler:
         omega = angular_velocity(model.body, s.R_world_body, s.L_world)
         q = normalized(rotate_world(s.q_world_body, dt * omega))
         R = quat_to_matrix(q)
-        wet = model.wetted(x, R)
-        F, T = model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world))
+        wet = model.wetted(x, R, s.t + dt)
+        F, T = model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world), s.t + dt)
         return State(s.t + dt, x, q, s.u_world + dt * F / model.body.mass, s.L_world + dt * T)
 
 
 class Splitting:
-    """Symmetric (Strang) splitting: half damping, half kick, drift with exact rotation, half kick,
-    half damping. Symplectic and second order without damping; with damping each half damping
-    substep is an explicit midpoint step (second order, stable while dt lambda_max <= 4)."""
+    """Symmetric (Strang) splitting: half twist flow (damping, drag), half kick, drift with exact
+    rotation, half kick, half twist flow. Symplectic and second order without damping; each half
+    twist flow is an explicit midpoint step (second order, stable while dt lambda_max <= 4)."""
 
     name, order, adaptive = "splitting", 2, False
     heave_limit, damping_limit = 2.0, 4.0
@@ -76,28 +69,31 @@ class Splitting:
         M = model.body.mass
         x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
         R = quat_to_matrix(q)
-        wet = model.wetted(x, R)
-        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h)
-        F, T = model.conservative(wet)
+        wet = model.wetted(x, R, s.t)
+        u, L = twist_flow(model, wet, R, u, L, h, s.t)
+        F, T = model.pose_loads(wet, s.t)
         u, L = u + h * F / M, L + h * T
         x = x + dt * u
         q = free_rotation(model, q, L, dt)
         R = quat_to_matrix(q)
-        wet = model.wetted(x, R)
-        F, T = model.conservative(wet)
+        t = s.t + dt
+        wet = model.wetted(x, R, t)
+        F, T = model.pose_loads(wet, t)
         u, L = u + h * F / M, L + h * T
-        u, L = damping_flow(model, model.damping_matrix(wet), R, u, L, h)
-        return State(s.t + dt, x, q, u, L)
+        u, L = twist_flow(model, wet, R, u, L, h, t)
+        return State(t, x, q, u, L)
 
 
-def forced_damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L, F, T, h: float):
-    """Advance (u, L) by h under the pose-dependent loads (F, T) and the damping together, pose
-    frozen: d(M u, L)/dt = (F, T) - D (u, omega), a linear system with a constant forcing, solved
-    exactly. In y = Mg^(1/2) v with K = W D W: y(h) = exp(-hK) y0 + h phi(hK) W f,
+def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
+    """Advance (u, L) by h under every load linearised about (u, omega), pose frozen:
+    d(M u, L)/dt = f - D (u, omega) (`Model.linearised`), a linear system with a constant forcing,
+    solved exactly. In y = Mg^(1/2) v with K = W D W: y(h) = exp(-hK) y0 + h phi(hK) W f,
     phi(x) = (1 - e^-x) / x. Each mode decays by exp(-h lambda) <= 1 (stable for any damping, no
     overshoot) and relaxes to its exact terminal velocity, so an overdamped body creeps at the
     physical speed. With no damping it is the plain kick."""
     body = model.body
+    f, D = model.linearised(wet, np.concatenate([u, angular_velocity(body, R, L)]), t)
+    F, T = f[:3], f[3:]
     if D is None:
         return u + h * F / body.mass, L + h * T
     sqrt_m, w_half = np.sqrt(body.mass), np.sqrt(body.inertia)
@@ -114,9 +110,10 @@ def forced_damping_flow(model: Model, D: np.ndarray | None, R: np.ndarray, u, L,
 
 
 class ImplicitSplitting(Splitting):
-    """Strang splitting of the pose (drift with exact rotation) and the momenta (pose-dependent
-    loads and damping together, solved exactly at a frozen pose): second order, stable for any
-    damping coefficient, and an overdamped body creeps at its physical speed."""
+    """Strang splitting of the pose (drift with exact rotation) and the momenta (every load, the
+    twist-dependent ones linearised about the current twist, solved exactly at a frozen pose):
+    second order, stable for any damping coefficient, and an overdamped body creeps at its
+    physical speed. Quadratic drag enters through its Jacobian, so its terminal speed is exact."""
 
     name = "implicit"
     damping_limit = float("inf")
@@ -125,22 +122,21 @@ class ImplicitSplitting(Splitting):
         h = 0.5 * dt
         x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
         R = quat_to_matrix(q)
-        wet = model.wetted(x, R)
-        u, L = forced_damping_flow(model, model.damping_matrix(wet), R, u, L, *model.conservative(wet), h)
+        u, L = linear_flow(model, model.wetted(x, R, s.t), R, u, L, h, s.t)
         x = x + dt * u
         q = free_rotation(model, q, L, dt)
         R = quat_to_matrix(q)
-        wet = model.wetted(x, R)
-        u, L = forced_damping_flow(model, model.damping_matrix(wet), R, u, L, *model.conservative(wet), h)
-        return State(s.t + dt, x, q, u, L)
+        t = s.t + dt
+        u, L = linear_flow(model, model.wetted(x, R, t), R, u, L, h, t)
+        return State(t, x, q, u, L)
 
 
-def derivative(model: Model, y: np.ndarray) -> np.ndarray:
+def derivative(model: Model, t: float, y: np.ndarray) -> np.ndarray:
     """d/dt of (x, q, u, L) stacked, for RK4 and solve_ivp; q need not be normalised."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
     R = quat_to_matrix(q)
     omega = angular_velocity(model.body, R, L)
-    F, T = model.loads(model.wetted(x, R), u, omega)
+    F, T = model.loads(model.wetted(x, R, t), u, omega, t)
     dq = 0.5 * quat_multiply(np.array([0.0, *omega]), q / np.sqrt(q @ q))
     return np.concatenate([u, dq, F / model.body.mass, T])
 
@@ -152,11 +148,11 @@ class RK4:
     heave_limit, damping_limit = 2.0 * 2**0.5, 2.785  # where RK4's stability region meets the axes
 
     def step(self, model: Model, s: State, dt: float) -> State:
-        y = s.as_vector()
-        k1 = derivative(model, y)
-        k2 = derivative(model, y + 0.5 * dt * k1)
-        k3 = derivative(model, y + 0.5 * dt * k2)
-        k4 = derivative(model, y + dt * k3)
+        y, t = s.as_vector(), s.t
+        k1 = derivative(model, t, y)
+        k2 = derivative(model, t + 0.5 * dt, y + 0.5 * dt * k1)
+        k3 = derivative(model, t + 0.5 * dt, y + 0.5 * dt * k2)
+        k4 = derivative(model, t + dt, y + dt * k3)
         return State.from_vector(s.t + dt, y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
 
 
@@ -177,7 +173,7 @@ class Adaptive:
 
         t_end = s.t + dt
         options = {"first_step": min(self._h, t_end - s.t)} if self._h else {}  # (t + dt) - t may be < dt
-        sol = solve_ivp(lambda t, y: derivative(model, y), (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
+        sol = solve_ivp(lambda t, y: derivative(model, t, y), (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
         if not sol.success:
             return State(s.t + dt, *(np.full(n, np.nan) for n in (3, 4, 3, 3)))
         if sol.t.size > 1:

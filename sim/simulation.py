@@ -10,19 +10,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .body import Body, make_body
-from .config import SceneConfig
-from .forces import Model, Params, damping_matrix, hydrostatic_energy, wetted
+from .config import SceneConfig, with_overrides
+from .errors import SimulationDiverged
+from .forces import Model, damping_matrix
 from .integrators import make_integrator
 from .rotation import normalized, quat_multiply
 from .state import State, angular_momentum, angular_velocity
+from .surface import wet_points
+from .water import StillWater
 
 CSV_COLUMNS = (
     "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub".split(",")
 )
-
-
-class SimulationDiverged(RuntimeError):
-    """The state went non-finite or the energy blew up; the message names the time and a likely cause."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,41 +64,28 @@ class Frame:
 
 
 def observe(model: Model, state: State, compiled: bool = False) -> Frame:
-    """All diagnostics of a state, from one set of wet samples (for the sampled model with
+    """All diagnostics of a state, from one wet surface (for the sampled model in still water with
     compiled=True, from one pass of the compiled kernel: the same numbers to round-off)."""
-    body, params = model.body, model.params
+    body, water = model.body, model.water
     R = state.R_world_body
     omega = angular_velocity(body, R, state.L_world)
-    if compiled and params.forces == "points":
-        from .fast import observe_points
+    E_kin = 0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world)
+    E_grav = body.mass * water.g * float(state.x_world[2])
+    common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
+                  L_world=state.L_world, E_kin=E_kin, E_grav=E_grav)  # fmt: skip
+    if compiled and model.fluid.forces == "points" and water.is_still:
+        from .kernels import pack
+        from .kernels.simulation import observe as observe_points
 
         wet = np.empty(body.n_samples, dtype=bool)
-        d = params.damping if model.has_damping else 0.0
-        rho = params.rho if model.needs_wet else 0.0
-        F, T, e_hyd, a_sub, v_sub = observe_points(state.x_world, R, state.u_world, omega, body.r_body, body.n_body, body.area,
-                                                   body.mass, rho, params.g, d, wet)  # fmt: skip
-        return Frame(state.t, state.x_world, state.q_world_body, state.u_world, omega, state.L_world, F, T,
-                     E_kin=0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world),
-                     E_grav=body.mass * params.g * float(state.x_world[2]), E_hyd=e_hyd if model.has_pressure else 0.0,
-                     submerged_area=a_sub, submerged_volume=v_sub, wet_index=np.flatnonzero(wet))  # fmt: skip
-    wet = model.wetted(state.x_world, R)
-    F, T = model.loads(wet, state.u_world, omega)
-    return Frame(
-        t=state.t,
-        x_world=state.x_world,
-        q_world_body=state.q_world_body,
-        u_world=state.u_world,
-        omega_world=omega,
-        L_world=state.L_world,
-        force_world=F,
-        torque_world=T,
-        E_kin=0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world),
-        E_grav=body.mass * params.g * float(state.x_world[2]),
-        E_hyd=hydrostatic_energy(params, wet) if model.has_pressure else 0.0,
-        submerged_area=wet.submerged_area,
-        submerged_volume=wet.submerged_volume,
-        wet_index=wet.index,
-    )
+        terms, coef = pack(model)
+        F, T, e_hyd, a_sub, v_sub = observe_points(state.x_world, R, state.u_world, omega, body.packed, body.mass, terms, coef, wet)
+        return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
+                     wet_index=np.flatnonzero(wet))  # fmt: skip
+    wet = model.wetted(state.x_world, R, state.t)
+    F, T = model.loads(wet, state.u_world, omega, state.t)
+    return Frame(**common, force_world=F, torque_world=T, E_hyd=model.hydrostatic_energy(wet), submerged_area=wet.submerged_area,
+                 submerged_volume=wet.submerged_volume, wet_index=wet.index)  # fmt: skip
 
 
 def initial_state(body: Body, scene: SceneConfig) -> State:
@@ -115,6 +101,11 @@ def with_mass(body: Body, mass: float) -> Body:
     return dataclasses.replace(body, mass=float(mass), inertia=body.inertia * (mass / body.mass))
 
 
+def body_mass(scene: SceneConfig, volume: float) -> float:
+    b = scene.body
+    return float(b.mass) if b.mass is not None else float(b.density) * volume
+
+
 def default_backend() -> str:
     """'numba' (compiled, the default) unless FLOATSIM_BACKEND=numpy or numba is missing."""
     choice = os.environ.get("FLOATSIM_BACKEND", "numba")
@@ -126,34 +117,47 @@ def default_backend() -> str:
     return choice
 
 
-class Simulation:
-    """Owns body, params, integrator and state. Not thread-safe: one thread drives it.
+GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "samples")
+"""Body keys whose change rebuilds the body (the others only change its mass)."""
 
-    backend 'numba' advances fixed-step integrators many steps per call in compiled code (GIL
-    released); 'numpy' is the plain reference the tests compare it with. Adaptive integrators
-    and all observations (frames) always use the numpy code.
+
+class Simulation:
+    """Owns the scene, body, water, model, integrator and state. Not thread-safe: one thread drives it.
+
+    `scene` always describes what runs: `update` changes it and rebuilds only what the change
+    touches. backend 'numba' advances fixed-step integrators that have a compiled twin many steps
+    per call (GIL released); 'numpy' is the plain reference the tests compare it with.
     """
 
     def __init__(self, scene: SceneConfig, body: Body | None = None, backend: str | None = None):
         self.scene = scene
         self.backend = backend or default_backend()
+        self.notes: list[str] = []
+        """Things the user should know about how this runs (a fallback to numpy, ...)."""
         self._frame_key: tuple | None = None
         self._frame: Frame | None = None
         body = body or make_body(scene.body, scene.base_dir)
-        fluid = scene.fluid
-        self.model = Model(body, Params(fluid.rho, fluid.g, fluid.damping, fluid.forces))
+        self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
-        self.dt = float(scene.step.dt)
         self.state = initial_state(body, scene)
+        self._check_backend()
         self._rebase_energy()
+
+    def _model(self, body: Body) -> Model:
+        return Model(body, StillWater(self.scene.fluid.rho, self.scene.fluid.g), self.scene.fluid)
 
     @property
     def body(self) -> Body:
         return self.model.body
 
     @property
-    def params(self) -> Params:
-        return self.model.params
+    def params(self):
+        """The fluid section of the scene: water, force model and every term's coefficients."""
+        return self.scene.fluid
+
+    @property
+    def dt(self) -> float:
+        return float(self.scene.step.dt)
 
     def frame(self) -> Frame:
         """Diagnostics of the current state (computed once per state and model)."""
@@ -164,8 +168,19 @@ class Simulation:
 
     @property
     def compiled(self) -> bool:
-        """Whether steps run in the compiled kernels (fixed-step integrators on the numba backend)."""
-        return self.backend == "numba" and not self.integrator.adaptive
+        """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin, still water)."""
+        from .kernels.layout import SCHEMES
+
+        return self.backend == "numba" and self.integrator.name in SCHEMES and self.model.water.is_still
+
+    def _check_backend(self) -> None:
+        from .kernels.layout import SCHEMES
+
+        integ = self.integrator
+        if self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
+            note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
+            if note not in self.notes:
+                self.notes.append(note)
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
@@ -194,11 +209,12 @@ class Simulation:
         return state
 
     def _advance_compiled(self, n: int) -> State:
-        from . import fast
+        from . import kernels
 
-        p, body = self.params, self.body
-        y, done = fast.advance(self.state.as_vector(), n, self.dt, fast.SCHEMES[self.integrator.name], fast.MODELS[p.forces],
-                               body.packed, body.mass, body.inertia, p.rho, p.g, p.damping)  # fmt: skip
+        body = self.body
+        terms, coef = kernels.pack(self.model)
+        y, done = kernels.advance(self.state.as_vector(), n, self.dt, kernels.SCHEMES[self.integrator.name], kernels.MODELS[self.params.forces],
+                                  body.packed, body.mass, body.inertia, terms, coef)  # fmt: skip
         state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
         if done < n:
             self.state = state
@@ -221,12 +237,11 @@ class Simulation:
         body, p = self.body, self.params
         omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
         rate = 0.0
-        if p.damping > 0 and p.rho > 0:
-            all_wet = wetted(body, np.array([0.0, 0.0, -1e9]), np.eye(3))
+        if self.model.has("damping"):
+            all_wet = wet_points(body, StillWater(p.rho, p.g), np.array([0.0, 0.0, -1e9]), np.eye(3), 0.0)
             w = np.concatenate([np.full(3, body.mass), body.inertia]) ** -0.5
             rate = float(np.linalg.eigvalsh(w[:, None] * damping_matrix(p, all_wet) * w[None, :]).max())
         return {"heave": self.dt * omega, "damping": self.dt * rate}
-
     def warnings(self) -> list[str]:
         """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up)."""
         n, integ = self.stability_numbers(), self.integrator
@@ -251,28 +266,54 @@ class Simulation:
             cause = "try a smaller --dt or another --integrator"
         return f"simulation diverged at t = {t:.6g} s: {what}; likely cause: {cause}"
 
-    # Changes between steps (the viewer's commands). Each replaces the model, never patches arrays.
+    # Changes between steps (the viewer's commands). Each replaces whole objects, never patches arrays.
+
+    def update(self, **changes) -> None:
+        """Change scene parameters by 'section__key' (as `config.with_overrides`), validated, between
+        steps: the scene stays the description of what runs. A new geometry rebuilds the body and
+        carries the motion over; a new mass keeps u and omega (so L scales with I); fluid changes
+        replace the model; step changes the integrator or dt. Velocities are kept."""
+        old, scene = self.scene, with_overrides(self.scene, **changes)
+        self.scene = scene
+        body = self.body
+        if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY):
+            self._rebuild_body(make_body(scene.body, scene.base_dir))
+        elif body_mass(scene, body.volume) != body.mass:
+            R = self.state.R_world_body
+            omega = angular_velocity(body, R, self.state.L_world)
+            self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
+            self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
+        elif old.fluid != scene.fluid:
+            self.model = self._model(body)
+        if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
+            self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
+            self._check_backend()
+        self._rebase_energy()
+
+    def _rebuild_body(self, body: Body) -> None:
+        """Swap in a new body of the same shape given in the same world orientation (its principal
+        frame may differ slightly), with the same position, velocity and angular velocity."""
+        old, state = self.body, self.state
+        omega = angular_velocity(old, state.R_world_body, state.L_world)
+        q_input = normalized(quat_multiply(state.q_world_body, old.q_input_body * np.array([1.0, -1.0, -1.0, -1.0])))
+        q = normalized(quat_multiply(q_input, body.q_input_body))
+        self.model = self._model(body)
+        carried = dataclasses.replace(state, q_world_body=q)
+        self.state = dataclasses.replace(carried, L_world=angular_momentum(body, carried.R_world_body, omega))
 
     def set_params(self, **changes) -> None:
-        """Replace rho, g or damping; velocities are kept."""
-        self.model = Model(self.body, dataclasses.replace(self.params, **changes))
-        self._rebase_energy()
+        """Replace fluid parameters (rho, g, damping, forces, any term's coefficient); velocities are kept."""
+        self.update(**{f"fluid__{k}": v for k, v in changes.items()})
 
     def set_density(self, density: float) -> None:
         """New mass = density x volume, same geometry; keeps u and omega (so L scales with I)."""
-        R = self.state.R_world_body
-        omega = angular_velocity(self.body, R, self.state.L_world)
-        body = with_mass(self.body, density * self.body.volume)
-        self.model = Model(body, self.params)
-        self.state = dataclasses.replace(self.state, L_world=angular_momentum(body, R, omega))
-        self._rebase_energy()
+        self.update(body__density=density)
 
     def set_dt(self, dt: float) -> None:
-        self.dt = float(dt)
+        self.update(step__dt=dt)
 
     def set_integrator(self, name: str) -> None:
-        s = self.scene.step
-        self.integrator = make_integrator(name, s.rtol, s.atol)
+        self.update(step__integrator=name)
 
     def reset(self, state: State | None = None) -> None:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""

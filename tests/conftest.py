@@ -10,7 +10,7 @@ def _compiled_kernels():
     from sim.simulation import default_backend
 
     if default_backend() == "numba":
-        from sim.fast import warm_up
+        from sim.kernels import warm_up
 
         warm_up()
 

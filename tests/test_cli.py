@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from sim.cli import main
+from sim.commands import main
 
 HEADER = "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total".split(",")
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sim import ConfigError, Simulation, load_scene, with_overrides
-from sim.cli import main
+from sim.commands import main
 from sim.ensemble import Ensemble
 
 

@@ -7,8 +7,9 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from sim import Simulation, load_scene, with_overrides
-from sim.forces import hydrostatic_energy, wetted_panels
+from sim.forces import hydrostatic_energy
 from sim.rotation import quat_to_matrix, rotate_world
+from sim.surface import wet_panels
 
 
 def clipped_hull(vertices_world: np.ndarray, edges) -> tuple[float, np.ndarray]:
@@ -65,11 +66,11 @@ def test_panel_forces_are_exactly_conservative(forces, tolerance):
 
     def potential(x, q):
         R = quat_to_matrix(q)
-        wet = model._wetted(body, x, R, False)
-        return body.mass * params.g * x[2] + hydrostatic_energy(params, wet)
+        wet = model.wetted(x, R)
+        return body.mass * params.g * x[2] + hydrostatic_energy(model.water, wet)
 
     R0 = quat_to_matrix(q0)
-    force, torque = model.conservative(model._wetted(body, x0, R0, False))
+    force, torque = model.pose_loads(model.wetted(x0, R0))
     h = 1e-6
     grad_x = [(potential(x0 + h * e, q0) - potential(x0 - h * e, q0)) / (2 * h) for e in np.eye(3)]
     grad_rot = [(potential(x0, rotate_world(q0, h * e)) - potential(x0, rotate_world(q0, -h * e))) / (2 * h) for e in np.eye(3)]
@@ -87,7 +88,7 @@ def test_fully_submerged_damping_matrix_is_the_shell_integral():
     scene = with_overrides(load_scene("rest"), fluid__forces="panels", fluid__damping=2.0, initial__position=(0.0, 0.0, -3.0),
                            initial__orientation=tuple(Rotation.from_rotvec([0.4, 0.1, -0.7]).as_quat(scalar_first=True)))  # fmt: skip
     sim = Simulation(scene)
-    wet = wetted_panels(sim.body, sim.state.x_world, sim.state.R_world_body)
+    wet = wet_panels(sim.body, sim.model.water, sim.state.x_world, sim.state.R_world_body, 0.0)
     D = sim.model.damping_matrix(wet)
     expected = 2.0 * np.diag([6.0, 6.0, 6.0, 5 / 3, 5 / 3, 5 / 3])
     np.testing.assert_allclose(D, expected, atol=1e-13)

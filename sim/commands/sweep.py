@@ -6,18 +6,22 @@ import sys
 from dataclasses import dataclass
 from typing import Literal
 
-from .config import ConfigError, load_scene, with_overrides
-from .ensemble import Ensemble
+from ..config import PARAMS, ConfigError, load_scene, with_overrides
+from ..ensemble import Ensemble
 from .progress import progress_bar
-from .simulation import CSV_COLUMNS
+from ..simulation import CSV_COLUMNS
+
+
+SWEPT = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid") and p.kind in ("float", "optional") and p.key != "mass"}
+"""Parameters a sweep can vary (every declared number of the body and the water, term coefficients included), plus z0."""
 
 
 @dataclass
 class SweepArgs:
     """Run many bodies of one shape together, one per value of a parameter; one CSV row per body."""
 
-    param: Literal["density", "damping", "z0"] = "density"
-    """Which parameter varies: density (kg/m^3), damping (N s/m^3) or z0 (initial height, m)."""
+    param: Literal[tuple(SWEPT) + ("z0",)] = "density"  # type: ignore[valid-type]
+    """Which parameter varies: a declared body or water parameter (density, damping, drag_coefficient, ...) or z0 (initial height, m)."""
     values: tuple[float, ...] = (500.0, 700.0, 900.0)
     """The values to run, one body each."""
     scene: str = "damped"
@@ -44,7 +48,7 @@ def sweep(args: SweepArgs) -> int:
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
     base = with_overrides(load_scene(args.scene), step__t_end=args.t_end, step__dt=args.dt, step__integrator=args.integrator)
-    key = {"density": "body__density", "damping": "fluid__damping"}.get(args.param)
+    key = f"{SWEPT[args.param].section}__{args.param}" if args.param in SWEPT else None
     scenes = []
     for v in args.values:
         if key:

@@ -1,4 +1,4 @@
-"""The headless command line: `python -m sim run ...` runs a scene to CSV with a progress bar."""
+"""`python -m sim run`: a scene headless to CSV, with a progress bar. Its flags come from the parameter declarations."""
 
 from __future__ import annotations
 
@@ -11,36 +11,18 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from .bench import BenchArgs, bench
-from .compare import CompareArgs, compare
-from .config import ConfigError, load_scene, with_overrides
-from .figures import FiguresArgs, figures
+from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
+from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
+from . import declared_flags, overrides
 from .progress import progress_bar
-from .report import ReportArgs, report
-from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
-from .sweep import SweepArgs, sweep
 
 
 @dataclass
-class RunArgs:
+class _RunBase:
     """Run a scene headless and write its trajectory to CSV. Flags override the scene."""
 
     scene: str = "drop"
     """Preset name (assets/scenes/NAME.toml) or path to a scene .toml."""
-    density: float | None = None
-    """Body density, kg/m^3 (mass = density x enclosed volume)."""
-    damping: float | None = None
-    """Viscous damping coefficient d, N s/m^3."""
-    dt: float | None = None
-    """Time step, s (output interval for the adaptive methods)."""
-    t_end: float | None = None
-    """Simulated duration, s."""
-    integrator: str | None = None
-    """euler | splitting | implicit | rk4 | rk45 | dop853 | radau."""
-    forces: str | None = None
-    """points (sum over the samples) | panels (exact integral over the clipped mesh triangles)."""
-    points_per_edge: int | None = None
-    """Cube/box samples: N x N cells per face."""
     z0: float | None = None
     """Initial height of the centre of mass, m."""
     q0: tuple[float, float, float, float] | None = None
@@ -56,35 +38,38 @@ class RunArgs:
     progress: Annotated[bool | None, tyro.conf.arg(help="Show a progress bar (default: only on a terminal, never under CI).")] = None
 
 
-def scene_from_args(args: RunArgs):
+RunArgs = declared_flags("RunArgs", _RunBase, PARAMS.values())
+
+
+def scene_from_args(args: RunArgs) -> SceneConfig:
+    """The scene file with every flag given applied on top, validated."""
     scene = load_scene(args.scene)
     position = scene.initial.position
     if args.z0 is not None:
         position = (position[0], position[1], args.z0)
-    return with_overrides(
-        scene,
-        body__density=args.density,
-        body__points_per_edge=args.points_per_edge,
-        fluid__damping=args.damping,
-        fluid__forces=args.forces,
-        step__dt=args.dt,
-        step__t_end=args.t_end,
-        step__integrator=args.integrator,
-        initial__position=position,
-        initial__orientation=args.q0,
-        initial__velocity=args.u0,
-        initial__omega=args.omega0,
-    )
+    return with_overrides(scene, **overrides(args, PARAMS.values()), initial__position=position, initial__orientation=args.q0,
+                          initial__velocity=args.u0, initial__omega=args.omega0)  # fmt: skip
 
 
 def announce_compile(sim: Simulation) -> None:
     """The compiled kernels build once per machine (then load from the disk cache): say so when slow."""
+    for note in sim.notes:
+        print(f"floatsim: note: {note}", file=sys.stderr)
     if sim.compiled:
-        from .fast import warm_up
+        from ..kernels import warm_up
 
         seconds = warm_up()
         if seconds > 5.0:  # loading from the cache takes under a second; compiling, 10-30 s
             print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
+
+
+def describe_terms(sim: Simulation) -> str:
+    """The terms in use with their declared parameters, e.g. 'gravity+pressure+damping(damping = 100 N s/m^3)'."""
+    parts = []
+    for term in sim.model.terms:
+        values = ", ".join(f"{p.key} = {p.describe(getattr(sim.params, p.key))}" for p in term.params)
+        parts.append(f"{term.name}({values})" if values else term.name)
+    return "+".join(parts)
 
 
 def run(args: RunArgs) -> int:
@@ -125,7 +110,7 @@ def run(args: RunArgs) -> int:
     steps = round(last.t / sim.dt)
     drift = last.E_total - first.E_total
     print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples, mass {sim.body.mass:.6g} kg, "
-          f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {'+'.join(sim.model.terms)}")  # fmt: skip
+          f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}")  # fmt: skip
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "
           f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)")  # fmt: skip
@@ -148,25 +133,3 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | Non
     except SimulationDiverged as e:
         return str(e)
     return None
-
-
-COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench),
-            "report": (ReportArgs, report), "figures": (FiguresArgs, figures)}  # fmt: skip
-
-
-def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:
-    """Parse `argv` into one subcommand's dataclass and run it; user mistakes exit 2 with one line."""
-    args = tyro.extras.subcommand_cli_from_dict({name: cls for name, (cls, _) in commands.items()}, args=argv, prog=prog)
-    handler = next(fn for cls, fn in commands.values() if isinstance(args, cls))
-    try:
-        return handler(args)
-    except ConfigError as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-
-
-def main(argv: list[str] | None = None) -> int:
-    return dispatch(COMMANDS, argv, prog="python -m sim")

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import load_scene, with_overrides
+from ..config import load_scene, with_overrides
 from .progress import progress_bar
-from .simulation import Simulation
+from ..simulation import Simulation
 
 
 @dataclass
@@ -64,8 +64,8 @@ def machine() -> str:
 
 
 def bench(args: BenchArgs) -> int:
-    from .ensemble import Ensemble
-    from .fast import warm_up
+    from ..ensemble import Ensemble
+    from ..kernels import warm_up
 
     compile_s = warm_up()
     base = load_scene(args.scene)

@@ -1,0 +1,95 @@
+"""The command line: `python -m sim run|sweep|compare|bench`. Flags for scene parameters are generated
+from their declarations (`parameters.Param`), so a new term's coefficient is a flag without an edit here."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import sys
+import typing
+from collections.abc import Iterable
+from typing import Annotated
+
+import tyro
+
+from ..errors import ConfigError
+from ..parameters import Param
+
+_TYPES = {"float": float, "int": int, "choice": str, "text": str, "optional": float}
+
+
+def _flag_type(p: Param):
+    if p.kind == "vector":
+        return tuple[(float,) * p.size]  # type: ignore[misc]
+    return _TYPES[p.kind]
+
+
+def _flag_help(p: Param) -> str:
+    extra = f"one of: {', '.join(p.choices)}" if p.choices else p.unit
+    return f"{p.help}" + (f" ({extra})" if extra else "") + f" [scene: [{p.section}] {p.key}]"
+
+
+def declared_flags(name: str, base: type, params: Iterable[Param]) -> type:
+    """A dataclass `base` extended with one optional flag per declared parameter (None: keep the scene's)."""
+    params = [p for p in params if p.flag]
+    taken = {f.name for f in dataclasses.fields(base)}
+    fields = []
+    for p in params:
+        if p.key in taken:
+            raise TypeError(f"flag --{p.key} is declared twice")
+        taken.add(p.key)
+        fields.append((p.key, Annotated[_flag_type(p) | None, tyro.conf.arg(help=_flag_help(p))], dataclasses.field(default=None)))
+    cls = dataclasses.make_dataclass(name, fields, bases=(base,))
+    cls.__doc__ = base.__doc__
+    return cls
+
+
+def overrides(args, params: Iterable[Param]) -> dict:
+    """{'section__key': value} for every declared flag that was given."""
+    return {f"{p.section}__{p.key}": getattr(args, p.key) for p in params if p.flag and getattr(args, p.key, None) is not None}
+
+
+COMMANDS = {
+    "run": "sim.commands.run:run",
+    "sweep": "sim.commands.sweep:sweep",
+    "compare": "sim.commands.compare:compare",
+    "bench": "sim.commands.bench:bench",
+}
+"""name -> 'module:function'; the function's `args` annotation is its dataclass of flags."""
+PLUGINS = "floatsim.commands"
+"""Entry-point group through which the packages above sim (the viewer, the studies) add subcommands to
+`floatsim` without sim importing them: see pyproject.toml."""
+
+
+def _load(target: str):
+    module, name = target.split(":")
+    fn = getattr(importlib.import_module(module), name)
+    return typing.get_type_hints(fn)["args"], fn
+
+
+def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str = "floatsim") -> int:
+    """Parse `argv` into one subcommand's dataclass and run it; user mistakes exit 2 with one line."""
+    loaded = {name: _load(target) for name, target in commands.items()}
+    args = tyro.extras.subcommand_cli_from_dict({name: cls for name, (cls, _) in loaded.items()}, args=argv, prog=prog)
+    handler = next(fn for cls, fn in loaded.values() if isinstance(args, cls))
+    try:
+        return handler(args)
+    except ConfigError as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m sim`: the headless commands."""
+    return dispatch(COMMANDS, argv, prog="python -m sim")
+
+
+def floatsim(argv: list[str] | None = None) -> int:
+    """The `floatsim` console script: the headless commands plus every installed plugin's (view, report, ...)."""
+    from importlib.metadata import entry_points
+
+    plugins = {ep.name: ep.value for ep in entry_points(group=PLUGINS)}
+    return dispatch({**COMMANDS, **plugins}, argv, prog="floatsim")

@@ -1,0 +1,34 @@
+"""The compiled twin of the numpy reference (numba): one module per reference module, same function
+names, sharing the array contract in layout.py. Compiled once and cached on disk.
+
+numba checks a cached kernel against its own file only, not the files of the kernels it calls, so
+the cache lives in a folder named after a hash of every kernel source and of the term registry:
+any change to them compiles afresh instead of running stale code.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+import numba
+from numba import njit
+
+_HERE = Path(__file__).resolve().parent
+
+
+def _cache_dir() -> str:
+    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "forces.py"]
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()[:16]
+    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "floatsim")
+    return os.path.join(root, f"kernels-{digest}")
+
+
+numba.config.CACHE_DIR = _cache_dir()  # read by numba when each kernel below is decorated
+JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
+
+from .integrators import advance, advance_many, warm_up  # noqa: E402
+from .layout import MODELS, SCHEMES, pack  # noqa: E402
+
+__all__ = ["JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "SCHEMES", "pack"]

@@ -1,0 +1,305 @@
+"""Compiled twin of integrators.py: K steps of euler, splitting, implicit or rk4 in one call, GIL released.
+
+The same arithmetic as the reference written as plain loops, so the two agree to round-off
+(tests compare them stage by stage and step by step).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import JIT, njit
+from .layout import COEF_BASE, TERM_PARAMS
+from .forces import DRAG, linearised, pose_loads, twist_loads
+from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
+from .state import angular_velocity
+
+
+@njit(**JIT)
+def matmul6(A, B):
+    out = np.zeros((6, 6))
+    for i in range(6):
+        for j in range(6):
+            acc = 0.0
+            for k in range(6):
+                acc += A[i, k] * B[k, j]
+            out[i, j] = acc
+    return out
+
+
+@njit(**JIT)
+def mat6v(K, y):
+    out = np.zeros(6)
+    for i in range(6):
+        for j in range(6):
+            out[i] += K[i, j] * y[j]
+    return out
+
+
+@njit(**JIT)
+def damping_modes(D, R, mass, inertia):
+    """K = W D W with W = diag(M, R I R^T)^(-1/2): D in mass-normalised coordinates, whose
+    eigenvalues are the damping rates."""
+    W = np.zeros((6, 6))
+    for i in range(3):
+        W[i, i] = 1.0 / math.sqrt(mass)
+        for j in range(3):  # R diag(I^-1/2) R^T
+            W[3 + i, 3 + j] = R[i, 0] * R[j, 0] / math.sqrt(inertia[0]) + R[i, 1] * R[j, 1] / math.sqrt(inertia[1]) + R[i, 2] * R[j, 2] / math.sqrt(inertia[2])
+    return matmul6(matmul6(W, D), W)
+
+
+@njit(**JIT)
+def exact_modes(K, h):
+    """Eigenmodes of K when h K is stiff; when h trace(K) <= 1/2 the Taylor series of exp(-hK)
+    converges to round-off in ~15 products and is cheaper than an eigensolver: flagged by lam[0] = -1."""
+    if h * (K[0, 0] + K[1, 1] + K[2, 2] + K[3, 3] + K[4, 4] + K[5, 5]) <= 0.5:
+        lam = np.zeros(6)
+        lam[0] = -1.0
+        return lam, np.eye(6)
+    return np.linalg.eigh(K)
+
+
+@njit(**JIT)
+def twist_flow(K, R, u, L, h, mass, inertia):
+    """(u, L) after h of linear damping alone by one explicit midpoint step (integrators.twist_flow
+    when damping is the only twist term)."""
+    sqrt_m = math.sqrt(mass)
+    w_half = np.sqrt(inertia)
+    y = np.empty(6)
+    y[:3] = sqrt_m * u
+    y[3:] = mv(R, mtv(R, L) / w_half)
+    y_mid = y - 0.5 * h * mat6v(K, y)
+    y = y - h * mat6v(K, y_mid)
+    return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
+
+
+@njit(**JIT)
+def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags):
+    """integrators.twist_flow with drag: explicit midpoint on the twist terms, pose frozen."""
+    F, T = twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags)
+    u_mid, L_mid = u + 0.5 * h * F / mass, L + 0.5 * h * T
+    F, T = twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags)
+    return u + h * F / mass, L + h * T
+
+
+@njit(**JIT)
+def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
+    """(u, L) after h under the linearised loads f - D (u, omega) at a frozen pose, exactly, as in
+    integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f."""
+    if not wet:
+        return u + h * F / mass, L + h * T
+    sqrt_m = math.sqrt(mass)
+    w_half = np.sqrt(inertia)
+    y = np.empty(6)
+    y[:3] = sqrt_m * u
+    y[3:] = mv(R, mtv(R, L) / w_half)
+    gv = np.empty(6)
+    gv[:3] = F / sqrt_m
+    gv[3:] = mv(R, mtv(R, T) / w_half)
+    if lam[0] < 0.0:  # mild (see exact_modes): both series, sum (-hK)^n y/n! + h (-hK)^n g/(n+1)!
+        a = y.copy()
+        b = h * gv
+        ka = np.empty(6)
+        kb = np.empty(6)
+        scale = 0.0
+        for i in range(6):
+            y[i] = a[i] + b[i]
+            scale = max(scale, abs(a[i]), abs(b[i]))
+        for n in range(1, 40):  # in place: this runs twice a step
+            ca, cb = -h / n, -h / (n + 1)
+            for i in range(6):
+                sa = 0.0
+                sb = 0.0
+                for j in range(6):
+                    sa += K[i, j] * a[j]
+                    sb += K[i, j] * b[j]
+                ka[i] = ca * sa
+                kb[i] = cb * sb
+            biggest = 0.0
+            for i in range(6):
+                a[i], b[i] = ka[i], kb[i]
+                y[i] += a[i] + b[i]
+                biggest = max(biggest, abs(a[i]), abs(b[i]))
+            if biggest <= 1e-17 * scale:
+                break
+    else:  # stiff: through the eigenmodes
+        c = np.zeros(6)
+        for j in range(6):
+            cy = 0.0
+            cg = 0.0
+            for i in range(6):
+                cy += V[i, j] * y[i]
+                cg += V[i, j] * gv[i]
+            x = h * max(lam[j], 0.0)
+            phi = -math.expm1(-x) / x if x > 1e-12 else 1.0 - 0.5 * x
+            c[j] = math.exp(-x) * cy + h * phi * cg
+        for i in range(6):
+            acc = 0.0
+            for j in range(6):
+                acc += V[i, j] * c[j]
+            y[i] = acc
+    return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
+
+
+@njit(**JIT)
+def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
+    """linear_flow with the drag linearised about the current twist (modes computed afresh)."""
+    f, Dt = linearised(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, F, T, D, wet, flags)
+    lam, V = np.zeros(6), np.eye(6)
+    K = np.zeros((6, 6))
+    if wet:
+        K = damping_modes(Dt, R, mass, inertia)
+        lam, V = exact_modes(K, h)
+    return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet)
+
+
+@njit(**JIT)
+def free_rotation(q, L, h, inertia):
+    """integrators.free_rotation as scalar code: the DLM split, each sub-step a rotation about one
+    body axis by h L_body[axis] / I[axis], with L_body[axis] = (column `axis` of R) . L."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    for axis, frac in ((0, 0.5), (1, 0.5), (2, 1.0), (1, 0.5), (0, 0.5)):
+        if axis == 0:
+            lb = (1 - 2 * (y * y + z * z)) * L[0] + 2 * (x * y + w * z) * L[1] + 2 * (x * z - w * y) * L[2]
+        elif axis == 1:
+            lb = 2 * (x * y - w * z) * L[0] + (1 - 2 * (x * x + z * z)) * L[1] + 2 * (y * z + w * x) * L[2]
+        else:
+            lb = 2 * (x * z + w * y) * L[0] + 2 * (y * z - w * x) * L[1] + (1 - 2 * (x * x + y * y)) * L[2]
+        half = 0.5 * frac * h * lb / inertia[axis]
+        c, s = math.cos(half), math.sin(half)
+        if axis == 0:  # q * (c, s, 0, 0)
+            w, x, y, z = w * c - x * s, w * s + x * c, y * c + z * s, z * c - y * s
+        elif axis == 1:  # q * (c, 0, s, 0)
+            w, x, y, z = w * c - y * s, x * c - z * s, w * s + y * c, z * c + x * s
+        else:  # q * (c, 0, 0, s)
+            w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, w * s + z * c
+    return normalized(np.array([w, x, y, z]))
+
+
+@njit(**JIT)
+def derivative(kind, y, geom, mass, inertia, terms, coef, flags, acc):
+    x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
+    R = quat_to_matrix(q)
+    w = angular_velocity(R, L, inertia)
+    F, T, D, wet = pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc)
+    Fv, Tv = twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags)
+    out = np.empty(13)
+    out[0:3] = u
+    out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
+    out[7:10] = (F + Fv) / mass
+    out[10:13] = T + Tv
+    return out
+
+
+@njit(**JIT)
+def _finite(y):
+    for v in y:
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@njit(**JIT)
+def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
+    """Advance the state vector (layout.py) by up to n_steps; stop before the first non-finite
+    state. Returns (state, steps done)."""
+    y = y0.copy()
+    flags = np.zeros(geom[0].shape[0], dtype=np.bool_)  # which samples are wet; the sums start afresh
+    acc = np.zeros(34)
+    x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
+    h = 0.5 * dt
+    has_drag = (terms & DRAG) != 0  # drag depends on the twist: relinearise it at every half step
+    R = quat_to_matrix(q)
+    F, T, D, wet = pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc)
+    K = damping_modes(D, R, mass, inertia)
+    lam, V = np.zeros(6), np.eye(6)
+    if wet and scheme == 2 and not has_drag:
+        lam, V = exact_modes(K, h)
+    for step in range(n_steps):
+        if scheme == 0:  # euler: drift, exact rotation, forces at the new pose, kick
+            w = angular_velocity(R, L, inertia)
+            xn = x + dt * u
+            qn = normalized(quat_multiply(rotation_quat(dt * w), q))
+            Rn = quat_to_matrix(qn)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
+            Fv, Tv = twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags)
+            un, Ln = u + dt * (Fc + Fv) / mass, L + dt * (Tc + Tv)
+        elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
+            un, Ln = u, L
+            if wet and has_drag:
+                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags)
+            elif wet:
+                un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia)
+            un, Ln = un + h * F / mass, Ln + h * T
+            xn = x + dt * un
+            qn = free_rotation(q, Ln, dt, inertia)
+            Rn = quat_to_matrix(qn)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
+            un, Ln = un + h * Fc / mass, Ln + h * Tc
+            if wetn and has_drag:
+                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags)
+            elif wetn:
+                K = damping_modes(Dn, Rn, mass, inertia)
+                un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia)
+        elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
+            if has_drag:
+                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
+            else:
+                un, Ln = linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet)
+            xn = x + dt * un
+            qn = free_rotation(q, Ln, dt, inertia)
+            Rn = quat_to_matrix(qn)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
+            if has_drag:
+                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fc, Tc, Dn, wetn, flags)
+            else:
+                if wetn:  # the same modes serve the next step's first half, at this pose
+                    K = damping_modes(Dn, Rn, mass, inertia)
+                    lam, V = exact_modes(K, h)
+                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fc, Tc, h, mass, inertia, wetn)
+        else:  # rk4 on (x, q, u, L), q renormalised
+            k1 = derivative(kind, y, geom, mass, inertia, terms, coef, flags, acc)
+            k2 = derivative(kind, y + 0.5 * dt * k1, geom, mass, inertia, terms, coef, flags, acc)
+            k3 = derivative(kind, y + 0.5 * dt * k2, geom, mass, inertia, terms, coef, flags, acc)
+            k4 = derivative(kind, y + dt * k3, geom, mass, inertia, terms, coef, flags, acc)
+            yn = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            xn, qn, un, Ln = yn[0:3].copy(), normalized(yn[3:7]), yn[7:10].copy(), yn[10:13].copy()
+            Rn = quat_to_matrix(qn)
+            Fc, Tc, Dn, wetn = F, T, D, wet  # unused by rk4
+        yn = np.empty(13)
+        yn[0:3], yn[3:7], yn[7:10], yn[10:13] = xn, qn, un, Ln
+        if not _finite(yn):
+            return y, step
+        y, x, q, u, L, R = yn, xn, qn, un, Ln, Rn
+        if scheme != 3:
+            F, T, D, wet = Fc, Tc, Dn, wetn
+    return y, n_steps
+
+
+@njit(**JIT)
+def advance_many(Y, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs):
+    """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
+    Returns the new states and each body's steps done (< n_steps where it diverged)."""
+    out = np.empty_like(Y)
+    done = np.empty(Y.shape[0], dtype=np.int64)
+    for b in range(Y.shape[0]):
+        out[b], done[b] = advance(Y[b], n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b])
+    return out, done
+
+
+def warm_up() -> float:
+    """Compile (first run ever) or load from the disk cache every kernel; returns the seconds taken."""
+    import time
+
+    from ..body import make_box
+    from .simulation import observe
+
+    start = time.perf_counter()
+    body = make_box((1.0, 1.0, 1.0), 1, 1.0)
+    y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    coef = np.ones(COEF_BASE + len(TERM_PARAMS))
+    advance(y, 1, 0.01, 2, 0, body.packed, body.mass, body.inertia, 15, coef)
+    observe(y[0:3], np.eye(3), y[7:10], y[7:10], body.packed, body.mass, 15, coef, np.empty(body.n_samples, dtype=np.bool_))
+    return time.perf_counter() - start

@@ -1,0 +1,53 @@
+"""The array contract the numpy reference and its compiled twin share. Plain Python, no numba.
+
+State vector y, (13,) float64: x_world (0:3, m), q_world_body (3:7, w x y z), u_world (7:10, m/s),
+L_world (10:13, kg m^2/s). Twist (6,): (u_world, omega_world).
+
+Geometry tuple `Body.packed`: (r_body (n, 3) m, n_body (n, 3), area (n,) m^2, mesh_vertices (v, 3) m,
+mesh_faces (f, 3) int64, face_normals (f, 3), sample_moments (n, MOMENTS)), all body frame, C order.
+Sample moments, per sample (sums over the wet set give every still-water integral, since z is linear
+in r): a | a r (3) | a r r^T as xx xy xz yy yz zz (6) | a n (3) | a n r^T row-major (9) | a c (3) |
+a c r^T row-major (9), with c = r x n.
+
+Coefficients `coef`, (COEF_BASE + number of term parameters,) float64: rho, g, then every force
+term's parameters in `forces.TERMS` order. Terms mask `terms`: bit i set when `forces.TERMS[i]` is
+used by the scene. So a new term gets its bit and its slots from its registry line alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..forces import TERMS
+
+STATE_SIZE = 13
+MOMENTS = 34
+RHO, G = 0, 1
+COEF_BASE = 2
+SCHEMES = {"euler": 0, "splitting": 1, "implicit": 2, "rk4": 3}
+"""Integrators with a compiled twin, by their number in `integrators.advance`."""
+MODELS = {"points": 0, "panels": 1}
+"""Force models (`surface.FORCE_MODELS`) by their number in the kernels."""
+TERM_PARAMS = [p.key for term in TERMS for p in term.params]
+
+
+def bit(term: str) -> int:
+    """The mask bit of a registered term."""
+    return 1 << [t.name for t in TERMS].index(term)
+
+
+def slot(key: str) -> int:
+    """Where a term parameter sits in `coef`."""
+    return COEF_BASE + TERM_PARAMS.index(key)
+
+
+def coefficients(fluid) -> np.ndarray:
+    return np.array([fluid.rho, fluid.g, *(float(getattr(fluid, key)) for key in TERM_PARAMS)])
+
+
+def pack(model) -> tuple[int, np.ndarray]:
+    """(terms mask, coef) of a `forces.Model`: only the terms it uses are switched on."""
+    mask = 0
+    for term in model.terms:
+        mask |= bit(term.name)
+    return mask, coefficients(model.fluid)

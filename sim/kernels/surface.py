@@ -1,0 +1,173 @@
+"""Compiled twin of surface.py: in still water the integrals every term needs, straight from the pose.
+
+The reference hands out quadrature nodes; here the same integrals are summed in place: the wet area
+A, integral of z nu dA (zn), of (z r) x nu dA (zt), of r dA (S) and of r r^T dA (rr), r the lever
+from the centre of mass, z the depth coordinate (negative under water). `clip` is the twin of
+`surface.clip_triangles` for one triangle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import JIT, njit
+from .rotation import mv, rotate_tensor
+
+
+@njit(**JIT)
+def wet_points(x, R, r, need_rr, moments, flags, acc):
+    """Integrals over the wet samples. Every one is linear in z = x_z + R[2].r, so it is fixed by
+    per-sample constants summed over the wet set (layout.py): keep those sums in `acc` and, at each
+    evaluation, add or remove only the samples that crossed the water line (`flags`: wet or not)."""
+    R20, R21, R22 = R[2, 0], R[2, 1], R[2, 2]
+    for k in range(r.shape[0]):
+        w = x[2] + (R20 * r[k, 0] + R21 * r[k, 1] + R22 * r[k, 2]) < 0.0
+        if w != flags[k]:
+            flags[k] = w
+            sign = 1.0 if w else -1.0
+            for j in range(34):
+                acc[j] += sign * moments[k, j]
+    x2 = x[2]
+    nb = np.empty(3)
+    cb = np.empty(3)
+    for i in range(3):
+        nb[i] = x2 * acc[10 + i] + acc[13 + 3 * i] * R20 + acc[14 + 3 * i] * R21 + acc[15 + 3 * i] * R22
+        cb[i] = x2 * acc[22 + i] + acc[25 + 3 * i] * R20 + acc[26 + 3 * i] * R21 + acc[27 + 3 * i] * R22
+    S = np.zeros(3)
+    rr = np.zeros((3, 3))
+    if need_rr:
+        S = mv(R, acc[1:4].copy())
+        Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
+        rr = rotate_tensor(R, Q)
+    return mv(R, nb), mv(R, cb), acc[0], S, rr
+
+
+@njit(**JIT)
+def crossing(a, b, ha, hb):
+    """Where the edge a -> b crosses the zero of a linear function with end values ha, hb (opposite signs)."""
+    t = ha / (ha - hb)
+    return (a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t)
+
+
+@njit(**JIT)
+def _put(out, k, a, b, c):
+    for i in range(3):
+        out[k, 0, i], out[k, 1, i], out[k, 2, i] = a[i], b[i], c[i]
+
+
+@njit(**JIT)
+def clip(p, h, out):
+    """Write the part of triangle p (3, 3) where the linear function with vertex values h is
+    negative into out[0:count] (triangles, same winding); return count (0, 1 or 2)."""
+    below = (h[0] < 0.0) + (h[1] < 0.0) + (h[2] < 0.0)
+    if below == 0:
+        return 0
+    if below == 3:
+        _put(out, 0, p[0], p[1], p[2])
+        return 1
+    first = 0
+    for i in range(3):  # roll so the odd vertex (alone below, or alone above) comes first
+        if (h[i] < 0.0) == (below == 1):
+            first = i
+            break
+    i0, i1, i2 = first, (first + 1) % 3, (first + 2) % 3
+    e01 = crossing(p[i0], p[i1], h[i0], h[i1])
+    e20 = crossing(p[i2], p[i0], h[i2], h[i0])
+    if below == 1:
+        _put(out, 0, p[i0], e01, e20)
+        return 1
+    _put(out, 0, e01, p[i1], p[i2])  # quadrilateral e01 -> p1 -> p2 -> e20
+    _put(out, 1, e01, p[i2], e20)
+    return 2
+
+
+@njit(**JIT)
+def _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr):
+    """Add one wet triangle's exact integrals (levers p0, p1, p2; heights x2 + p[2], clipped to <= 0)
+    to zn, zt, S, rr in place: integral f g dA = A/12 (sum f_i g_i + sum f_i sum g_i). Returns its area."""
+    e10, e11, e12 = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+    e20, e21, e22 = p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]
+    area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+    z0, z1, z2 = min(x2 + p0[2], 0.0), min(x2 + p1[2], 0.0), min(x2 + p2[2], 0.0)
+    sz = z0 + z1 + z2
+    s0, s1, s2 = p0[0] + p1[0] + p2[0], p0[1] + p1[1] + p2[1], p0[2] + p1[2] + p2[2]
+    w = area / 12.0
+    za = area * sz / 3.0
+    l0 = w * (z0 * p0[0] + z1 * p1[0] + z2 * p2[0] + sz * s0)
+    l1 = w * (z0 * p0[1] + z1 * p1[1] + z2 * p2[1] + sz * s1)
+    l2 = w * (z0 * p0[2] + z1 * p1[2] + z2 * p2[2] + sz * s2)
+    zn[0] += za * nx
+    zn[1] += za * ny
+    zn[2] += za * nz
+    zt[0] += l1 * nz - l2 * ny
+    zt[1] += l2 * nx - l0 * nz
+    zt[2] += l0 * ny - l1 * nx
+    if need_rr:
+        S[0] += area * s0 / 3.0
+        S[1] += area * s1 / 3.0
+        S[2] += area * s2 / 3.0
+        for i in range(3):
+            for j in range(3):
+                rr[i, j] += w * (p0[i] * p0[j] + p1[i] * p1[j] + p2[i] * p2[j] + (s0, s1, s2)[i] * (s0, s1, s2)[j])
+    return area
+
+
+@njit(**JIT)
+def vertex_levers(R, verts):
+    """(v, 3) mesh vertices rotated into the world frame (levers from the centre of mass)."""
+    lev = np.empty((verts.shape[0], 3))
+    for v in range(verts.shape[0]):
+        for i in range(3):
+            lev[v, i] = R[i, 0] * verts[v, 0] + R[i, 1] * verts[v, 1] + R[i, 2] * verts[v, 2]
+    return lev
+
+
+@njit(**JIT)
+def wet_panels(x, R, verts, faces, fnormals, need_rr):
+    """Exact integrals over the mesh's triangles clipped at the still water line."""
+    zn = np.zeros(3)
+    zt = np.zeros(3)
+    S = np.zeros(3)
+    rr = np.zeros((3, 3))
+    A = 0.0
+    lev = vertex_levers(R, verts)
+    x2 = x[2]
+    for f in range(faces.shape[0]):
+        ids = (faces[f, 0], faces[f, 1], faces[f, 2])
+        below = (x2 + lev[ids[0], 2] < 0.0) + (x2 + lev[ids[1], 2] < 0.0) + (x2 + lev[ids[2], 2] < 0.0)
+        if below == 0:
+            continue
+        b0, b1, b2 = fnormals[f, 0], fnormals[f, 1], fnormals[f, 2]
+        nx = R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2
+        ny = R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2
+        nz = R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2
+        first = 0
+        if below != 3:  # roll so the odd vertex (alone under water, or alone above it) comes first
+            for i in range(3):
+                if (x2 + lev[ids[i], 2] < 0.0) == (below == 1):
+                    first = i
+                    break
+        v0, v1, v2 = ids[first], ids[(first + 1) % 3], ids[(first + 2) % 3]
+        p0 = (lev[v0, 0], lev[v0, 1], lev[v0, 2])
+        p1 = (lev[v1, 0], lev[v1, 1], lev[v1, 2])
+        p2 = (lev[v2, 0], lev[v2, 1], lev[v2, 2])
+        if below == 3:
+            A += _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+            continue
+        e01 = crossing(p0, p1, x2 + p0[2], x2 + p1[2])
+        e20 = crossing(p2, p0, x2 + p2[2], x2 + p0[2])
+        if below == 1:
+            A += _triangle(p0, e01, e20, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+        else:  # quadrilateral e01 -> p1 -> p2 -> e20
+            A += _triangle(e01, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+            A += _triangle(e01, p2, e20, x2, nx, ny, nz, zn, zt, S, rr, need_rr)
+    return zn, zt, A, S, rr
+
+
+@njit(**JIT)
+def wet_integrals(kind, x, R, geom, need_rr, flags, acc):
+    """(zn, zt, A, S, rr) of the model `kind` (layout.MODELS); S and rr only when need_rr."""
+    r, nrm, area, verts, faces, fnormals, moments = geom
+    if kind == 0:
+        return wet_points(x, R, r, need_rr, moments, flags, acc)
+    return wet_panels(x, R, verts, faces, fnormals, need_rr)

@@ -1,0 +1,121 @@
+"""The wet part of a body's surface at one pose and time, as quadrature points every force term shares.
+
+Two models (`[fluid] forces`):
+- 'points': the body's samples under the surface, each one node of weight = its area (midpoint rule);
+- 'panels': the mesh's triangles clipped where they cross the surface, each wet triangle carrying
+  the three nodes at its edge midpoints with weight area/3, a rule exact for quadratic integrands:
+  in still water pressure (linear) times position (linear), so Archimedes' force, its torque and the
+  hydrostatic energy are exact at any pose.
+The water is asked where its surface is (`Water.height_above_surface`); the crossing of an edge is
+found by linear interpolation of that height, which is exact for a plane surface.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+FORCE_MODELS = ("points", "panels")
+
+
+@dataclass(frozen=True, eq=False)
+class WetSurface:
+    """Quadrature nodes of the wet surface, world frame, SI units."""
+
+    x: np.ndarray
+    """(3,) centre of mass the levers are taken from, m."""
+    point: np.ndarray
+    """(m, 3) node positions, m."""
+    lever: np.ndarray
+    """(m, 3) node positions relative to the centre of mass, m."""
+    weight: np.ndarray
+    """(m,) node weights (areas), m^2."""
+    normal: np.ndarray
+    """(m, 3) outward unit normals at the nodes."""
+    owner: np.ndarray
+    """(m,) the sample or mesh triangle each node belongs to."""
+    triangles: np.ndarray | None = None
+    """(k, 3, 3) wet triangles as vertex levers, m (panels only; None for points)."""
+    triangle_normal: np.ndarray | None = None
+    """(k, 3) their outward unit normals."""
+
+    @property
+    def submerged_area(self) -> float:
+        return float(self.weight.sum())
+
+    @property
+    def submerged_volume(self) -> float:
+        """V = integral of z nu_z dA over the wet surface (divergence theorem with the field (0, 0, z);
+        the still water plane z = 0 adds nothing), m^3."""
+        return float((self.weight * self.point[:, 2]) @ self.normal[:, 2])
+
+    @property
+    def index(self) -> np.ndarray:
+        """Which samples (or mesh triangles) are wet, sorted."""
+        return np.unique(self.owner)
+
+
+def empty_surface(x: np.ndarray) -> WetSurface:
+    z3 = np.zeros((0, 3))
+    return WetSurface(x, z3, z3, np.zeros(0), z3, np.zeros(0, int), np.zeros((0, 3, 3)), z3)
+
+
+def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface:
+    """The samples under the water surface, each a node weighted by its area."""
+    lever_all = body.r_body @ R.T
+    wet = np.flatnonzero(water.height_above_surface(x + lever_all, t) < 0.0)
+    lever = lever_all[wet]
+    return WetSurface(x, x + lever, lever, body.area[wet], body.n_body[wet] @ R.T, wet)
+
+
+def clip_triangles(P: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The parts of triangles P (k, 3, 3) where the linear function with vertex values h (k, 3) is
+    negative, as triangles (same winding) and the index of the triangle each came from.
+
+    One vertex below keeps a triangle, two keep a quadrilateral (split in two); rolling the
+    vertices to put the odd one first keeps the winding, hence the outward normal."""
+    below = h < 0.0
+    count = below.sum(axis=1)
+    whole = np.flatnonzero(count == 3)
+    tris, owners = [P[whole]], [whole]
+    for n_below in (1, 2):
+        sel = np.flatnonzero(count == n_below)
+        if not len(sel):
+            continue
+        first = np.argmax(below[sel] if n_below == 1 else ~below[sel], axis=1)  # the odd vertex
+        order = (first[:, None] + np.arange(3)) % 3
+        p = np.take_along_axis(P[sel], order[:, :, None], axis=1)
+        v = np.take_along_axis(h[sel], order, axis=1)
+        e01 = p[:, 0] + (p[:, 1] - p[:, 0]) * (v[:, 0] / (v[:, 0] - v[:, 1]))[:, None]
+        e20 = p[:, 2] + (p[:, 0] - p[:, 2]) * (v[:, 2] / (v[:, 2] - v[:, 0]))[:, None]
+        if n_below == 1:
+            tris.append(np.stack([p[:, 0], e01, e20], axis=1))
+            owners.append(sel)
+        else:  # quadrilateral e01 -> p1 -> p2 -> e20
+            tris += [np.stack([e01, p[:, 1], p[:, 2]], axis=1), np.stack([e01, p[:, 2], e20], axis=1)]
+            owners += [sel, sel]
+    return np.concatenate(tris), np.concatenate(owners)
+
+
+def triangle_areas(T: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Signed areas of triangles T (k, 3, 3) along their normals (k, 3)."""
+    return 0.5 * np.einsum("ki,ki->k", np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), normal)
+
+
+def wet_panels(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface:
+    """The mesh's triangles clipped at the water surface; three edge-midpoint nodes on each."""
+    lever_v = body.mesh_vertices @ R.T
+    heights = water.height_above_surface(x + lever_v, t)
+    faces = body.mesh_faces
+    T, owner = clip_triangles(lever_v[faces], heights[faces])
+    if not len(T):
+        return empty_surface(x)
+    normal = body.face_normals[owner] @ R.T
+    area = triangle_areas(T, normal)
+    mid = 0.5 * (T + T[:, [1, 2, 0]])  # edge midpoints (k, 3, 3)
+    lever = mid.reshape(-1, 3)
+    return WetSurface(x, x + lever, lever, np.repeat(area / 3.0, 3), np.repeat(normal, 3, axis=0), np.repeat(owner, 3), T, normal)
+
+
+WET_SURFACE = {"points": wet_points, "panels": wet_panels}

@@ -1,4 +1,5 @@
-"""The GUI inputs. Their callbacks only post commands; `show_setting` puts back the value the loop actually used.
+"""The GUI inputs, one per declared parameter with a control (sim.config.PARAMS with `gui`), plus the
+viewer's own. Callbacks only post commands; `show_setting` puts back the value the loop actually used.
 
 viser runs `def` callbacks on a thread pool, concurrently with the simulation thread and possibly
 out of order, so a callback never touches the simulation: it reads its handle and posts.
@@ -12,60 +13,48 @@ from typing import Any
 
 import viser
 
-import sim
+from sim.parameters import Param
 
-from .loop import Settings
+from .loop import CONTROLLED, SPEED, Settings
 
-LABELS = {
-    "density": "Density (kg/m³)",
-    "damping": "Damping d (N·s/m³)",
-    "dt": "Time step (s)",
-    "integrator": "Integrator",
-    "points_per_edge": "Points per edge",
-    "speed": "Speed (× real time)",
-    "omega0": "Initial ω (rad/s)",
-    "paused": "Pause",
-    "step": "Step",
-    "reset": "Reset",
-    "scene": "Scene",
-    "forces": "Force model",
-}
+FOLDERS = {"body": "Body", "fluid": "Water", "initial": "Start", "step": "Integration"}
+VECTOR_STEP = 0.1
 
 
 class Controls:
-    """Handles of every control, by setting name: `controls.density.value = 500` runs the same path as the browser."""
+    """Handles of every control by parameter key (`controls.density.value = 500` runs the same path as
+    the browser), plus paused, step, reset, speed and scene."""
 
     def __init__(self, server: viser.ViserServer, post: Callable[[str, Any], None], settings: Settings, scene_options: tuple[str, ...]):
         gui = server.gui
         self._post = post
         self._quiet = threading.local()  # set while we write a handle ourselves: its callback must not post it back
+        self._handles: dict[str, Any] = {}
 
         self.notice = gui.add_markdown("", visible=False)
         with gui.add_folder("Run"):
-            self.paused = gui.add_checkbox(LABELS["paused"], settings.paused, hint="Freeze the simulation (the view stays live)")
-            self.pause = self.paused  # the same handle, by its label
-            self.step = gui.add_button(LABELS["step"], hint="Advance one time step")
-            self.reset = gui.add_button(LABELS["reset"], hint="Back to the scene's initial state, keeping these parameters")
-            self.speed = _slider(gui, LABELS["speed"], 0.1, 10.0, 0.1, settings.speed)
-            self.scene = gui.add_dropdown(
-                LABELS["scene"], scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters"
-            )
-        with gui.add_folder("Body and water"):
-            self.density = _slider(gui, LABELS["density"], 1.0, 5000.0, 1.0, settings.density)
-            self.damping = _slider(gui, LABELS["damping"], 0.0, 5000.0, 1.0, settings.damping)
-            self.points_per_edge = _slider(gui, LABELS["points_per_edge"], 1, 60, 1, settings.points_per_edge)
-            self.forces = gui.add_dropdown(LABELS["forces"], sim.forces.FORCE_MODELS, initial_value=settings.forces,
-                                           hint="points: summed over the samples (the report's model); panels: exact over the clipped triangles")  # fmt: skip
-            self.omega0 = gui.add_vector3(LABELS["omega0"], settings.omega0, step=0.1, hint="Angular velocity given on Reset, world frame")
-        with gui.add_folder("Integration"):
-            self.dt = _slider(gui, LABELS["dt"], 0.0005, 0.05, 0.0005, settings.dt)
-            self.integrator = gui.add_dropdown(LABELS["integrator"], tuple(sim.INTEGRATORS), initial_value=settings.integrator)
-
-        for name in ("density", "damping", "dt", "speed", "points_per_edge", "omega0", "integrator", "scene", "forces"):
-            self._bind(name, name)
+            self.paused = gui.add_checkbox("Pause", settings.paused, hint="Freeze the simulation (the view stays live)")
+            self.step = gui.add_button("Step", hint="Advance one time step")
+            self.reset = gui.add_button("Reset", hint="Back to the scene's initial state, keeping these parameters")
+            self.speed = _control(gui, SPEED, settings.speed)
+            self.scene = gui.add_dropdown("Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters")
+        for section, title in FOLDERS.items():
+            params = [p for p in CONTROLLED.values() if p.section == section]
+            if params:
+                with gui.add_folder(title):
+                    for p in params:
+                        self._handles[p.key] = _control(gui, p, settings.value(p.key))
+        for key in (*CONTROLLED, "speed", "scene"):
+            self._bind(key, key)
         self._bind("paused", "pause")
         self.step.on_click(lambda _: self._post("step", None))
         self.reset.on_click(lambda _: self._post("reset", None))
+
+    def __getattr__(self, key: str):
+        handles = self.__dict__.get("_handles", {})
+        if key in handles:
+            return handles[key]
+        raise AttributeError(key)
 
     def _bind(self, field: str, command: str) -> None:
         handle = getattr(self, field)
@@ -78,8 +67,11 @@ class Controls:
 
     def show_setting(self, field: str, value: Any) -> None:
         """Show a value the loop chose (a clamp, a scene's preset, a pause on divergence) without posting it again."""
-        handle = getattr(self, field, None)
-        if handle is None or field == "scene" and value not in handle.options:
+        try:
+            handle = getattr(self, field)
+        except AttributeError:
+            return
+        if field == "scene" and value not in handle.options:
             return
         if hasattr(handle, "max") and isinstance(value, (int, float)):  # sliders: widen the range rather than refuse the value
             handle.max = max(handle.max, value)
@@ -96,6 +88,19 @@ class Controls:
         self.notice.visible = bool(text)
 
 
+def _control(gui, p: Param, value):
+    """The control a declaration asks for: a dropdown for a choice, three numbers for a vector, else a
+    slider whose range also holds `value` (a scene may start outside the usual range)."""
+    if p.kind == "choice":
+        return gui.add_dropdown(p.title, p.choices, initial_value=value, hint=p.help)
+    if p.kind == "vector":
+        return gui.add_vector3(p.title, value, step=VECTOR_STEP, hint=p.help)
+    lo, hi, step = p.gui
+    kind = int if p.kind == "int" else float
+    lo, hi = min(lo, value), max(hi, value)
+    return gui.add_slider(p.title, min=kind(lo), max=kind(hi), step=kind(step), initial_value=kind(value), hint=p.help)
+
+
 class Layers:
     """Checkboxes for what the scene shows; read by the viewer each frame (no commands: they change no physics)."""
 
@@ -105,9 +110,3 @@ class Layers:
             self.points = server.gui.add_checkbox("Show points", True, hint="Samples: blue under water, orange above")
             self.water = server.gui.add_checkbox("Show water", True)
             self.forces = server.gui.add_checkbox("Show force and torque", True, hint="Red: net force (1 m = body weight); green: torque")
-
-
-def _slider(gui, label: str, lo, hi, step, value):
-    """A slider whose range also holds `value` (a scene may start outside the usual range)."""
-    lo, hi = min(lo, value), max(hi, value)
-    return gui.add_slider(label, min=lo, max=hi, step=step, initial_value=type(step)(value))

@@ -21,37 +21,50 @@ from typing import Any
 import numpy as np
 
 import sim
-from sim.config import load_scene, with_overrides
-from sim.rotation import normalized, quat_multiply
-from sim.simulation import initial_state
-from sim.state import angular_momentum
-
-from . import limits
+from sim.config import PARAMS, load_scene
+from sim.parameters import Param
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
 
+SPEED = Param("viewer", "speed", 1.0, "Simulated seconds per wall-clock second asked for", "×", lo=0.01, hi=100.0, label="Speed",
+              gui=(0.1, 10.0, 0.1))  # fmt: skip
+CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
+"""Scene parameters with a live control, by key (the command that changes each is its key)."""
+
 
 @dataclass(frozen=True)
 class Settings:
-    """What the user controls. Replaced whole by the loop; never mutated."""
+    """What the viewer shows in its controls: the running scene (`Simulation.scene`, never copied)
+    plus what only the viewer has (preset name, speed, pause). Read any scene parameter by its key."""
 
-    scene: str
-    density: float
-    """Body density, kg/m^3."""
-    damping: float
-    """Viscous damping d, N s/m^3."""
-    dt: float
-    """Time step, s."""
-    integrator: str
-    points_per_edge: int
+    scene_name: str
+    config: sim.SceneConfig
+    body: sim.Body
     speed: float = 1.0
     """Simulated seconds per wall-clock second asked for."""
-    omega0: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    """Angular velocity applied on Reset, world frame, rad/s."""
     paused: bool = False
-    forces: str = "points"
-    """Force model: 'points' or 'panels'."""
+
+    @property
+    def scene(self) -> str:
+        return self.scene_name
+
+    @property
+    def density(self) -> float:
+        return self.body.mass / self.body.volume
+
+    @property
+    def points_per_edge(self) -> int:
+        b = self.config.body
+        return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
+
+    def __getattr__(self, key: str):
+        if key in CONTROLLED or key in {p.key for p in PARAMS.values()}:
+            return self.config.value(next(q for q, p in PARAMS.items() if p.key == key))
+        raise AttributeError(key)
+
+    def value(self, key: str):
+        return getattr(self, key)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +74,6 @@ class Snapshot:
     frame: sim.Frame
     settings: Settings
     body: sim.Body
-    params: sim.Params
     real_time_factor: float
     """Simulated seconds per wall second over the last ~2 s (nan while paused or just started)."""
     behind: bool
@@ -77,30 +89,17 @@ class Snapshot:
     """Steps taken since the loop started."""
 
     @property
+    def params(self):
+        """The running scene's [fluid] table."""
+        return self.settings.config.fluid
+
+    @property
     def density(self) -> float:
         return self.settings.density
 
     @property
     def damping(self) -> float:
-        return self.settings.damping
-
-
-def settings_for(simulation: sim.Simulation, scene_name: str, speed: float = 1.0, paused: bool = False) -> Settings:
-    """The controls' values that describe a freshly built simulation."""
-    scene, body = simulation.scene, simulation.body
-    ppe = scene.body.points_per_edge if scene.body.shape != "mesh" else max(1, round(math.sqrt(scene.body.samples / 6)))
-    return Settings(
-        scene=scene_name,
-        density=body.mass / body.volume,
-        damping=simulation.params.damping,
-        dt=simulation.dt,
-        integrator=simulation.integrator.name,
-        points_per_edge=int(ppe),
-        speed=speed,
-        omega0=tuple(float(w) for w in scene.initial.omega),  # type: ignore[arg-type]
-        paused=paused,
-        forces=simulation.params.forces,
-    )
+        return self.settings.config.fluid.damping
 
 
 class SimLoop:
@@ -132,7 +131,7 @@ class SimLoop:
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
         self.sim = sim.Simulation(scene)
-        self.settings = settings_for(self.sim, scene_name)
+        self._scene_name, self._speed, self._paused = scene_name, 1.0, False
         self._queue: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
         self._latest: Snapshot | None = None
@@ -153,6 +152,11 @@ class SimLoop:
     def attach(self, publish: Callable[[Snapshot], None] | None, on_setting: Callable[[str, Any], None] | None = None) -> None:
         """Set the viewer's hooks (before `start`): they run on the simulation thread."""
         self._publish, self._on_setting = publish, on_setting
+
+    @property
+    def settings(self) -> Settings:
+        """The controls' values: a view of the running simulation's scene plus the viewer's own."""
+        return Settings(self._scene_name, self.sim.scene, self.sim.body, self._speed, self._paused)
 
     # ---- any thread ------------------------------------------------------------------------
 
@@ -248,7 +252,6 @@ class SimLoop:
             frame=frame,
             settings=self.settings,
             body=self.sim.body,
-            params=self.sim.params,
             real_time_factor=self._rate(),
             behind=(not self.settings.paused) and (now < self._behind_until or self._rate() < 0.85 * self.settings.speed),
             notice=self._notice,
@@ -308,7 +311,7 @@ class SimLoop:
         """
         started = time.perf_counter()
         done = 0
-        while done < n and not self.settings.paused:
+        while done < n and not self._paused:
             k = min(n - done, max(1, int(0.25 * self._budget / self._step_cost)))
             chunk_started = time.perf_counter()
             self._step(k)
@@ -344,9 +347,14 @@ class SimLoop:
         self._notice_until = math.inf if sticky else time.monotonic() + NOTICE_SECONDS
 
     def _set(self, field: str, value: Any, tell: bool = True) -> None:
-        """Change one setting; `tell` the GUI when the loop, not the user, chose the value."""
-        self.settings = dataclasses.replace(self.settings, **{field: value})
-        if tell and self._on_setting is not None:
+        """Change a viewer setting (speed, paused); `tell` the GUI when the loop, not the user, chose it."""
+        setattr(self, f"_{field}", value)
+        if tell:
+            self._tell(field, value)
+
+    def _tell(self, field: str, value: Any) -> None:
+        """Show the GUI a value the loop chose (a clamp, a preset's value, a pause on divergence)."""
+        if self._on_setting is not None:
             try:
                 self._on_setting(field, value)
             except Exception as e:  # noqa: BLE001
@@ -354,57 +362,50 @@ class SimLoop:
 
     def _apply(self, name: str, value: Any) -> None:
         handler = getattr(self, f"_cmd_{name}", None)
+        if handler is None and name in CONTROLLED:
+            handler = lambda v: self._set_param(CONTROLLED[name], v)  # noqa: E731
         if handler is None:
-            self._raise_notice(f"Unknown command {name!r} ignored.")
+            self._raise_notice(f"Unknown command {name[:24]!r} ignored.")
             return
         try:
             handler(value)
         except Exception as e:  # noqa: BLE001 - a bad command must not stop the run
             self._log(f"command {name}", e)
-            self._raise_notice(f"Could not apply {name} = {value!r}: {type(e).__name__}: {e}")
+            self._raise_notice(f"Could not apply {name}: {type(e).__name__}: {str(e)[:200]}")
 
-    def _clamped(self, field: str, value: Any, clamp=limits.clamp) -> Any:
-        used, note = clamp(field, value, getattr(self.settings, field))
+    # ---- commands ----------------------------------------------------------------------------
+
+    def _set_param(self, param: Param, value: Any) -> None:
+        """Any scene parameter with a control: clamped by its declaration, applied between steps
+        through `Simulation.update` (which rebuilds only what it touches); the scene stays current."""
+        current = self.settings.value(param.key)
+        used, note = param.clamp(value, current)
         if note:
             self._raise_notice(note)
-        self._set(field, used, tell=note is not None)
-        return used
-
-    # ---- commands (one per control) --------------------------------------------------------
-
-    def _cmd_density(self, value) -> None:
-        self.sim.set_density(self._clamped("density", value))
-
-    def _cmd_damping(self, value) -> None:
-        self.sim.set_params(damping=self._clamped("damping", value))
-
-    def _cmd_dt(self, value) -> None:
-        self.sim.set_dt(self._clamped("dt", value))
-        self._restart_clock()
+        old_body, old_integrator = self.sim.body, self.sim.integrator
+        change = {f"{param.section}__{param.key}": used}
+        if param.key == "points_per_edge" and self.sim.scene.body.shape == "mesh":
+            change = {"body__samples": 6 * used * used}  # a mesh is refined to about as many samples as a cube of N per edge
+        try:
+            self.sim.update(**change)
+        except sim.ConfigError as e:
+            self._raise_notice(f"{param.label or param.what}: {e}; kept {param.describe(current)}.")
+            used = current
+        if note or used != value:
+            self._tell(param.key, used)
+        if param.key == "points_per_edge":
+            self._epoch += 1  # a rebuilt body: new history for the plots
+        if self.sim.body is not old_body or self.sim.integrator is not old_integrator:
+            self._cost_unknown()
+        if param.key == "dt":
+            self._restart_clock()
 
     def _cmd_speed(self, value) -> None:
-        self._clamped("speed", value)
+        used, note = SPEED.clamp(value, self._speed)
+        if note:
+            self._raise_notice(note)
+        self._set("speed", used, tell=note is not None)
         self._restart_clock()
-
-    def _cmd_omega0(self, value) -> None:
-        self._clamped("omega0", value, limits.clamp_vector3)
-
-    def _cmd_integrator(self, value) -> None:
-        if value not in sim.INTEGRATORS:
-            self._raise_notice(f"Integrator: {value!r} is not one of {', '.join(sim.INTEGRATORS)}; kept {self.settings.integrator}.")
-            self._set("integrator", self.settings.integrator)
-            return
-        self.sim.set_integrator(value)
-        self._set("integrator", value, tell=False)
-        self._cost_unknown()
-
-    def _cmd_forces(self, value) -> None:
-        if value not in sim.forces.FORCE_MODELS:
-            self._raise_notice(f"Force model: {value!r} is not one of {', '.join(sim.forces.FORCE_MODELS)}; kept {self.settings.forces}.")
-            self._set("forces", self.settings.forces)
-            return
-        self.sim.set_params(forces=value)
-        self._set("forces", value, tell=False)
 
     def _cmd_pause(self, value) -> None:
         paused = bool(value)
@@ -420,9 +421,8 @@ class SimLoop:
         self._step(1)
 
     def _cmd_reset(self, _value=None) -> None:
-        """The scene's initial pose and velocities, with the current parameters and initial ω."""
-        scene = with_overrides(self.sim.scene, initial__omega=self.settings.omega0)
-        self.sim.reset(initial_state(self.sim.body, scene))
+        """The scene's initial pose and velocities (its initial omega included), with the current parameters."""
+        self.sim.reset()
         if self._diverged:  # the run was paused by the divergence, not by the user: resume
             self._diverged = False
             self._set("paused", False)
@@ -431,39 +431,19 @@ class SimLoop:
         self._epoch += 1
         self._restart_clock()
 
-    def _cmd_points_per_edge(self, value) -> None:
-        """Rebuild the body with N x N samples per face, keeping the parameters and the motion."""
-        n = self._clamped("points_per_edge", value, limits.clamp_int)
-        old = self.sim
-        s = self.settings
-        body_change = {"body__samples": 6 * n * n} if old.scene.body.shape == "mesh" else {"body__points_per_edge": n}
-        scene = with_overrides(
-            old.scene, body__density=s.density, fluid__damping=s.damping, fluid__forces=s.forces, step__dt=s.dt, step__integrator=s.integrator,
-            **body_change,
-        )
-        new = sim.Simulation(scene)
-        state, frame = old.state, old.frame()
-        # Same world orientation of the shape as given (the principal frame may differ slightly), same omega.
-        q_input = normalized(quat_multiply(state.q_world_body, old.body.q_input_body * np.array([1.0, -1.0, -1.0, -1.0])))
-        q = normalized(quat_multiply(q_input, new.body.q_input_body))
-        carried = dataclasses.replace(state, q_world_body=q, L_world=np.zeros(3))
-        carried = dataclasses.replace(carried, L_world=angular_momentum(new.body, carried.R_world_body, frame.omega_world))
-        new.reset(carried)
-        self.sim = new
-        self._epoch += 1
-        self._cost_unknown()
-
     def _cmd_scene(self, value) -> None:
         """Load another preset with its own parameters (speed and pause are kept)."""
         if value not in self.scene_options:
-            self._raise_notice(f"Scene: {value!r} is not one of {', '.join(self.scene_options)}; kept {self.settings.scene}.")
-            self._set("scene", self.settings.scene)
+            self._raise_notice(f"Scene: {str(value)[:40]!r} is not one of {', '.join(self.scene_options)}; kept {self._scene_name}.")
+            self._tell("scene", self._scene_name)
             return
+        old = self.settings
         self.sim = sim.Simulation(load_scene(value))
-        old, self.settings = self.settings, settings_for(self.sim, value, self.settings.speed, self.settings.paused)
-        for field in dataclasses.fields(Settings):
-            if getattr(old, field.name) != getattr(self.settings, field.name) and field.name != "scene":
-                self._set(field.name, getattr(self.settings, field.name))
+        self._scene_name = value
+        new = self.settings
+        for key in CONTROLLED:
+            if old.value(key) != new.value(key):
+                self._tell(key, new.value(key))
         self._diverged = False
         self._epoch += 1
         self._cost_unknown()

@@ -87,7 +87,7 @@ def warm_kernels() -> None:
 
     if default_backend() != "numba":
         return
-    from sim.fast import warm_up
+    from sim.kernels import warm_up
 
     note = threading.Timer(5.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about 30 s)...",
                                               file=sys.stderr, flush=True))  # fmt: skip

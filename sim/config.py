@@ -28,7 +28,7 @@ BODY = (
     Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=0.0, lo_open=True, hi=1e3, kind="vector", size=3,
           name="box extents"),
     Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=100, kind="int",
-          name="points per edge", gui=(1, 60, 1)),
+          name="points per edge", label="Points per edge", gui=(1, 60, 1)),
     Param("body", "mesh", "", "Mesh file (shape mesh), relative to the scene file or the working directory", kind="text", name="mesh file"),
     Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
           kind="int", name="mesh samples"),
@@ -40,7 +40,7 @@ FLUID = (
     Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),
     Param("fluid", "g", 9.81, "Gravitational acceleration", "m/s^2", lo=0.0, hi=1e3, name="gravity g"),
     Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model) or panels (exactly "
-          "over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model"),
+          "over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (
@@ -51,10 +51,10 @@ INITIAL = (
     Param("initial", "velocity", (0.0, 0.0, 0.0), "Centre-of-mass velocity, world frame", "m/s", lo=-1e4, hi=1e4, kind="vector", size=3,
           name="initial velocity u0", flag=False),
     Param("initial", "omega", (0.0, 0.0, 0.0), "Angular velocity, world frame", "rad/s", lo=-1e3, hi=1e3, kind="vector", size=3,
-          name="initial angular velocity omega0", label="Initial ω", flag=False),
+          name="initial angular velocity omega0", label="Initial ω", flag=False, gui=()),
 )
 STEP = (
-    Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator"),
+    Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator", gui=()),
     Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=0.0, lo_open=True, least=1e-5, hi=1.0,
           gui=(0.0005, 0.05, 0.0005), label="Time step"),
     Param("step", "t_end", 30.0, "Simulated duration", "s", lo=0.0, hi=1e7),

@@ -61,7 +61,7 @@ def pressure(body, water, fluid, wet, twist, t) -> Load:
 
 
 DAMPING = Param("fluid", "damping", 0.0, "Viscous damping coefficient d: a wet element feels -d a v_rel", "N s/m^3",
-                lo=0.0, hi=1.0e7, label="Damping d", gui=(0.0, 5000.0, 1.0))  # fmt: skip
+                lo=0.0, hi=1.0e7, label="Damping", gui=(0.0, 5000.0, 1.0))  # fmt: skip
 
 
 def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:

@@ -45,8 +45,9 @@ class Param:
     """How error messages call it (default: the key)."""
     label: str = ""
     """The viewer's label (default: the name); only parameters with `gui` get a control."""
-    gui: tuple[float, float, float] | None = None
-    """(min, max, step) of the viewer's slider; None: no live control."""
+    gui: tuple | None = None
+    """The viewer's control: (min, max, step) of a slider for a number, () for a choice's dropdown or a
+    vector's three boxes; None: no live control."""
     flag: bool = True
     """Whether `run` and `sweep` take it as a command-line flag."""
 

@@ -226,7 +226,7 @@ def test_reset_restores_the_initial_pose_keeping_parameters(make_app):
     app = make_app("drop")
     c = app.controls
     c.density.value = 600.0
-    c.omega0.value = (0.0, 0.0, 2.0)
+    c.omega.value = (0.0, 0.0, 2.0)
     wait_for(app, lambda s: s.frame.t > 0.5 and abs(s.frame.x_world[2]) > 0.01, what="the body to move")
     c.paused.value = True
     c.reset.value = True
@@ -263,7 +263,7 @@ def test_scene_dropdown_loads_the_preset_and_shows_its_values(make_app):
     assert snap.frame.t == 0.0 and snap.damping == 0.0 and snap.settings.speed == 3.0
     np.testing.assert_allclose(snap.frame.x_world, [0.0, 0.0, -0.4])
     assert app.controls.damping.value == 0.0
-    assert app.controls.omega0.value == (-1.0, 1.0, 0.0)
+    assert app.controls.omega.value == (-1.0, 1.0, 0.0)
 
 
 # ---- bad input and faults ----------------------------------------------------------------------
@@ -299,12 +299,12 @@ def test_wrong_kinds_of_input_are_refused(make_app):
     app = make_app("damped", paused=True)
     integrator = app.latest().settings.integrator
     app.loop.post("density", "heavy")
-    app.loop.post("omega0", (float("nan"), 0.0, 1.0))
+    app.loop.post("omega", (float("nan"), 0.0, 1.0))
     app.loop.post("integrator", "leapfrog")
     app.loop.post("scene", "../../etc/passwd")
     app.loop.post("no such command", 1)
     snap = app.sync()
-    assert snap.density == 900.0 and snap.settings.omega0 == (-1.0, 1.0, 0.0)
+    assert snap.density == 900.0 and snap.settings.omega == (-1.0, 1.0, 0.0)
     assert snap.settings.integrator == integrator and snap.settings.scene == "damped"
     assert "Unknown command" in snap.notice
     assert snap.notice_id >= 5

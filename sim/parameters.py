@@ -59,7 +59,8 @@ class Param:
     def title(self) -> str:
         """The viewer's label with its unit."""
         text = self.label or self.what
-        return f"{text} ({self.unit})" if self.unit else text
+        unit = self.unit.replace("^3", "³").replace("^2", "²").replace(" ", "·")
+        return f"{text} ({unit})" if unit else text
 
     def describe(self, value) -> str:
         return f"{value:g} {self.unit}".strip() if isinstance(value, (int, float)) else str(value)

@@ -140,6 +140,8 @@ class Term:
     """Its parameters (in the [fluid] table): the scene schema, flags and controls come from these."""
     twist: bool = False
     """Whether it depends on the twist (then it gives D and affine)."""
+    linear: bool = True
+    """Whether its load is affine in the twist (its linearisation is exact, the implicit scheme need not iterate)."""
     used: Callable[[Any], bool] | None = None
     """Whether a scene's fluid section uses it; default: water present and every parameter nonzero."""
 
@@ -153,7 +155,7 @@ TERMS: tuple[Term, ...] = (
     Term("gravity", gravity, used=lambda f: f.g != 0.0),
     Term("pressure", pressure, used=lambda f: f.rho * f.g != 0.0),
     Term("damping", damping, (DAMPING,), twist=True),
-    Term("drag", drag, (DRAG_COEFFICIENT,), twist=True),
+    Term("drag", drag, (DRAG_COEFFICIENT,), twist=True, linear=False),
 )
 """Every force term, in the order the compiled kernels number them (bit i of their `terms` mask)."""
 
@@ -170,6 +172,7 @@ class Model:
         self.pose_terms = tuple(term for term in self.terms if not term.twist)
         self.twist_terms = tuple(term for term in self.terms if term.twist)
         self.needs_wet = any(term.name != "gravity" for term in self.terms)
+        self.linear_in_twist = all(term.linear for term in self.twist_terms)
         self._wet_surface = WET_SURFACE[fluid.forces]
         self._cache_key: tuple | None = None
         self._cache: WetSurface | None = None

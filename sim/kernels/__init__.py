@@ -2,7 +2,7 @@
 names, sharing the array contract in layout.py. Compiled once and cached on disk.
 
 numba checks a cached kernel against its own file only, not the files of the kernels it calls, so
-the cache lives in a folder named after a hash of every kernel source and of the term registry:
+the cache lives in a folder named after a hash of every kernel source, of the term registry and of the integrators' constants:
 any change to them compiles afresh instead of running stale code.
 """
 
@@ -19,7 +19,7 @@ _HERE = Path(__file__).resolve().parent
 
 
 def _cache_dir() -> str:
-    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "forces.py"]
+    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "forces.py", _HERE.parent / "integrators.py"]
     digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()[:16]
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "floatsim")
     return os.path.join(root, f"kernels-{digest}")

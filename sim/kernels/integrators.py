@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from . import JIT, njit
+from ..integrators import RELINEARISE, RELINEARISE_TOL
 from .layout import COEF_BASE, TERM_PARAMS
 from .forces import DRAG, linearised, pose_loads, twist_loads
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
@@ -144,15 +145,34 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
 
 
 @njit(**JIT)
-def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
-    """linear_flow with the drag linearised about the current twist (modes computed afresh)."""
-    f, Dt = linearised(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, F, T, D, wet, flags)
+def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
+    """(u, L) after h under the loads linearised about the twist (uc, omega(Lc)), exactly."""
+    f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags)
     lam, V = np.zeros(6), np.eye(6)
     K = np.zeros((6, 6))
     if wet:
         K = damping_modes(Dt, R, mass, inertia)
         lam, V = exact_modes(K, h)
     return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet)
+
+
+@njit(**JIT)
+def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
+    """integrators.linear_flow with a nonlinear term (drag): linearised about the end twist of the
+    half step, found by fixed-point iteration from the start twist."""
+    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
+    if not wet:
+        return un, Ln
+    scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / mass)
+    for _ in range(RELINEARISE):
+        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
+        dw = angular_velocity(R, L2 - Ln, inertia)
+        w2 = angular_velocity(R, L2, inertia)
+        change = max(np.abs(u2 - un).max(), scale * np.abs(dw).max())
+        un, Ln = u2, L2
+        if change <= RELINEARISE_TOL * (np.abs(un).max() + scale * np.abs(w2).max()):
+            break
+    return un, Ln
 
 
 @njit(**JIT)

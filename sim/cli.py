@@ -14,9 +14,7 @@ import tyro
 from .bench import BenchArgs, bench
 from .compare import CompareArgs, compare
 from .config import ConfigError, load_scene, with_overrides
-from .figures import FiguresArgs, figures
 from .progress import progress_bar
-from .report import ReportArgs, report
 from .simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from .sweep import SweepArgs, sweep
 
@@ -150,8 +148,7 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | Non
     return None
 
 
-COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench),
-            "report": (ReportArgs, report), "figures": (FiguresArgs, figures)}  # fmt: skip
+COMMANDS = {"run": (RunArgs, run), "sweep": (SweepArgs, sweep), "compare": (CompareArgs, compare), "bench": (BenchArgs, bench)}
 
 
 def dispatch(commands: dict, argv: list[str] | None = None, prog: str = "floatsim") -> int:

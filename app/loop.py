@@ -7,7 +7,6 @@ here, so the tests drive it without a browser or a server.
 from __future__ import annotations
 
 import collections
-import dataclasses
 import math
 import queue
 import sys

@@ -1,5 +1,5 @@
-"""`sim.figures` on its quick setting: every figure the page promises is written, one section per figure group
-of the source report, and the physics facts the page states hold."""
+"""`studies.seed_figures` (`python -m studies figures`) on its quick setting: every figure the page promises is
+written, one section per figure group of the source report, and the physics facts the page states hold."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import struct
 import numpy as np
 import pytest
 
-from sim.figures import ASSETS, PAGE, FiguresArgs, figures, fmt, report_grid
+from studies.seed_figures import ASSETS, PAGE, FiguresArgs, figures, fmt, report_grid
 
 SECTIONS = ("Figures 1-2", "Figure 3", "Figures 4-5", "Figure 6", "Density", "Figures 7-9")
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -42,6 +42,11 @@ def test_every_promised_figure_is_a_real_png(page):
         pixels = matplotlib.image.imread(out / link)[..., :3]
         assert pixels.std() > 0.05, f"{link} looks blank"
     assert sorted(p.name for p in (out / ASSETS).glob("*.png")) == sorted(link.split("/")[1] for link in links)
+
+
+def test_says_how_to_regenerate(page):
+    _, text, _ = page
+    assert "python -m studies figures" in text
 
 
 def test_one_section_per_figure_group_with_settings_and_comparison(page):

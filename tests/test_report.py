@@ -1,4 +1,4 @@
-"""The accuracy report (`python -m sim report`): the quick setting runs, writes every figure it
+"""The accuracy report (`python -m studies report`): the quick setting runs, writes every figure it
 references, carries the verdict table, and its data show the physics the report claims."""
 
 import re
@@ -6,7 +6,7 @@ import re
 import pytest
 
 from sim.integrators import INTEGRATORS
-from sim.report import QUICK, ReportArgs, run_report
+from studies.accuracy import QUICK, ReportArgs, run_report
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +34,7 @@ def test_writes_markdown_and_every_figure_it_references(quick):
 
 def test_says_how_to_regenerate_and_names_the_machine(quick):
     _, data = quick
-    assert "python -m sim report" in data.markdown
+    assert "python -m studies report" in data.markdown
     for key in ("CPU (/proc/cpuinfo)", "platform.processor()", "Python / numpy / scipy"):
         assert key in data.markdown
 

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import load_scene, with_overrides
-from .progress import progress_bar
 from ..simulation import Simulation
+from .progress import progress_bar
 
 
 @dataclass

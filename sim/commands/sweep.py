@@ -8,9 +8,8 @@ from typing import Literal
 
 from ..config import PARAMS, ConfigError, load_scene, with_overrides
 from ..ensemble import Ensemble
-from .progress import progress_bar
 from ..simulation import CSV_COLUMNS
-
+from .progress import progress_bar
 
 SWEPT = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid") and p.kind in ("float", "optional") and p.key != "mass"}
 """Parameters a sweep can vary (every declared number of the body and the water, term coefficients included), plus z0."""

@@ -10,10 +10,10 @@ import math
 
 import numpy as np
 
-from . import JIT, njit
 from ..integrators import RELINEARISE, RELINEARISE_TOL
-from .layout import COEF_BASE, TERM_PARAMS
+from . import JIT, njit
 from .forces import DRAG, linearised, pose_loads, twist_loads
+from .layout import COEF_BASE, TERM_PARAMS
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
 

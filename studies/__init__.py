@@ -1,0 +1,1 @@
+"""Generated documents (the accuracy report, the source report's figures); outputs go to reports/."""

@@ -1,0 +1,15 @@
+"""`python -m studies report|figures ...`: write the generated documents (reports/ by default)."""
+
+import sys
+
+from .probes import dispatch
+
+COMMANDS = {"report": "studies.accuracy:report", "figures": "studies.seed_figures:figures"}
+
+
+def main(argv: list[str] | None = None) -> int:
+    return dispatch(COMMANDS, argv, prog="python -m studies")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,131 @@
+"""`python -m studies report`: the accuracy report, OUT_DIR/accuracy.md with figures in OUT_DIR/accuracy/.
+
+Five parts, every number computed from runs made by this command (nothing hand-typed): work-precision
+diagrams with observed orders, the sampled model's error against the exact panel model as N grows, a
+stability map of the fixed-step integrators over damping and density, a verdict table (cheapest
+method per target accuracy) and a table of stiff and extreme cases.
+
+`compute` runs the simulations and returns plain data, `numbers` derives what the text quotes, `plot`
+draws and `text` writes the markdown. Wall-clock figures are medians of `repeats` runs, single-threaded.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import common
+from . import numbers, plot, text
+from .compute import (
+    ADAPTIVE,
+    FIXED,
+    FULL,
+    QUICK,
+    Extreme,
+    ModelError,
+    Settings,
+    StabilityMap,
+    StiffRow,
+    WPPoint,
+    WPResult,
+    extreme_cases,
+    model_error,
+    stability_map,
+    stiff_rows,
+    work_precision,
+)
+
+
+@dataclass
+class ReportArgs:
+    """Write the accuracy report (work-precision, model error, stability map, verdict, stiff and extreme cases)."""
+
+    out_dir: str = "reports"
+    """Folder for accuracy.md; the figures go to OUT_DIR/accuracy/."""
+    quick: bool = False
+    """A short setting (fewer and shorter runs, ~20 s) for the test suite; the numbers are coarser."""
+    repeats: int = 3
+    """Timing repeats per run (wall-clock figures are their median)."""
+
+
+@dataclass
+class ReportData:
+    settings: Settings
+    machine: dict[str, str]
+    wp: list[WPResult]
+    model: ModelError
+    stability: StabilityMap
+    stiff: list[StiffRow]
+    extremes: list[Extreme]
+    messages: list[tuple[str, str]]
+    verdict: dict[float, dict[str, WPPoint | None]]
+    figures: list[str]
+    seconds: float
+    markdown: str = ""
+
+
+def compute_all(cfg: Settings, repeats: int, blas: str) -> ReportData:
+    """Every run of the report, with a progress bar; the orders, rates and verdict filled in."""
+    bar = common.progress(cfg.jobs(), unit="run")
+
+    def tick(n=1):
+        bar.update(n)
+
+    try:
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            info = common.machine(blas)
+            common.warm_up((*FIXED, *ADAPTIVE))
+            wp = [work_precision(case, cfg, repeats, tick) for case in cfg.cases]
+            me = model_error(cfg, repeats, tick)
+            st = stability_map(cfg, tick)
+            stiff = stiff_rows(cfg, tick)
+            extremes, messages = extreme_cases(cfg, tick)
+    finally:
+        bar.close()
+    for res in wp:
+        res.orders = numbers.observed_orders(res)
+    me.rates = numbers.model_rates(me)
+    return ReportData(cfg, info, wp, me, st, stiff, extremes, messages, numbers.verdict(wp, cfg.targets), [], 0.0)
+
+
+def draw_all(data: ReportData, fig_dir: Path, repeats: int) -> None:
+    """Every figure, into fig_dir; their names go to data.figures."""
+    cfg, cpu = data.settings, data.machine["CPU (/proc/cpuinfo)"]
+    label = f"{cfg.horizon:g} s; {cpu}, {repeats} repeats"
+    for res in data.wp:
+        name = f"wp_{res.case.key}.png"
+        plot.work_precision(res, fig_dir / name, label)
+        data.figures.append(name)
+    plot.model_error(data.model, fig_dir / "model_error.png", f"{cpu}, {repeats} repeats")
+    plot.stability(data.stability, cfg, fig_dir / "stability.png")
+    plot.creep(data.stiff, fig_dir / "stiff_creep.png")
+    data.figures += ["model_error.png", "stability.png", "stiff_creep.png"]
+
+
+def run_report(args: ReportArgs) -> ReportData:
+    """Compute everything and write the markdown and figures; return the data (for tests)."""
+    started = time.perf_counter()
+    cfg = QUICK if args.quick else FULL
+    out = Path(args.out_dir)
+    fig_dir = out / "accuracy"
+    fig_dir.mkdir(parents=True, exist_ok=True)
+    blas = common.single_thread_blas()
+    repeats = max(1, args.repeats)
+    data = compute_all(cfg, repeats, blas)
+    draw_all(data, fig_dir, repeats)
+    data.seconds = time.perf_counter() - started
+    data.markdown = text.markdown(data, args)
+    (out / "accuracy.md").write_text(data.markdown)
+    return data
+
+
+def report(args: ReportArgs) -> int:
+    data = run_report(args)
+    print(f"wrote {Path(args.out_dir) / 'accuracy.md'} and {len(data.figures)} figures in {data.seconds:.0f} s")
+    return 0
+
+
+__all__ = ["FULL", "QUICK", "ReportArgs", "ReportData", "report", "run_report"]

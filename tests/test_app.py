@@ -280,6 +280,8 @@ def test_scene_dropdown_loads_the_preset_and_shows_its_values(make_app):
         ("dt", 0.0, 1e-5),
         ("speed", 1e9, 100.0),
         ("points_per_edge", 1000, 100),
+        ("drag_coefficient", -2.0, 0.0),
+        ("drag_coefficient", 1e9, 100.0),
     ],
 )
 def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, used):
@@ -288,7 +290,7 @@ def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, use
     snap = app.sync()
     assert getattr(snap.settings, field) == used
     assert getattr(app.controls, field).value == used  # the GUI shows what is used
-    assert snap.notice and snap.notice.split(":")[0] in ("Density", "Damping", "Time step", "Speed", "Points per edge")
+    assert snap.notice and snap.notice.split(":")[0] in ("Density", "Damping", "Time step", "Speed", "Points per edge", "Drag C_d")
     assert app.controls.notice.visible and snap.notice in app.controls.notice.content
     assert app.loop.is_alive()
     snap = wait_for(app, lambda s, n=snap.steps: s.steps > n + 10, what="the run to go on")
@@ -408,3 +410,17 @@ def test_force_model_dropdown_switches_the_running_model(make_app):
     app.loop.post("forces", "voxels")
     snap = app.sync()
     assert snap.params.forces == "panels" and "Force model" in snap.notice
+
+
+def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
+    """The drag coefficient's control (generated from its declaration) changes Simulation.scene, and
+    the term joins the model only while it is nonzero."""
+    app = make_app("damped", paused=True)
+    assert "drag" not in app.loop.sim.model.term_names
+    app.controls.drag_coefficient.value = 2.0
+    snap = app.sync()
+    assert snap.params.drag_coefficient == 2.0 and app.loop.sim.scene.fluid.drag_coefficient == 2.0
+    assert "drag" in app.loop.sim.model.term_names
+    app.controls.drag_coefficient.value = 0.0
+    app.sync()
+    assert "drag" not in app.loop.sim.model.term_names

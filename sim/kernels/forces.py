@@ -16,6 +16,8 @@ GRAVITY, PRESSURE, DAMPING, DRAG = bit("gravity"), bit("pressure"), bit("damping
 C_DAMPING, C_DRAG = slot("damping"), slot("drag_coefficient")
 WET_TERMS = PRESSURE | DAMPING | DRAG
 TWIST_TERMS = DAMPING | DRAG
+NONLINEAR = DRAG
+"""Twist terms whose load is not affine in the twist (forces.Term.linear is False): summed by `nonlinear_loads`."""
 DUNAVANT4 = np.array([[0.108103018168070, 0.445948490915965, 0.445948490915965], [0.445948490915965, 0.108103018168070, 0.445948490915965],
                       [0.445948490915965, 0.445948490915965, 0.108103018168070], [0.816847572980459, 0.091576213509771, 0.091576213509771],
                       [0.091576213509771, 0.816847572980459, 0.091576213509771], [0.091576213509771, 0.091576213509771, 0.816847572980459]])  # fmt: skip
@@ -138,8 +140,22 @@ def drag(kind, x, R, u, w, geom, coef, flags, need_D):
 
 
 @njit(**JIT)
+def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D):
+    """Force, torque and (need_D) Jacobian of the nonlinear twist terms the scene uses."""
+    F = np.zeros(3)
+    T = np.zeros(3)
+    D = np.zeros((6, 6))
+    if terms & DRAG:
+        Fd, Td, Dd = drag(kind, x, R, u, w, geom, coef, flags, need_D)
+        F += Fd
+        T += Td
+        D += Dd
+    return F, T, D
+
+
+@njit(**JIT)
 def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags):
-    """Force and torque of the twist terms at (u, w): -D (u, w) for damping, plus drag."""
+    """Force and torque of the twist terms at (u, w): -D (u, w) for linear damping, plus the nonlinear ones."""
     F = np.zeros(3)
     T = np.zeros(3)
     if not wet:
@@ -149,26 +165,26 @@ def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags):
             for j in range(3):
                 F[i] -= D[i, j] * u[j] + D[i, 3 + j] * w[j]
                 T[i] -= D[3 + i, j] * u[j] + D[3 + i, 3 + j] * w[j]
-    if terms & DRAG:
-        Fd, Td, _ = drag(kind, x, R, u, w, geom, coef, flags, False)
-        F += Fd
-        T += Td
+    if terms & NONLINEAR:
+        Fn, Tn, _ = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, False)
+        F += Fn
+        T += Tn
     return F, T
 
 
 @njit(**JIT)
 def linearised(kind, x, R, u, w, geom, coef, terms, F, T, D, wet, flags):
     """(f, D) with loads ~ f - D (u, w) near (u, w), as forces.Model.linearised: the pose loads
-    (F, T) plus each twist term's affine part, and the sum of their Jacobians. Without drag: (F, T), D."""
+    (F, T) plus each nonlinear term's affine part, and the sum of the Jacobians. Linear only: (F, T), D."""
     f = np.empty(6)
     f[:3] = F
     f[3:] = T
-    if not (wet and terms & DRAG):
+    if not (wet and terms & NONLINEAR):
         return f, D
-    Fd, Td, Dd = drag(kind, x, R, u, w, geom, coef, flags, True)
+    Fn, Tn, Dn = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, True)
     for i in range(6):
         acc = 0.0
         for j in range(3):
-            acc += Dd[i, j] * u[j] + Dd[i, 3 + j] * w[j]
-        f[i] += (Fd[i] if i < 3 else Td[i - 3]) + acc
-    return f, D + Dd
+            acc += Dn[i, j] * u[j] + Dn[i, 3 + j] * w[j]
+        f[i] += (Fn[i] if i < 3 else Tn[i - 3]) + acc
+    return f, D + Dn

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..integrators import RELINEARISE, RELINEARISE_TOL
 from . import JIT, njit
-from .forces import DRAG, linearised, pose_loads, twist_loads
+from .forces import NONLINEAR, linearised, pose_loads, twist_loads
 from .layout import COEF_BASE, TERM_PARAMS
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
@@ -78,7 +78,7 @@ def twist_flow(K, R, u, L, h, mass, inertia):
 
 @njit(**JIT)
 def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags):
-    """integrators.twist_flow with drag: explicit midpoint on the twist terms, pose frozen."""
+    """integrators.twist_flow with nonlinear twist terms: explicit midpoint on the twist terms, pose frozen."""
     F, T = twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags)
     u_mid, L_mid = u + 0.5 * h * F / mass, L + 0.5 * h * T
     F, T = twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags)
@@ -158,7 +158,7 @@ def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F
 
 @njit(**JIT)
 def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
-    """integrators.linear_flow with a nonlinear term (drag): linearised about the end twist of the
+    """integrators.linear_flow with nonlinear twist terms (drag): linearised about the end twist of the
     half step, found by fixed-point iteration from the start twist."""
     un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
     if not wet:
@@ -230,12 +230,12 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
     acc = np.zeros(34)
     x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
     h = 0.5 * dt
-    has_drag = (terms & DRAG) != 0  # drag depends on the twist: relinearise it at every half step
+    nonlinear = (terms & NONLINEAR) != 0  # e.g. drag: relinearised at every half step
     R = quat_to_matrix(q)
     F, T, D, wet = pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc)
     K = damping_modes(D, R, mass, inertia)
     lam, V = np.zeros(6), np.eye(6)
-    if wet and scheme == 2 and not has_drag:
+    if wet and scheme == 2 and not nonlinear:
         lam, V = exact_modes(K, h)
     for step in range(n_steps):
         if scheme == 0:  # euler: drift, exact rotation, forces at the new pose, kick
@@ -248,7 +248,7 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
             un, Ln = u + dt * (Fc + Fv) / mass, L + dt * (Tc + Tv)
         elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
-            if wet and has_drag:
+            if wet and nonlinear:
                 un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags)
             elif wet:
                 un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia)
@@ -258,13 +258,13 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
             Rn = quat_to_matrix(qn)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
             un, Ln = un + h * Fc / mass, Ln + h * Tc
-            if wetn and has_drag:
+            if wetn and nonlinear:
                 un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags)
             elif wetn:
                 K = damping_modes(Dn, Rn, mass, inertia)
                 un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
-            if has_drag:
+            if nonlinear:
                 un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
             else:
                 un, Ln = linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet)
@@ -272,7 +272,7 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
-            if has_drag:
+            if nonlinear:
                 un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fc, Tc, Dn, wetn, flags)
             else:
                 if wetn:  # the same modes serve the next step's first half, at this pose

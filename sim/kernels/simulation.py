@@ -5,21 +5,21 @@ from __future__ import annotations
 import numpy as np
 
 from . import JIT, njit
-from .forces import C_DAMPING, C_DRAG, DAMPING, DRAG, PRESSURE, WET_TERMS
+from .forces import C_DAMPING, DAMPING, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads
 from .layout import RHO, G
 
 
 @njit(**JIT)
 def observe(x, R, u, w, geom, mass, terms, coef, wet):
     """Total force and torque (every used term at (u, w)), hydrostatic energy, wet area and
-    submerged volume of the sampled model; marks the wet samples in `wet`. Scalar loop, no allocations."""
+    submerged volume of the sampled model; marks the wet samples in `wet`. One scalar loop for the
+    terms linear in the pose and twist, then the nonlinear ones."""
     r, nrm, area = geom[0], geom[1], geom[2]
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
     F0 = F1 = T0 = T1 = T2 = e_hyd = a_sub = v_sub = 0.0
     F2 = -mass * coef[G]
     rg = coef[RHO] * coef[G] if terms & WET_TERMS else 0.0
     d = coef[C_DAMPING] if terms & DAMPING else 0.0
-    half_rc = 0.5 * coef[RHO] * coef[C_DRAG] if terms & DRAG else 0.0
     for k in range(r.shape[0]):
         a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
         lz = R20 * a0 + R21 * a1 + R22 * a2
@@ -39,10 +39,6 @@ def observe(x, R, u, w, geom, mass, terms, coef, wet):
             fx = p * nx - da * vx
             fy = p * ny - da * vy
             fz = p * nz - da * vz
-            vn = vx * nx + vy * ny + vz * nz
-            if vn > 0.0 and half_rc != 0.0:
-                q = half_rc * a * vn * vn
-                fx, fy, fz = fx - q * nx, fy - q * ny, fz - q * nz
             F0 += fx
             F1 += fy
             F2 += fz
@@ -54,4 +50,9 @@ def observe(x, R, u, w, geom, mass, terms, coef, wet):
             v_sub += z * a * nz
     if not terms & PRESSURE:
         e_hyd = 0.0
-    return np.array([F0, F1, F2]), np.array([T0, T1, T2]), e_hyd, a_sub, v_sub
+    F, T = np.array([F0, F1, F2]), np.array([T0, T1, T2])
+    if terms & NONLINEAR:  # their own pass over the wet samples just marked
+        Fn, Tn, _ = nonlinear_loads(0, x, R, u, w, geom, coef, terms, wet, False)
+        F += Fn
+        T += Tn
+    return F, T, e_hyd, a_sub, v_sub

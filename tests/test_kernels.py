@@ -1,0 +1,191 @@
+"""The compiled kernels against the plain-numpy reference: the same trajectories to round-off."""
+
+import numpy as np
+import pytest
+
+from sim import Simulation, SimulationDiverged, load_scene, with_overrides
+
+CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
+         for integrator in ["euler", "splitting", "implicit", "rk4"] for forces in ["points", "panels"]
+         if integrator == "implicit" or "fluid__damping" not in changes]  # explicit ones diverge there (tested below)  # fmt: skip
+
+
+@pytest.mark.parametrize("scene, changes, integrator, forces", CASES)
+def test_compiled_path_matches_numpy_reference(scene, changes, integrator, forces):
+    config = with_overrides(load_scene(scene), step__integrator=integrator, fluid__forces=forces, **changes)
+    reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
+    assert compiled.compiled and not reference.compiled
+    for _ in range(5):  # several calls: state carried correctly between calls of many steps
+        reference.step(40)
+        compiled.step(40)
+        a, b = reference.state.as_vector(), compiled.state.as_vector()
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * (1 + np.abs(a).max()))
+    assert compiled.state.t == pytest.approx(reference.state.t, rel=1e-14)
+
+
+def test_compiled_path_stops_on_divergence_with_a_finite_state():
+    config = with_overrides(load_scene("damped"), fluid__damping=1e6, step__integrator="euler", step__dt=0.01)
+    sim = Simulation(config, backend="numba")
+    with pytest.raises(SimulationDiverged, match="diverged at t = .*--integrator implicit"):
+        sim.step(1000)
+    assert sim.state.is_finite()
+
+
+def test_adaptive_integrators_use_the_numpy_path():
+    sim = Simulation(with_overrides(load_scene("rest"), step__integrator="dop853"), backend="numba")
+    assert not sim.compiled
+    sim.step(5)
+    assert abs(sim.state.x_world[2] + 0.4) < 1e-9
+
+
+@pytest.mark.parametrize("scene, changes", [("damped", {}), ("spin", {"fluid__damping": 30.0}), ("drop", {"initial__position": (0.0, 0.0, 3.0)})])
+def test_compiled_frame_matches_numpy_frame(scene, changes):
+    config = with_overrides(load_scene(scene), **changes)
+    reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
+    for _ in range(4):
+        a, b = reference.frame(), compiled.frame()
+        for field in ("force_world", "torque_world", "omega_world"):
+            np.testing.assert_allclose(getattr(b, field), getattr(a, field), rtol=1e-12, atol=1e-9)
+        for field in ("E_kin", "E_grav", "E_hyd", "E_total", "submerged_area", "submerged_volume"):
+            assert getattr(b, field) == pytest.approx(getattr(a, field), rel=1e-12, abs=1e-9)
+        np.testing.assert_array_equal(b.wet_index, a.wet_index)
+        reference.step(25)
+        compiled.reset(reference.state)  # the same state for both
+
+
+# ---- stage by stage, on the cube and on an anisotropic mesh body, with every term on ------------------
+
+import trimesh  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+from sim import FluidConfig, Model, State, StillWater, make_integrator  # noqa: E402
+from sim.body import make_box, make_mesh_body  # noqa: E402
+from sim.kernels import SCHEMES, advance, pack  # noqa: E402
+from sim.kernels.forces import linearised, pose_loads, twist_loads  # noqa: E402
+from sim.kernels.simulation import observe as observe_kernel  # noqa: E402
+from sim.kernels.surface import wet_integrals  # noqa: E402
+from sim.kernels.layout import MODELS  # noqa: E402
+
+BODIES = {
+    "cube": lambda: make_box((1.0, 1.0, 1.0), 6, 900.0, "cube"),
+    # a box given as a mesh, tilted in its file so its principal frame is not the file's: three different moments
+    "mesh": lambda: make_mesh_body(trimesh.creation.box(extents=(1.0, 0.6, 0.3), transform=trimesh.transformations.rotation_matrix(0.4, [1, 2, 3])),
+                                   300, density=700.0),  # fmt: skip
+}
+POSES = list(zip(Rotation.random(6, random_state=11).as_quat(scalar_first=True), np.linspace(-0.35, 0.3, 6)))
+TWISTS = np.random.default_rng(2).normal(size=(6, 6))
+
+
+def model_of(body_name: str, forces: str, damping: float = 40.0, drag_coefficient: float = 0.7) -> Model:
+    fluid = FluidConfig(forces=forces, damping=damping, drag_coefficient=drag_coefficient)
+    return Model(BODIES[body_name](), StillWater(fluid.rho, fluid.g), fluid)
+
+
+def close(a, b, scale=1.0):
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * max(1.0, scale, np.abs(b).max()))
+
+
+@pytest.mark.parametrize("body_name", BODIES)
+@pytest.mark.parametrize("forces", ["points", "panels"])
+def test_stage_wet_integrals(body_name, forces):
+    """The kernel's running wet-set sums (points, carried from pose to pose) and closed-form clipped
+    panels against the reference's quadrature nodes: area, z nu, (z r) x nu, r and r r^T integrals."""
+    model = model_of(body_name, forces)
+    flags, acc = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34)
+    for q, z in POSES:
+        x, R = np.array([0.05, -0.1, z]), Rotation.from_quat(q, scalar_first=True).as_matrix()
+        wet = model.wetted(x, R)
+        zn, zt, A, S, rr = wet_integrals(MODELS[forces], x, R, model.body.packed, True, flags, acc)
+        wz = wet.weight * wet.point[:, 2]
+        close(A, wet.submerged_area)
+        close(zn, wz @ wet.normal)
+        close(zt, (wz[:, None] * np.cross(wet.lever, wet.normal)).sum(axis=0))
+        close(S, wet.weight @ wet.lever)
+        close(rr, (wet.lever * wet.weight[:, None]).T @ wet.lever)
+        if forces == "points":
+            np.testing.assert_array_equal(np.flatnonzero(flags), wet.index)
+
+
+@pytest.mark.parametrize("body_name", BODIES)
+@pytest.mark.parametrize("forces", ["points", "panels"])
+def test_stage_loads_and_linearisation(body_name, forces):
+    """Every term's total force and torque at a pose and twist, and the implicit scheme's linearised
+    loads (f, D), kernel against reference."""
+    model = model_of(body_name, forces)
+    terms, coef = pack(model)
+    assert terms == 0b1111  # gravity, pressure, damping, drag
+    flags, acc = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34)
+    weight = model.body.mass * 9.81
+    for (q, z), twist in zip(POSES, TWISTS):
+        x, R = np.array([0.0, 0.2, z]), Rotation.from_quat(q, scalar_first=True).as_matrix()
+        wet = model.wetted(x, R)
+        u, w = twist[:3], twist[3:]
+        F, T, D, is_wet = pose_loads(MODELS[forces], x, R, model.body.packed, model.body.mass, terms, coef, flags, acc)
+        Fv, Tv = twist_loads(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, D, is_wet, flags)
+        F_ref, T_ref = model.loads(wet, u, w)
+        close(F + Fv, F_ref, weight)
+        close(T + Tv, T_ref, weight)
+        f, Dt = linearised(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, F, T, D, is_wet, flags)
+        f_ref, D_ref = model.linearised(wet, twist)
+        close(f, f_ref, weight)
+        close(Dt, D_ref, weight)
+
+
+@pytest.mark.parametrize("body_name", BODIES)
+@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("scheme", list(SCHEMES))
+def test_stage_one_step_of_each_scheme(body_name, forces, scheme):
+    model = model_of(body_name, forces)
+    terms, coef = pack(model)
+    integrator = make_integrator(scheme)
+    for (q, z), twist in zip(POSES[:3], TWISTS):
+        R = Rotation.from_quat(q, scalar_first=True).as_matrix()
+        state = State(0.0, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
+        ref = integrator.step(model, state, 0.01).as_vector()
+        y, done = advance(state.as_vector(), 1, 0.01, SCHEMES[scheme], MODELS[forces], model.body.packed, model.body.mass, model.body.inertia,
+                          terms, coef)  # fmt: skip
+        assert done == 1
+        close(y, ref, np.abs(ref).max())
+
+
+@pytest.mark.parametrize("body_name", BODIES)
+def test_stage_frame_with_every_term(body_name):
+    model = model_of(body_name, "points")
+    terms, coef = pack(model)
+    for (q, z), twist in zip(POSES, TWISTS):
+        R = Rotation.from_quat(q, scalar_first=True).as_matrix()
+        x = np.array([0.0, 0.0, z])
+        wet = np.empty(model.body.n_samples, dtype=bool)
+        F, T, e_hyd, a_sub, v_sub = observe_kernel(x, R, twist[:3], twist[3:], model.body.packed, model.body.mass, terms, coef, wet)
+        ref = model.wetted(x, R)
+        F_ref, T_ref = model.loads(ref, twist[:3], twist[3:])
+        close(F, F_ref, model.body.mass * 9.81)
+        close(T, T_ref, model.body.mass * 9.81)
+        assert e_hyd == pytest.approx(model.hydrostatic_energy(ref), rel=1e-12, abs=1e-9)
+        assert (a_sub, v_sub) == pytest.approx((ref.submerged_area, ref.submerged_volume), rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4"])
+@pytest.mark.parametrize("forces", ["points", "panels"])
+def test_compiled_path_matches_numpy_with_drag(integrator, forces):
+    config = with_overrides(load_scene("damped"), step__integrator=integrator, fluid__forces=forces, fluid__drag_coefficient=1.5)
+    reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
+    for _ in range(3):
+        reference.step(40)
+        compiled.step(40)
+        a, b = reference.state.as_vector(), compiled.state.as_vector()
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * (1 + np.abs(a).max()))
+
+
+def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(monkeypatch):
+    """A new fixed-step scheme that has no compiled twin yet runs on the reference, and says so."""
+    import sim.kernels.layout as layout
+
+    monkeypatch.setattr(layout, "SCHEMES", {k: v for k, v in layout.SCHEMES.items() if k != "rk4"})
+    config = with_overrides(load_scene("damped"), step__integrator="rk4")
+    sim = Simulation(config, backend="numba")
+    assert not sim.compiled and any("rk4" in note and "numpy" in note for note in sim.notes)
+    reference = Simulation(config, backend="numpy")
+    sim.step(20)
+    reference.step(20)
+    np.testing.assert_array_equal(sim.state.as_vector(), reference.state.as_vector())

@@ -2,8 +2,16 @@
 
 import numpy as np
 import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
 
-from sim import Simulation, SimulationDiverged, load_scene, with_overrides
+from sim import FluidConfig, Model, Simulation, SimulationDiverged, State, StillWater, load_scene, make_integrator, with_overrides
+from sim.body import make_box, make_mesh_body
+from sim.kernels import SCHEMES, advance, pack
+from sim.kernels.forces import linearised, pose_loads, twist_loads
+from sim.kernels.layout import MODELS
+from sim.kernels.simulation import observe as observe_kernel
+from sim.kernels.surface import wet_integrals
 
 CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
          for integrator in ["euler", "splitting", "implicit", "rk4"] for forces in ["points", "panels"]
@@ -54,17 +62,6 @@ def test_compiled_frame_matches_numpy_frame(scene, changes):
 
 
 # ---- stage by stage, on the cube and on an anisotropic mesh body, with every term on ------------------
-
-import trimesh  # noqa: E402
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-from sim import FluidConfig, Model, State, StillWater, make_integrator  # noqa: E402
-from sim.body import make_box, make_mesh_body  # noqa: E402
-from sim.kernels import SCHEMES, advance, pack  # noqa: E402
-from sim.kernels.forces import linearised, pose_loads, twist_loads  # noqa: E402
-from sim.kernels.simulation import observe as observe_kernel  # noqa: E402
-from sim.kernels.surface import wet_integrals  # noqa: E402
-from sim.kernels.layout import MODELS  # noqa: E402
 
 BODIES = {
     "cube": lambda: make_box((1.0, 1.0, 1.0), 6, 900.0, "cube"),

@@ -51,7 +51,7 @@ class Frame:
     submerged_volume: float
     """m^3 (from the samples, by the divergence theorem)."""
     wet_index: np.ndarray
-    """Indices of the submerged samples."""
+    """Indices of the samples under the water surface (for either force model)."""
 
     @property
     def E_total(self) -> float:
@@ -64,8 +64,8 @@ class Frame:
 
 
 def observe(model: Model, state: State, compiled: bool = False) -> Frame:
-    """All diagnostics of a state, from one wet surface (for the sampled model in still water with
-    compiled=True, from one pass of the compiled kernel: the same numbers to round-off)."""
+    """All diagnostics of a state, from one wet surface (in still water with compiled=True, from the
+    compiled twin: the same numbers to round-off)."""
     body, water = model.body, model.water
     R = state.R_world_body
     omega = angular_velocity(body, R, state.L_world)
@@ -73,19 +73,21 @@ def observe(model: Model, state: State, compiled: bool = False) -> Frame:
     E_grav = body.mass * water.g * float(state.x_world[2])
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav)  # fmt: skip
-    if compiled and model.fluid.forces == "points" and water.is_still:
-        from .kernels import pack
-        from .kernels.simulation import observe as observe_points
+    if compiled and water.is_still:
+        from .kernels import MODELS, pack
+        from .kernels.simulation import observe as observe_kernel
 
         wet = np.empty(body.n_samples, dtype=bool)
         terms, coef = pack(model)
-        F, T, e_hyd, a_sub, v_sub = observe_points(state.x_world, R, state.u_world, omega, body.packed, body.mass, terms, coef, wet)
+        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.u_world, omega, body.packed, body.mass,
+                                                   terms, coef, wet)  # fmt: skip
         return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
                      wet_index=np.flatnonzero(wet))  # fmt: skip
     wet = model.wetted(state.x_world, R, state.t)
     F, T = model.loads(wet, state.u_world, omega, state.t)
+    wet_samples = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
     return Frame(**common, force_world=F, torque_world=T, E_hyd=model.hydrostatic_energy(wet), submerged_area=wet.submerged_area,
-                 submerged_volume=wet.submerged_volume, wet_index=wet.index)  # fmt: skip
+                 submerged_volume=wet.submerged_volume, wet_index=wet_samples)  # fmt: skip
 
 
 def initial_state(body: Body, scene: SceneConfig) -> State:

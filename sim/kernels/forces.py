@@ -43,13 +43,14 @@ def damping_matrix(coef, A, S, rr):
 def pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc):
     """Gravity and pressure at a pose, the linear damping matrix D there, and whether any twist
     term has a wet surface to act on."""
+    r, nrm, area, verts, faces, fnormals, moments = geom
     F = np.zeros(3)
     F[2] = -mass * coef[G]
     T = np.zeros(3)
     D = np.zeros((6, 6))
     wet = False
     if terms & WET_TERMS:
-        zn, zt, A, S, rr = wet_integrals(kind, x, R, geom, (terms & DAMPING) != 0, flags, acc)
+        zn, zt, A, S, rr = wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, (terms & DAMPING) != 0, flags, acc)
         if terms & PRESSURE:
             rg = coef[RHO] * coef[G]
             F += rg * zn
@@ -154,12 +155,11 @@ def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D):
 
 
 @njit(**JIT)
-def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags):
-    """Force and torque of the twist terms at (u, w): -D (u, w) for linear damping, plus the nonlinear ones."""
-    F = np.zeros(3)
-    T = np.zeros(3)
+def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T):
+    """Add the force and torque of the twist terms at (u, w) to F, T in place (no allocation in the
+    hot loop): -D (u, w) for linear damping, plus the nonlinear ones."""
     if not wet:
-        return F, T
+        return
     if terms & DAMPING:
         for i in range(3):
             for j in range(3):
@@ -167,9 +167,9 @@ def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags):
                 T[i] -= D[3 + i, j] * u[j] + D[3 + i, 3 + j] * w[j]
     if terms & NONLINEAR:
         Fn, Tn, _ = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, False)
-        F += Fn
-        T += Tn
-    return F, T
+        for i in range(3):
+            F[i] += Fn[i]
+            T[i] += Tn[i]
 
 
 @njit(**JIT)

@@ -1,16 +1,62 @@
-"""Compiled twin of simulation.observe for the sampled model: a frame's diagnostics in one pass."""
+"""Compiled twin of simulation.observe: a frame's diagnostics (the sampled model in one pass)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from . import JIT, njit
-from .forces import C_DAMPING, DAMPING, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads
+from .forces import C_DAMPING, DAMPING, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
 from .layout import RHO, G
+from .surface import clip, vertex_levers
 
 
 @njit(**JIT)
-def observe(x, R, u, w, geom, mass, terms, coef, wet):
+def observe(kind, x, R, u, w, geom, mass, terms, coef, wet):
+    """(force, torque, hydrostatic energy, wet area, submerged volume) at a state, every used term
+    included; marks the wet samples in `wet` (for either model: the viewer colours samples)."""
+    if kind == 0:
+        return observe_points(x, R, u, w, geom, mass, terms, coef, wet)
+    return observe_panels(x, R, u, w, geom, mass, terms, coef, wet)
+
+
+@njit(**JIT)
+def observe_panels(x, R, u, w, geom, mass, terms, coef, wet):
+    r, verts, faces = geom[0], geom[3], geom[4]
+    flags, acc = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34)
+    F, T, D, is_wet = pose_loads(1, x, R, geom, mass, terms, coef, flags, acc)
+    twist_loads(1, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T)
+    for k in range(r.shape[0]):
+        wet[k] = x[2] + R[2, 0] * r[k, 0] + R[2, 1] * r[k, 1] + R[2, 2] * r[k, 2] < 0.0
+    lev = vertex_levers(R, verts)
+    fnormals = geom[5]
+    P = np.empty((3, 3))
+    h = np.empty(3)
+    tris = np.empty((2, 3, 3))
+    z2n = a_sub = v_sub = 0.0
+    for f in range(faces.shape[0]):
+        for v in range(3):
+            for i in range(3):
+                P[v, i] = lev[faces[f, v], i]
+            h[v] = x[2] + P[v, 2]
+        nz = R[2, 0] * fnormals[f, 0] + R[2, 1] * fnormals[f, 1] + R[2, 2] * fnormals[f, 2]
+        nx = R[0, 0] * fnormals[f, 0] + R[0, 1] * fnormals[f, 1] + R[0, 2] * fnormals[f, 2]
+        ny = R[1, 0] * fnormals[f, 0] + R[1, 1] * fnormals[f, 1] + R[1, 2] * fnormals[f, 2]
+        for k in range(clip(P, h, tris)):
+            t = tris[k]
+            e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+            e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+            area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+            z0, z1, z2 = min(x[2] + t[0, 2], 0.0), min(x[2] + t[1, 2], 0.0), min(x[2] + t[2, 2], 0.0)
+            sz = z0 + z1 + z2
+            a_sub += area
+            v_sub += area * sz / 3.0 * nz
+            z2n += area / 12.0 * (z0 * z0 + z1 * z1 + z2 * z2 + sz * sz) * nz  # integral of z^2 over the triangle, times nu_z
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
+    return F, T, e_hyd, a_sub, v_sub
+
+
+@njit(**JIT)
+def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
     """Total force and torque (every used term at (u, w)), hydrostatic energy, wet area and
     submerged volume of the sampled model; marks the wet samples in `wet`. One scalar loop for the
     terms linear in the pose and twist, then the nonlinear ones."""

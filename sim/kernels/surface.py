@@ -14,7 +14,7 @@ from . import JIT, njit
 from .rotation import mv, rotate_tensor
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def wet_points(x, R, r, need_rr, moments, flags, acc):
     """Integrals over the wet samples. Every one is linear in z = x_z + R[2].r, so it is fixed by
     per-sample constants summed over the wet set (layout.py): keep those sums in `acc` and, at each
@@ -81,7 +81,7 @@ def clip(p, h, out):
     return 2
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr):
     """Add one wet triangle's exact integrals (levers p0, p1, p2; heights x2 + p[2], clipped to <= 0)
     to zn, zt, S, rr in place: integral f g dA = A/12 (sum f_i g_i + sum f_i sum g_i). Returns its area."""
@@ -112,7 +112,7 @@ def _triangle(p0, p1, p2, x2, nx, ny, nz, zn, zt, S, rr, need_rr):
     return area
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def vertex_levers(R, verts):
     """(v, 3) mesh vertices rotated into the world frame (levers from the centre of mass)."""
     lev = np.empty((verts.shape[0], 3))
@@ -122,7 +122,7 @@ def vertex_levers(R, verts):
     return lev
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def wet_panels(x, R, verts, faces, fnormals, need_rr):
     """Exact integrals over the mesh's triangles clipped at the still water line."""
     zn = np.zeros(3)
@@ -165,9 +165,8 @@ def wet_panels(x, R, verts, faces, fnormals, need_rr):
 
 
 @njit(**JIT)
-def wet_integrals(kind, x, R, geom, need_rr, flags, acc):
+def wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, need_rr, flags, acc):
     """(zn, zt, A, S, rr) of the model `kind` (layout.MODELS); S and rr only when need_rr."""
-    r, nrm, area, verts, faces, fnormals, moments = geom
     if kind == 0:
         return wet_points(x, R, r, need_rr, moments, flags, acc)
     return wet_panels(x, R, verts, faces, fnormals, need_rr)

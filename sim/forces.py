@@ -45,7 +45,8 @@ def _relative_velocity(water, wet: WetSurface, twist: np.ndarray, t: float) -> n
 
 def _wrench(wet: WetSurface, f: np.ndarray) -> np.ndarray:
     """(6,) total force and torque about the centre of mass of node forces f (m, 3)."""
-    return np.concatenate([f.sum(axis=0), np.cross(wet.lever, f).sum(axis=0)])
+    m = wet.lever.T @ f  # m[i, j] = sum of r_i f_j: the torque is its antisymmetric part
+    return np.array([*f.sum(axis=0), m[1, 2] - m[2, 1], m[2, 0] - m[0, 2], m[0, 1] - m[1, 0]])
 
 
 def gravity(body, water, fluid, wet, twist, t) -> Load:
@@ -70,11 +71,9 @@ def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:
     The force is -d times the integral of v = u + omega x r over the wet surface, so
     F = -d (A u + omega x S) and T = -d (S x u + J omega), with S = integral of r dA and
     J = integral of (|r|^2 Id - r r^T) dA."""
-    w, r = wet.weight, wet.lever
-    S = w @ r
-    rr = (r * w[:, None]).T @ r
+    S, rr = wet.first_moment, wet.second_moment
     D = np.empty((6, 6))
-    D[:3, :3] = w.sum() * np.eye(3)
+    D[:3, :3] = wet.submerged_area * np.eye(3)
     D[:3, 3:] = -skew(S)
     D[3:, :3] = skew(S)
     D[3:, 3:] = np.trace(rr) * np.eye(3) - rr
@@ -84,7 +83,7 @@ def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:
 def damping(body, water, fluid, wet, twist, t) -> Load:
     """Linear viscous damping: the integral of -d v_rel dA, linear in the twist."""
     D = damping_matrix(fluid, wet)
-    affine = _wrench(wet, fluid.damping * wet.weight[:, None] * water.velocity(wet.point, t))
+    affine = np.zeros(6) if water.is_still else _wrench(wet, fluid.damping * wet.weight[:, None] * water.velocity(wet.point, t))
     load = affine - D @ twist
     return Load(load[:3], load[3:], D, affine)
 

@@ -13,6 +13,7 @@ found by linear interpolation of that height, which is exact for a plane surface
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -40,9 +41,19 @@ class WetSurface:
     triangle_normal: np.ndarray | None = None
     """(k, 3) their outward unit normals."""
 
-    @property
+    @cached_property
     def submerged_area(self) -> float:
         return float(self.weight.sum())
+
+    @cached_property
+    def first_moment(self) -> np.ndarray:
+        """(3,) integral of r dA, m^3."""
+        return self.weight @ self.lever
+
+    @cached_property
+    def second_moment(self) -> np.ndarray:
+        """(3, 3) integral of r r^T dA, m^4."""
+        return (self.lever * self.weight[:, None]).T @ self.lever
 
     @property
     def submerged_volume(self) -> float:

@@ -74,9 +74,11 @@ def empty_surface(x: np.ndarray) -> WetSurface:
 
 def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface:
     """The samples under the water surface, each a node weighted by its area."""
-    lever_all = body.r_body @ R.T
-    wet = np.flatnonzero(water.height_above_surface(x + lever_all, t) < 0.0)
-    lever = lever_all[wet]
+    if water.is_still:  # a flat surface at rest: the samples' heights alone decide
+        wet = np.flatnonzero(x[2] + body.r_body @ R[2] < water.elevation(x[:2], t))
+    else:
+        wet = np.flatnonzero(water.height_above_surface(x + body.r_body @ R.T, t) < 0.0)
+    lever = body.r_body[wet] @ R.T
     return WetSurface(x, x + lever, lever, body.area[wet], body.n_body[wet] @ R.T, wet)
 
 

@@ -25,6 +25,22 @@ def test_each_body_of_an_ensemble_moves_as_it_would_alone(backend):
         assert state.t == pytest.approx(alone.state.t, rel=1e-14)
 
 
+@pytest.mark.parametrize("integrator", ["splitting", "implicit", "rk4"])
+def test_bodies_with_and_without_drag_share_one_ensemble(integrator):
+    """Per-body term coefficients: a body whose drag coefficient is 0 moves exactly as alone (where
+    the term is left out), next to bodies with drag."""
+    base = with_overrides(load_scene("damped"), step__integrator=integrator)
+    scenes = [with_overrides(base, fluid__drag_coefficient=cd) for cd in (0.0, 0.5, 2.0)]
+    ensemble = Ensemble(scenes)
+    ensemble.step(200)
+    for scene, state in zip(scenes, ensemble.states):
+        alone = Simulation(scene)
+        alone.step(200)
+        a = alone.state.as_vector()
+        np.testing.assert_allclose(state.as_vector(), a, rtol=0, atol=1e-12 * (1 + np.abs(a).max()))
+    assert not np.allclose(ensemble.states[0].as_vector(), ensemble.states[2].as_vector(), atol=1e-3)
+
+
 def test_a_diverging_body_stops_alone():
     base = with_overrides(load_scene("damped"), step__integrator="euler", step__dt=0.01)
     ensemble = Ensemble([with_overrides(base, fluid__damping=d) for d in (100.0, 1e6, 50.0)])

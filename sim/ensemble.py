@@ -77,8 +77,8 @@ class Ensemble:
             before = s.state
             s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
             if k < n:
-                self.diverged[i] = s._diagnose(s.state.t + self.dt, "the state became non-finite")
+                self.diverged[i] = s.diagnose(s.state.t + self.dt, "the state became non-finite")
             elif s.frame().E_total - s._E_ref > 10.0 * s._E_scale:
-                self.diverged[i] = s._diagnose(s.state.t, "the energy blew up")
+                self.diverged[i] = s.diagnose(s.state.t, "the energy blew up")
                 s.state = before  # the last state that passed the check, as Simulation.step does
 

@@ -3,20 +3,19 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import stability
 from .body import Body, make_body
 from .config import SceneConfig, with_overrides
 from .errors import SimulationDiverged
-from .forces import Model, damping_matrix
+from .forces import Model
 from .integrators import make_integrator
 from .rotation import normalized, quat_multiply
 from .state import State, angular_momentum, angular_velocity
-from .surface import wet_points
 from .water import StillWater
 
 CSV_COLUMNS = (
@@ -191,7 +190,7 @@ class Simulation:
         energy = self.frame().E_total
         if energy - self._E_ref > 10.0 * self._E_scale:
             t, self.state = self.state.t, checked  # back to the last state that passed this check
-            raise SimulationDiverged(self._diagnose(t, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
+            raise SimulationDiverged(self.diagnose(t, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
         return self.state
 
     def _advance_numpy(self, n: int) -> State:
@@ -206,7 +205,7 @@ class Simulation:
                 why = "the state became non-finite"
             if new is None or not new.is_finite():
                 self.state = state
-                raise SimulationDiverged(self._diagnose(state.t + dt, why))
+                raise SimulationDiverged(self.diagnose(state.t + dt, why))
             state = new
         return state
 
@@ -220,7 +219,7 @@ class Simulation:
         state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
         if done < n:
             self.state = state
-            raise SimulationDiverged(self._diagnose(state.t + self.dt, "the state became non-finite"))
+            raise SimulationDiverged(self.diagnose(state.t + self.dt, "the state became non-finite"))
         return state
 
     def _rebase_energy(self) -> None:
@@ -232,41 +231,14 @@ class Simulation:
         self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
 
     def stability_numbers(self) -> dict[str, float]:
-        """The explicit stability numbers of PHYSICS.md for the current body and dt: dt * omega_heave
-        (water-plane area ~ V^(2/3)) and dt * lambda_max, the fastest damping rate: the largest
-        eigenvalue of diag(M, I)^(-1/2) D diag(M, I)^(-1/2) with the whole surface wet (sway and roll
-        couple, so it exceeds d A / M)."""
-        body, p = self.body, self.params
-        omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
-        rate = 0.0
-        if self.model.has("damping"):
-            all_wet = wet_points(body, StillWater(p.rho, p.g), np.array([0.0, 0.0, -1e9]), np.eye(3), 0.0)
-            w = np.concatenate([np.full(3, body.mass), body.inertia]) ** -0.5
-            rate = float(np.linalg.eigvalsh(w[:, None] * damping_matrix(p, all_wet) * w[None, :]).max())
-        return {"heave": self.dt * omega, "damping": self.dt * rate}
+        return stability.numbers(self.model, self.dt)
+
     def warnings(self) -> list[str]:
         """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up)."""
-        n, integ = self.stability_numbers(), self.integrator
-        out = []
-        if n["damping"] > integ.damping_limit:
-            out.append(f"dt*lambda_max = {n['damping']:.3g} is past the damping limit {integ.damping_limit:.3g} of '{integ.name}': "
-                       f"use --integrator implicit or --dt below {self.dt * integ.damping_limit / n['damping']:.3g}")  # fmt: skip
-        if n["heave"] > integ.heave_limit:
-            out.append(f"dt*omega_heave = {n['heave']:.3g} is past the heave limit {integ.heave_limit:.3g} of '{integ.name}': "
-                       f"use --dt below {self.dt * integ.heave_limit / n['heave']:.3g}")  # fmt: skip
-        return out
+        return stability.warnings(self.stability_numbers(), self.integrator, self.dt)
 
-    def _diagnose(self, t: float, what: str) -> str:
-        numbers, integ = self.stability_numbers(), self.integrator
-        if numbers["damping"] > 0.5 * integ.damping_limit:
-            cause = (f"dt = {self.dt:g} s is too large for this damping with '{integ.name}' (dt*lambda_max = {numbers['damping']:.3g}, "
-                     f"its limit {integ.damping_limit:.3g}): use --integrator implicit or a smaller --dt")  # fmt: skip
-        elif numbers["heave"] > 0.5 * integ.heave_limit:
-            cause = (f"dt = {self.dt:g} s is too large for this body's heave oscillation (dt*omega = {numbers['heave']:.3g}, "
-                     f"limit {integ.heave_limit:.3g}): use a smaller --dt")  # fmt: skip
-        else:
-            cause = "try a smaller --dt or another --integrator"
-        return f"simulation diverged at t = {t:.6g} s: {what}; likely cause: {cause}"
+    def diagnose(self, t: float, what: str) -> str:
+        return stability.diagnosis(self.stability_numbers(), self.integrator, self.dt, t, what)
 
     # Changes between steps (the viewer's commands). Each replaces whole objects, never patches arrays.
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .parameters import Param
 from .rotation import skew
-from .surface import WET_SURFACE, WetSurface, empty_surface
+from .surface import WET_SURFACE, WetSurface, clip_triangles, empty_surface, triangle_areas
 
 
 class Load(NamedTuple):
@@ -104,8 +104,6 @@ def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> Wet
 
     Points: the wet samples doing so. Panels: each wet triangle clipped again where v_rel . n
     (linear over a flat panel of a rigid body in still water) changes sign, with a degree-4 rule."""
-    from .surface import clip_triangles, triangle_areas
-
     if wet.triangles is None:
         return wet
     if not len(wet.triangles):

@@ -27,13 +27,13 @@ BODY = (
     Param("body", "size", 1.0, "Cube side", "m", lo=0.0, lo_open=True, hi=1e3, name="cube size"),
     Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=0.0, lo_open=True, hi=1e3, kind="vector", size=3,
           name="box extents"),
-    Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=100, kind="int",
-          name="points per edge", label="Points per edge", gui=(1, 60, 1)),
+    Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=1000, kind="int",
+          name="points per edge", label="Points per edge", gui=(1, 60, 1), live=(1, 100)),  # 60 000 samples at most in the viewer
     Param("body", "mesh", "", "Mesh file (shape mesh), relative to the scene file or the working directory", kind="text", name="mesh file"),
     Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
           kind="int", name="mesh samples"),
     Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=0.0, lo_open=True,
-          least=1.0, hi=1e5, kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
+          hi=1e5, live=(1.0, 1e5), kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
     Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=0.0, lo_open=True, hi=1e12, kind="optional"),
 )
 FLUID = (
@@ -55,7 +55,7 @@ INITIAL = (
 )
 STEP = (
     Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator", gui=()),
-    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=0.0, lo_open=True, least=1e-5, hi=1.0,
+    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=0.0, lo_open=True, hi=1.0, live=(1e-5, 1.0),
           gui=(0.0005, 0.05, 0.0005), label="Time step"),
     Param("step", "t_end", 30.0, "Simulated duration", "s", lo=0.0, hi=1e7),
     Param("step", "rtol", 1e-8, "Relative tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1.0),

@@ -35,8 +35,9 @@ class Param:
     """Largest valid value."""
     lo_open: bool = False
     """Whether `lo` itself is excluded (> rather than >=)."""
-    least: float | None = None
-    """With an excluded `lo`: the smallest value a live control clamps to."""
+    live: tuple[float, float] | None = None
+    """(min, max) a live control clamps into when narrower than the valid range: an excluded lower
+    bound needs a smallest usable value, and some valid values cost too much to apply interactively."""
     kind: str = "float"
     choices: tuple[str, ...] = ()
     size: int = 0
@@ -101,8 +102,8 @@ class Param:
 
     def clamp(self, value, current) -> tuple[Any, str | None]:
         """(value to use, note for the user or None): what a live control does with any input.
-        Non-numbers and NaN keep `current`; numbers are clipped into the valid range (an excluded
-        lower bound clips to `least`); whole-number parameters are rounded."""
+        Non-numbers and NaN keep `current`; numbers are clipped into `live` (default: the valid
+        range); whole-number parameters are rounded."""
         label = self.label or self.what
         if self.kind == "choice":
             if value in self.choices:
@@ -121,12 +122,12 @@ class Param:
             return used, f"{label}: components are limited to {self.lo:g} … {self.hi:g} {self.unit}; using {used}."
         if not _is_number(value) or math.isnan(value):
             return current, f"{label}: {_short(value)} is not a number; kept {self.describe(current)}."
-        lo = self.least if self.lo_open and self.least is not None else self.lo
+        lo, hi = self.live or (self.lo, self.hi)
         note = None
         used = float(value)
-        if used < lo or used > self.hi or (self.lo_open and used <= self.lo):
-            used = min(max(used, lo), self.hi)
-            note = f"{label}: {value:g} is outside {self.describe(lo)} … {self.describe(self.hi)}; using {self.describe(used)}."
+        if used < lo or used > hi:
+            used = min(max(used, lo), hi)
+            note = f"{label}: {value:g} is outside {self.describe(lo)} … {self.describe(hi)}; using {self.describe(used)}."
         if self.kind == "int":
             n = round(used)
             if note is None and n != used:

@@ -30,6 +30,7 @@ SPEED = Param("viewer", "speed", 1.0, "Simulated seconds per wall-clock second a
               gui=(0.1, 10.0, 0.1))  # fmt: skip
 CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
 """Scene parameters with a live control, by key (the command that changes each is its key)."""
+_QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
 
 
 @dataclass(frozen=True)
@@ -58,8 +59,8 @@ class Settings:
         return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
 
     def __getattr__(self, key: str):
-        if key in CONTROLLED or key in {p.key for p in PARAMS.values()}:
-            return self.config.value(next(q for q, p in PARAMS.items() if p.key == key))
+        if key in _QUALNAME:
+            return self.config.value(_QUALNAME[key])
         raise AttributeError(key)
 
     def value(self, key: str):

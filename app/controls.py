@@ -17,7 +17,7 @@ from sim.parameters import Param
 
 from .loop import CONTROLLED, SPEED, Settings
 
-FOLDERS = {"body": "Body", "fluid": "Water", "initial": "Start", "step": "Integration"}
+FOLDERS = {"body": "Body", "fluid": "Water", "waves": "Waves", "initial": "Start", "step": "Integration"}
 VECTOR_STEP = 0.1
 
 

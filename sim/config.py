@@ -61,9 +61,28 @@ STEP = (
     Param("step", "rtol", 1e-8, "Relative tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1.0),
     Param("step", "atol", 1e-10, "Absolute tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1e3),
 )
-SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP}
+WAVES = (
+    Param("waves", "kind", "still", "The sea: still water, regular (Airy) waves, or an irregular JONSWAP sea", kind="choice",
+          choices=("still", "regular", "jonswap"), name="waves", flag_name="waves", label="Waves", gui=()),
+    Param("waves", "height", 1.0, "Regular waves: crest-to-trough height H", "m", lo=0.0, hi=30.0, name="wave height", flag_name="wave_height",
+          label="Height", gui=(0.0, 4.0, 0.05)),
+    Param("waves", "period", 8.0, "Regular waves: period T", "s", lo=0.0, lo_open=True, hi=60.0, live=(0.5, 60.0), name="wave period",
+          flag_name="wave_period", label="Period", gui=(1.0, 20.0, 0.1)),
+    Param("waves", "direction", 0.0, "Direction the waves travel to, degrees from +x", "deg", lo=-360.0, hi=360.0, name="wave direction",
+          flag_name="wave_direction", label="Direction", gui=(-180.0, 180.0, 1.0)),
+    Param("waves", "hs", 2.0, "JONSWAP: significant wave height Hs = 4 sqrt(m0)", "m", lo=0.0, hi=30.0, label="Hs", gui=(0.0, 8.0, 0.05)),
+    Param("waves", "tp", 10.0, "JONSWAP: peak period Tp", "s", lo=0.0, lo_open=True, hi=60.0, live=(1.0, 60.0), label="Tp", gui=(2.0, 25.0, 0.1)),
+    Param("waves", "gamma", 3.3, "JONSWAP: peak enhancement gamma (1: Pierson-Moskowitz)", lo=1.0, hi=10.0),
+    Param("waves", "components", 64, "JONSWAP: number of wave components", lo=1, hi=4096, kind="int", name="wave components",
+          flag_name="wave_components"),
+    Param("waves", "seed", 0, "JONSWAP: random seed of the phases and frequencies (the same seed, the same sea)", lo=0, hi=2**32 - 1, kind="int"),
+    Param("waves", "depth", None, "Water depth h (unset: deep water)", "m", lo=0.0, lo_open=True, hi=1e5, kind="optional"),
+    Param("waves", "spreading", 0.0, "JONSWAP: directional spreading exponent s of cos^(2s) (0: long-crested)", lo=0.0, hi=100.0),
+)
+SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
-"""Every scene parameter by 'section.key'."""
+"""Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
+assert len({p.key for p in PARAMS.values()}) == len(PARAMS), "a parameter key is declared in two sections"
 
 
 def _section(name: str, params: tuple[Param, ...]):
@@ -78,7 +97,8 @@ BodyConfig = _section("BodyConfig", BODY)
 FluidConfig = _section("FluidConfig", FLUID)
 InitialConfig = _section("InitialConfig", INITIAL)
 StepConfig = _section("StepConfig", STEP)
-SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig}
+WavesConfig = _section("WavesConfig", WAVES)
+SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig}
 
 
 @dataclass(frozen=True)
@@ -89,6 +109,7 @@ class SceneConfig:
     fluid: FluidConfig = field(default_factory=FluidConfig)
     initial: InitialConfig = field(default_factory=InitialConfig)
     step: StepConfig = field(default_factory=StepConfig)
+    waves: WavesConfig = field(default_factory=WavesConfig)
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -150,10 +171,29 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError("body shape 'mesh' needs a mesh file")
     if b.mass is None and b.density is None:
         raise ConfigError("give the body a density or a mass")
+    _check_steepness(checked["waves"], checked["fluid"].g)
     norm = math.sqrt(sum(c * c for c in i.orientation))
     if abs(norm - 1.0) > 1e-6:
         raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g}")
     return dataclasses.replace(scene, **checked)
+
+
+BREAKING_STEEPNESS = 1 / 7
+"""H / wavelength above which a wave breaks (Michell 1893: 0.142 in deep water)."""
+
+
+def _check_steepness(w, g: float) -> None:
+    """Refuse a sea steeper than breaking: regular H / lambda, JONSWAP Hs / lambda_p."""
+    from .water import wavenumber
+
+    if w.kind == "still" or g == 0:
+        return
+    height, period, what = (w.height, w.period, "wave height / wavelength") if w.kind == "regular" else (w.hs, w.tp, "Hs / peak wavelength")
+    depth = math.inf if w.depth is None else w.depth
+    wavelength = 2 * math.pi / float(wavenumber(2 * math.pi / period, g, depth))
+    if height / wavelength > BREAKING_STEEPNESS:
+        raise ConfigError(f"{what} = {height / wavelength:.3g} is past the breaking limit 1/7: the wave would break "
+                          f"(wavelength {wavelength:.3g} m at period {period:g} s); use a smaller height or a longer period")  # fmt: skip
 
 
 def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:

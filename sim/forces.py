@@ -21,7 +21,7 @@ import numpy as np
 
 from .parameters import Param
 from .rotation import skew
-from .surface import WET_SURFACE, WetSurface, clip_triangles, empty_surface, triangle_areas
+from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, WET_SURFACE, WetSurface, clip_triangles, empty_surface, triangle_areas
 
 
 class Load(NamedTuple):
@@ -90,14 +90,6 @@ def damping(body, water, fluid, wet, twist, t) -> Load:
 
 DRAG_COEFFICIENT = Param("fluid", "drag_coefficient", 0.0, "Quadratic (pressure) drag coefficient C_d: a wet element moving into the "
                          "water feels -(1/2) rho C_d a (v_rel . n)^2 n", lo=0.0, hi=100.0, label="Drag C_d", gui=(0.0, 5.0, 0.05))  # fmt: skip
-
-# Dunavant's 6-point rule (degree 4) on a triangle: barycentric nodes and weights (sum 1). Drag's
-# torque integrand (v.n)^2 r is cubic over a clipped panel, so this is exact there.
-DUNAVANT4 = np.array([[0.108103018168070, 0.445948490915965, 0.445948490915965], [0.445948490915965, 0.108103018168070, 0.445948490915965],
-                      [0.445948490915965, 0.445948490915965, 0.108103018168070], [0.816847572980459, 0.091576213509771, 0.091576213509771],
-                      [0.091576213509771, 0.816847572980459, 0.091576213509771], [0.091576213509771, 0.091576213509771, 0.816847572980459]])  # fmt: skip
-DUNAVANT4_WEIGHTS = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
-
 
 def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> WetSurface:
     """Nodes of the part of the wet surface that moves into the water (v_rel . n > 0).

@@ -51,6 +51,12 @@ class Param:
     vector's three boxes; None: no live control."""
     flag: bool = True
     """Whether `run` and `sweep` take it as a command-line flag."""
+    flag_name: str = ""
+    """The flag's name with underscores (default: the key), e.g. 'wave_height' for [waves] height."""
+
+    @property
+    def cli(self) -> str:
+        return self.flag_name or self.key
 
     @property
     def what(self) -> str:

@@ -16,10 +16,10 @@ from .forces import Model
 from .integrators import make_integrator
 from .rotation import normalized, quat_multiply
 from .state import State, angular_momentum, angular_velocity
-from .water import StillWater
+from .water import make_water
 
 CSV_COLUMNS = (
-    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub".split(",")
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta".split(",")
 )
 
 
@@ -51,6 +51,8 @@ class Frame:
     """m^3 (from the samples, by the divergence theorem)."""
     wet_index: np.ndarray
     """Indices of the samples under the water surface (for either force model)."""
+    eta: float = 0.0
+    """Water surface elevation at the centre of mass's (x, y), m."""
 
     @property
     def E_total(self) -> float:
@@ -59,7 +61,7 @@ class Frame:
     def row(self) -> list[float]:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
-                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume]  # fmt: skip
+                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta]  # fmt: skip
 
 
 def observe(model: Model, state: State, compiled: bool = False) -> Frame:
@@ -71,7 +73,7 @@ def observe(model: Model, state: State, compiled: bool = False) -> Frame:
     E_kin = 0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world)
     E_grav = body.mass * water.g * float(state.x_world[2])
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
-                  L_world=state.L_world, E_kin=E_kin, E_grav=E_grav)  # fmt: skip
+                  L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)))  # fmt: skip
     if compiled and water.is_still:
         from .kernels import MODELS, pack
         from .kernels.simulation import observe as observe_kernel
@@ -145,7 +147,8 @@ class Simulation:
         self._rebase_energy()
 
     def _model(self, body: Body) -> Model:
-        return Model(body, StillWater(self.scene.fluid.rho, self.scene.fluid.g), self.scene.fluid)
+        fluid = self.scene.fluid
+        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g), fluid)
 
     @property
     def body(self) -> Body:
@@ -257,7 +260,7 @@ class Simulation:
             omega = angular_velocity(body, R, self.state.L_world)
             self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
-        elif old.fluid != scene.fluid:
+        elif old.fluid != scene.fluid or old.waves != scene.waves:
             self.model = self._model(body)
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
             self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)

@@ -6,6 +6,7 @@ the first kind; waves plug in as further kinds with the same three questions. Wo
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,3 +42,143 @@ class StillWater:
     def height_above_surface(self, points: np.ndarray, t: float) -> np.ndarray:
         """z - eta at (..., 3) points: negative where they are wet."""
         return points[..., 2] - self.elevation(points[..., :2], t)
+
+
+@dataclass(frozen=True, eq=False)
+class Waves:
+    """Linear (Airy) waves: a sum of components, each a_i cos(k_i . x - omega_i t + phi_i), with
+    omega^2 = g k tanh(k h). Pressure p = -rho g z + sum rho g a_i E_i(z*) cos(psi_i) and velocity
+    from the same potential, evaluated with Wheeler stretching z* = (z - eta) h / (h + eta) (deep
+    water: z - eta) so that p = 0 on the surface itself. E = cosh(k (z* + h)) / cosh(k h) (deep: e^(k z*)).
+
+    Valid for small steepness (H / wavelength well below the breaking limit 1/7) and, for the body,
+    as the Froude-Krylov part of the wave load only: the body does not diffract or radiate waves."""
+
+    rho: float
+    g: float
+    amplitude: np.ndarray
+    """(n,) a_i, m."""
+    omega: np.ndarray
+    """(n,) angular frequencies, rad/s."""
+    k: np.ndarray
+    """(n,) wavenumbers, rad/m."""
+    direction: np.ndarray
+    """(n,) propagation directions, rad from +x."""
+    phase: np.ndarray
+    """(n,) phases phi_i, rad."""
+    depth: float = math.inf
+    """Water depth h, m (inf: deep water)."""
+
+    kind = "waves"
+    is_still = False
+
+    def _psi(self, xy: np.ndarray, t: float) -> np.ndarray:
+        """(..., n) phases k_i . x - omega_i t + phi_i."""
+        kx = self.k * np.cos(self.direction)
+        ky = self.k * np.sin(self.direction)
+        return xy[..., :1] * kx + xy[..., 1:2] * ky - self.omega * t + self.phase
+
+    def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
+        return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
+
+    def _stretched(self, points: np.ndarray, t: float):
+        """(psi, z*) with Wheeler's stretching of the depth coordinate."""
+        psi = self._psi(points, t)
+        eta = np.cos(psi) @ self.amplitude
+        z = points[..., 2]
+        zs = z - eta if math.isinf(self.depth) else (z - eta) * self.depth / (self.depth + eta)
+        return psi, zs
+
+    def _decay(self, zs: np.ndarray, hyperbolic: str) -> np.ndarray:
+        """(..., n) depth factors at stretched depth zs: 'cosh' gives cosh(k(z+h))/cosh(kh) (pressure),
+        'cosh/sinh' cosh(k(z+h))/sinh(kh) and 'sinh/sinh' sinh(k(z+h))/sinh(kh) (velocity); in
+        exponential form so that no cosh overflows (deep water: all e^(k z))."""
+        kz = self.k * np.minimum(zs, 0.0)[..., None]
+        if math.isinf(self.depth):
+            return np.exp(kz)
+        far = np.exp(-self.k * (2 * self.depth) - kz)  # e^(-k(z + 2h))
+        h2 = np.exp(-2 * self.k * self.depth)
+        num = np.exp(kz) + (far if hyperbolic != "sinh/sinh" else -far)
+        den = 1 + h2 if hyperbolic == "cosh" else 1 - h2
+        return num / den
+
+    def pressure(self, points: np.ndarray, t: float) -> np.ndarray:
+        psi, zs = self._stretched(points, t)
+        dynamic = (self._decay(zs, "cosh") * np.cos(psi)) @ self.amplitude
+        return self.rho * self.g * (dynamic - points[..., 2])
+
+    def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
+        psi, zs = self._stretched(points, t)
+        aw = self.amplitude * self.omega
+        horizontal = self._decay(zs, "cosh/sinh") * np.cos(psi) * aw
+        out = np.empty(np.shape(points))
+        out[..., 0] = horizontal @ np.cos(self.direction)
+        out[..., 1] = horizontal @ np.sin(self.direction)
+        out[..., 2] = (self._decay(zs, "sinh/sinh") * np.sin(psi)) @ aw
+        return out
+
+    def height_above_surface(self, points: np.ndarray, t: float) -> np.ndarray:
+        return points[..., 2] - self.elevation(points[..., :2], t)
+
+
+def wavenumber(omega: np.ndarray, g: float, depth: float) -> np.ndarray:
+    """k from omega^2 = g k tanh(k h) (Newton from the deep-water value; deep water: omega^2 / g)."""
+    omega = np.asarray(omega, float)
+    k = omega**2 / g
+    if math.isinf(depth):
+        return k
+    k = np.maximum(k, omega / math.sqrt(g * depth))  # start above the root (tanh <= 1, and the shallow limit)
+    for _ in range(50):
+        th = np.tanh(k * depth)
+        f = g * k * th - omega**2
+        k = k - f / (g * th + g * k * depth * (1 - th * th))
+    return k
+
+
+def regular_waves(rho: float, g: float, height: float, period: float, direction_deg: float = 0.0, depth: float = math.inf, phase: float = 0.0) -> Waves:
+    """One Airy component of crest-to-trough height H and period T."""
+    omega = np.array([2 * math.pi / period])
+    return Waves(rho, g, np.array([0.5 * height]), omega, wavenumber(omega, g, depth), np.array([math.radians(direction_deg)]),
+                 np.array([phase]), depth)  # fmt: skip
+
+
+def jonswap_spectrum(omega: np.ndarray, hs: float, tp: float, gamma: float) -> np.ndarray:
+    """S(omega), m^2 s/rad: the JONSWAP shape (gamma = 1: Pierson-Moskowitz) scaled so that 4 sqrt(m0) = Hs
+    (DNV-RP-C205, 3.5.5)."""
+    wp = 2 * math.pi / tp
+    sigma = np.where(omega <= wp, 0.07, 0.09)
+    shape = omega**-5.0 * np.exp(-1.25 * (wp / omega) ** 4) * gamma ** np.exp(-0.5 * ((omega - wp) / (sigma * wp)) ** 2)
+    grid = np.linspace(0.2 * wp, 6.0 * wp, 4000)  # the normalising integral, far past where the shape matters
+    s_grid = grid**-5.0 * np.exp(-1.25 * (wp / grid) ** 4) * gamma ** np.exp(-0.5 * ((grid - wp) / (np.where(grid <= wp, 0.07, 0.09) * wp)) ** 2)
+    m0 = float(np.sum(0.5 * (s_grid[1:] + s_grid[:-1]) * np.diff(grid)))
+    return shape * (hs / 4.0) ** 2 / m0
+
+
+def jonswap_waves(rho: float, g: float, hs: float, tp: float, gamma: float = 3.3, components: int = 64, seed: int = 0, direction_deg: float = 0.0,
+                  spreading: float = 0.0, depth: float = math.inf) -> Waves:  # fmt: skip
+    """An irregular sea: `components` Airy waves at frequencies spread over [0.5, 3] omega_p, one per
+    band of equal width at a random point in its band (so the record does not repeat), amplitude
+    sqrt(2 S(omega) d omega), random phase; directions spread as cos^(2s)((theta - theta0)/2) when
+    spreading s > 0 (long-crested when 0). Reproducible from `seed`."""
+    rng = np.random.default_rng(seed)
+    wp = 2 * math.pi / tp
+    edges = np.linspace(0.5 * wp, 3.0 * wp, components + 1)
+    omega = edges[:-1] + rng.random(components) * np.diff(edges)
+    amplitude = np.sqrt(2 * jonswap_spectrum(omega, hs, tp, gamma) * np.diff(edges))
+    phase = rng.uniform(0, 2 * math.pi, components)
+    theta = np.full(components, math.radians(direction_deg))
+    if spreading > 0:  # inverse-CDF sampling of cos^(2s)(dtheta / 2) on a fine grid
+        grid = np.linspace(-math.pi, math.pi, 2001)
+        cdf = np.cumsum(np.cos(grid / 2) ** (2 * spreading))
+        theta = theta + np.interp(rng.random(components), cdf / cdf[-1], grid)
+    return Waves(rho, g, amplitude, omega, wavenumber(omega, g, depth), theta, phase, depth)
+
+
+def make_water(waves, rho: float, g: float):
+    """The water a scene's [waves] table and [fluid] rho, g describe."""
+    depth = math.inf if waves.depth is None else float(waves.depth)
+    if waves.kind == "regular":
+        return regular_waves(rho, g, waves.height, waves.period, waves.direction, depth)
+    if waves.kind == "jonswap":
+        return jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
+    return StillWater(rho, g)

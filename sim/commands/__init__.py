@@ -35,10 +35,10 @@ def declared_flags(name: str, base: type, params: Iterable[Param]) -> type:
     taken = {f.name for f in dataclasses.fields(base)}
     fields = []
     for p in params:
-        if p.key in taken:
-            raise TypeError(f"flag --{p.key} is declared twice")
-        taken.add(p.key)
-        fields.append((p.key, Annotated[_flag_type(p) | None, tyro.conf.arg(help=_flag_help(p))], dataclasses.field(default=None)))
+        if p.cli in taken:
+            raise TypeError(f"flag --{p.cli} is declared twice")
+        taken.add(p.cli)
+        fields.append((p.cli, Annotated[_flag_type(p) | None, tyro.conf.arg(help=_flag_help(p))], dataclasses.field(default=None)))
     cls = dataclasses.make_dataclass(name, fields, bases=(base,))
     cls.__doc__ = base.__doc__
     return cls
@@ -46,7 +46,7 @@ def declared_flags(name: str, base: type, params: Iterable[Param]) -> type:
 
 def overrides(args, params: Iterable[Param]) -> dict:
     """{'section__key': value} for every declared flag that was given."""
-    return {f"{p.section}__{p.key}": getattr(args, p.key) for p in params if p.flag and getattr(args, p.key, None) is not None}
+    return {f"{p.section}__{p.key}": getattr(args, p.cli) for p in params if p.flag and getattr(args, p.cli, None) is not None}
 
 
 COMMANDS = {

@@ -40,7 +40,7 @@ ZERO = np.zeros(3)
 
 def _relative_velocity(water, wet: WetSurface, twist: np.ndarray, t: float) -> np.ndarray:
     """(m, 3) velocity of each node relative to the water, m/s."""
-    return twist[:3] + np.cross(twist[3:], wet.lever) - water.velocity(wet.point, t)
+    return twist[:3] + np.cross(twist[3:], wet.lever) - wet.flow
 
 
 def _wrench(wet: WetSurface, f: np.ndarray) -> np.ndarray:
@@ -56,7 +56,7 @@ def gravity(body, water, fluid, wet, twist, t) -> Load:
 
 def pressure(body, water, fluid, wet, twist, t) -> Load:
     """The water's pressure on the wet surface: the integral of -p nu dA, and its torque."""
-    f = -(wet.weight * water.pressure(wet.point, t))[:, None] * wet.normal
+    f = -(wet.weight * wet.pressure)[:, None] * wet.normal
     w = _wrench(wet, f)
     return Load(w[:3], w[3:])
 
@@ -83,7 +83,7 @@ def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:
 def damping(body, water, fluid, wet, twist, t) -> Load:
     """Linear viscous damping: the integral of -d v_rel dA, linear in the twist."""
     D = damping_matrix(fluid, wet)
-    affine = np.zeros(6) if water.is_still else _wrench(wet, fluid.damping * wet.weight[:, None] * water.velocity(wet.point, t))
+    affine = np.zeros(6) if water.is_still else _wrench(wet, fluid.damping * wet.weight[:, None] * wet.flow)
     load = affine - D @ twist
     return Load(load[:3], load[3:], D, affine)
 
@@ -106,7 +106,7 @@ def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> Wet
     area = triangle_areas(T, n[owner])
     lever = np.einsum("qv,kvi->kqi", DUNAVANT4, T).reshape(-1, 3)
     weight = (area[:, None] * DUNAVANT4_WEIGHTS).ravel()
-    return WetSurface(wet.x, wet.x + lever, lever, weight, np.repeat(n[owner], 6, axis=0), np.repeat(owner, 6))
+    return WetSurface(wet.x, wet.x + lever, lever, weight, np.repeat(n[owner], 6, axis=0), np.repeat(owner, 6), water=water, t=t)
 
 
 def drag(body, water, fluid, wet, twist, t) -> Load:
@@ -209,10 +209,10 @@ class Model:
         fv, tv = self.twist_loads(wet, np.concatenate([u, omega]), t)
         return force + fv, torque + tv
 
-    def linearised(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, np.ndarray | None]:
-        """(f, D): the loads near `twist` as f - D (u, omega), f (6,), D (6, 6) or None (no twist terms wet)."""
-        force, torque = self.pose_loads(wet, t)
-        f = np.concatenate([force, torque])
+    def linearised(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0, pose: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """(f, D): the loads near `twist` as f - D (u, omega), f (6,), D (6, 6) or None (no twist terms
+        wet). `pose`: the pose loads (6,) when already known (they do not depend on the twist)."""
+        f = np.concatenate(self.pose_loads(wet, t)) if pose is None else pose
         if not self.twist_terms or not len(wet.weight):
             return f, None
         D = np.zeros((6, 6))

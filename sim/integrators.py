@@ -107,9 +107,10 @@ def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
     if model.linear_in_twist:
         return un, Ln
     scale = velocity_scale(body)
+    pose = np.concatenate(model.pose_loads(wet, t))
     for _ in range(RELINEARISE):
         end = np.concatenate([un, angular_velocity(body, R, Ln)])
-        u2, L2 = exact_linear_flow(model, R, u, L, *model.linearised(wet, end, t), h)
+        u2, L2 = exact_linear_flow(model, R, u, L, *model.linearised(wet, end, t, pose), h)
         change = max(np.abs(u2 - un).max(), scale * np.abs(angular_velocity(body, R, L2 - Ln)).max())
         un, Ln = u2, L2
         if change <= RELINEARISE_TOL * (np.abs(un).max() + scale * np.abs(angular_velocity(body, R, Ln)).max()):

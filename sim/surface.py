@@ -46,6 +46,20 @@ class WetSurface:
     """(k, 3, 3) wet triangles as vertex levers, m (panels only; None for points)."""
     triangle_normal: np.ndarray | None = None
     """(k, 3) their outward unit normals."""
+    water: object = None
+    """The water it is wet in (asked lazily, once, for the pressure and flow at the nodes)."""
+    t: float = 0.0
+    """Time, s."""
+
+    @cached_property
+    def pressure(self) -> np.ndarray:
+        """(m,) the water's pressure at the nodes, Pa."""
+        return self.water.pressure(self.point, self.t) if len(self.weight) else np.zeros(0)
+
+    @cached_property
+    def flow(self) -> np.ndarray:
+        """(m, 3) the water's velocity at the nodes, m/s."""
+        return self.water.velocity(self.point, self.t) if len(self.weight) else np.zeros((0, 3))
 
     @cached_property
     def submerged_area(self) -> float:
@@ -85,7 +99,7 @@ def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
     else:
         wet = np.flatnonzero(water.height_above_surface(x + body.r_body @ R.T, t) < 0.0)
     lever = body.r_body[wet] @ R.T
-    return WetSurface(x, x + lever, lever, body.area[wet], body.n_body[wet] @ R.T, wet)
+    return WetSurface(x, x + lever, lever, body.area[wet], body.n_body[wet] @ R.T, wet, water=water, t=t)
 
 
 def clip_triangles(P: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -141,7 +155,8 @@ def wet_panels(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
         nodes, weights = np.einsum("qv,kvi->kqi", DUNAVANT4, T), DUNAVANT4_WEIGHTS
     q = len(weights)
     lever = nodes.reshape(-1, 3)
-    return WetSurface(x, x + lever, lever, (area[:, None] * weights).ravel(), np.repeat(normal, q, axis=0), np.repeat(owner, q), T, normal)
+    return WetSurface(x, x + lever, lever, (area[:, None] * weights).ravel(), np.repeat(normal, q, axis=0), np.repeat(owner, q), T, normal,
+                      water, t)  # fmt: skip
 
 
 WET_SURFACE = {"points": wet_points, "panels": wet_panels}

@@ -1,0 +1,158 @@
+"""Waves against exact answers: the surface has zero pressure, the dispersion relation holds, a
+seeded JONSWAP sea has the asked Hs and Tp, zero amplitude is still water, the Froude-Krylov force
+on a fixed box is linear theory's closed form, and a small cube follows long waves at the linear RAO."""
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from sim import FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
+from sim.body import make_mesh_body
+from sim.config import ConfigError
+from sim.water import jonswap_waves, regular_waves, wavenumber
+
+RHO, G = 1000.0, 9.81
+
+
+@pytest.mark.parametrize("depth", [math.inf, 30.0, 5.0])
+def test_surface_pressure_vanishes_and_deep_pressure_is_linear_theory(depth):
+    w = jonswap_waves(RHO, G, 2.0, 8.0, components=16, seed=4, depth=depth, spreading=4.0)
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-50, 50, size=(40, 2))
+    t = 7.3
+    surface = np.column_stack([xy, w.elevation(xy, t)])
+    np.testing.assert_allclose(w.pressure(surface, t), 0.0, atol=1e-9)
+    # far below the surface stretching hardly matters: p - rho g (-z) -> rho g sum a_i E_i(z) cos(psi_i)
+    small = regular_waves(RHO, G, 1e-4, 6.0, direction_deg=30.0, depth=depth)
+    z = -min(0.5 * depth, 3.0)
+    p = small.pressure(np.array([[1.0, 2.0, z]]), 0.4)[0] + RHO * G * z
+    k = small.k[0]
+    E = math.exp(k * z) if math.isinf(depth) else math.cosh(k * (z + depth)) / math.cosh(k * depth)
+    psi = k * (math.cos(math.radians(30)) + 2 * math.sin(math.radians(30))) - small.omega[0] * 0.4
+    assert p == pytest.approx(RHO * G * 0.5e-4 * E * math.cos(psi), rel=1e-4)
+
+
+def test_dispersion_relation():
+    omega = np.linspace(0.2, 5.0, 30)
+    for depth in (1.0, 10.0, 200.0):
+        k = wavenumber(omega, G, depth)
+        np.testing.assert_allclose(G * k * np.tanh(k * depth), omega**2, rtol=1e-12)
+    np.testing.assert_allclose(wavenumber(omega, G, math.inf), omega**2 / G)
+
+
+def test_jonswap_sea_has_the_asked_hs_and_tp_and_is_reproducible():
+    hs, tp = 3.0, 9.0
+    sea = jonswap_waves(RHO, G, hs, tp, gamma=3.3, components=256, seed=7)
+    t = np.arange(0.0, 6 * 3600.0, 0.25)
+    eta = np.cos(-np.outer(t, sea.omega) + sea.phase) @ sea.amplitude  # at x = 0
+    assert 4 * eta.std() == pytest.approx(hs, rel=0.03)
+    from scipy.signal import welch
+
+    f, S = welch(eta, fs=4.0, nperseg=2**14)
+    assert 1 / f[np.argmax(S)] == pytest.approx(tp, rel=0.05)
+    again = jonswap_waves(RHO, G, hs, tp, gamma=3.3, components=256, seed=7)
+    other = jonswap_waves(RHO, G, hs, tp, gamma=3.3, components=256, seed=8)
+    np.testing.assert_array_equal(again.phase, sea.phase)
+    np.testing.assert_array_equal(again.omega, sea.omega)
+    assert not np.allclose(other.phase, sea.phase)
+
+
+@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4", "rk45"])
+def test_zero_amplitude_is_still_water(forces, integrator):
+    """The waves' general path (per-point surface, stretched pressure, water velocity, higher-order
+    panel rule) with a = 0 reproduces still water to round-off."""
+    base = with_overrides(load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.5, step__integrator=integrator, step__dt=0.01)
+    still = Simulation(base, backend="numpy")
+    flat = Simulation(with_overrides(base, waves__kind="regular", waves__height=0.0), backend="numpy")
+    assert not flat.model.water.is_still
+    still.step(150)
+    flat.step(150)
+    a = still.state.as_vector()
+    np.testing.assert_allclose(flat.state.as_vector(), a, rtol=0, atol=1e-11 * (1 + np.abs(a).max()))
+
+
+def box_model(L=1.0, B=1.0, H=1.0, edge=0.05) -> Model:
+    mesh = trimesh.creation.box(extents=(L, B, H))
+    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=edge)
+    body = make_mesh_body(trimesh.Trimesh(v, f), samples=len(f), density=900.0)
+    return body
+
+
+@pytest.mark.parametrize("direction", [0.0, 30.0])
+def test_froude_krylov_force_on_a_fixed_box_is_linear_theory(direction):
+    """A box L x B with draft d held still in a deep-water wave of tiny steepness: the force beyond the
+    still-water buoyancy is F_z = rho g a e^(-kd) L B sinc(k_x L/2) sinc(k_y B/2) cos(omega t) and
+    F_x = -2 rho g a B sinc(k_y B/2) sin(k_x L/2) (1 - e^(-kd))/k sin(omega t) (sinc u = sin u / u)."""
+    L = B = 1.0
+    d = 0.9
+    a, T = 1e-6, 4.0
+    body = box_model(L, B)
+    fluid = FluidConfig(forces="panels")
+    waves = regular_waves(RHO, G, 2 * a, T, direction_deg=direction)
+    x, R = np.array([0.0, 0.0, 0.5 - d]), np.eye(3)
+    still_model = Model(body, StillWater(RHO, G), fluid)
+    still = np.concatenate(still_model.pose_loads(still_model.wetted(x, R)))
+    model = Model(body, waves, fluid)
+    k, w = waves.k[0], waves.omega[0]
+    kx, ky = k * math.cos(math.radians(direction)), k * math.sin(math.radians(direction))
+
+    def sinc(u):
+        return 1.0 if u == 0 else math.sin(u) / u
+
+    scale = RHO * G * a * L * B
+    for t in np.linspace(0.0, T, 7):
+        load = np.concatenate(model.pose_loads(model.wetted(x, R, t), t)) - still
+        fz = RHO * G * a * math.exp(-k * d) * L * B * sinc(kx * L / 2) * sinc(ky * B / 2) * math.cos(w * t)
+        fx = -2 * RHO * G * a * B * sinc(ky * B / 2) * math.sin(kx * L / 2) * (1 - math.exp(-k * d)) / k * math.sin(w * t)
+        fy = -2 * RHO * G * a * L * sinc(kx * L / 2) * math.sin(ky * B / 2) * (1 - math.exp(-k * d)) / k * math.sin(w * t)
+        np.testing.assert_allclose(load[:3], [fx, fy, fz], rtol=0, atol=1e-6 * scale)
+
+
+def heave_amplitude(period: float, height: float = 0.2, cycles: int = 6) -> tuple[float, float]:
+    """(simulated, linear prediction) heave amplitude of the floating ice cube in a regular wave: a
+    least-squares fit of z(t) at the wave frequency and at the free heave frequency together."""
+    scene = with_overrides(load_scene("rest"), fluid__forces="panels", waves__kind="regular", waves__height=height, waves__period=period,
+                           step__dt=0.01)  # fmt: skip
+    sim = Simulation(scene)
+    w = 2 * math.pi / period
+    wn = math.sqrt(RHO * G * 1.0 / 900.0)
+    k = float(wavenumber(w, G, math.inf))
+    ts, zs = [], []
+    for _ in range(round(cycles * period / 0.01) // 5):
+        sim.step(5)
+        ts.append(sim.state.t)
+        zs.append(sim.state.x_world[2])
+    t, z = np.array(ts), np.array(zs)
+    A = np.column_stack([np.ones_like(t), np.cos(w * t), np.sin(w * t), np.cos(wn * t), np.sin(wn * t)])
+    c = np.linalg.lstsq(A, z, rcond=None)[0]
+    predicted = 0.5 * height * math.exp(-k * 0.9) * math.sin(k / 2) / (k / 2) / abs(1 - (w / wn) ** 2)
+    return math.hypot(c[1], c[2]), predicted
+
+
+def test_a_small_cube_follows_long_waves_at_the_linear_rao():
+    simulated, predicted = heave_amplitude(period=2 * math.pi / math.sqrt(G * 2 * math.pi / 200.0))  # wavelength 200 m
+    assert simulated == pytest.approx(predicted, rel=0.01)
+
+
+def test_heave_response_grows_towards_resonance():
+    wn = math.sqrt(RHO * G / 900.0)
+    ratios = [0.5, 0.7, 0.85]
+    amps = [heave_amplitude(2 * math.pi / (r * wn), height=0.02, cycles=12) for r in ratios]
+    for (sim_amp, pred), r in zip(amps, ratios):
+        assert sim_amp == pytest.approx(pred, rel=0.05), r
+    assert amps[0][0] < amps[1][0] < amps[2][0]
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"waves__kind": "regular", "waves__height": -1.0}, "wave height must be >= 0"),
+    ({"waves__kind": "regular", "waves__period": 0.0}, "wave period must be > 0"),
+    ({"waves__kind": "regular", "waves__height": 10.0, "waves__period": 5.0}, "past the breaking limit"),
+    ({"waves__kind": "jonswap", "waves__hs": 8.0, "waves__tp": 4.0}, "past the breaking limit"),
+    ({"waves__kind": "tsunami"}, "unknown waves 'tsunami'"),
+])  # fmt: skip
+def test_bad_wave_input_is_one_clear_error(changes, message):
+    with pytest.raises(ConfigError, match=message):
+        with_overrides(load_scene("rest"), **changes)

@@ -74,6 +74,8 @@ class Snapshot:
     frame: sim.Frame
     settings: Settings
     body: sim.Body
+    water: object
+    """The running simulation's Water (the viewer draws its surface)."""
     real_time_factor: float
     """Simulated seconds per wall second over the last ~2 s (nan while paused or just started)."""
     behind: bool
@@ -252,6 +254,7 @@ class SimLoop:
             frame=frame,
             settings=self.settings,
             body=self.sim.body,
+            water=self.sim.model.water,
             real_time_factor=self._rate(),
             behind=(not self.settings.paused) and (now < self._behind_until or self._rate() < 0.85 * self.settings.speed),
             notice=self._notice,

@@ -32,7 +32,7 @@ class ViewerApp:
         self.controls = Controls(server, loop.post, snap.settings, loop.scene_options)
         self.layers = Layers(server)
         self.readouts = Readouts(server)
-        self.scene = SceneView(server, self.layers, snap.body)
+        self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.is_still)
         self._notice_id = snap.notice_id
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()

@@ -16,6 +16,7 @@ import sim
 
 from .controls import Layers
 from .loop import Snapshot
+from .water import WaterView
 
 COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
@@ -26,19 +27,17 @@ DRY = np.array([245, 150, 40], np.uint8)
 class SceneView:
     """Scene nodes of one viewer; `show` runs on the simulation thread only."""
 
-    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body):
+    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, waves: bool = False):
         self.server, self.layers = server, layers
         scene = server.scene
         size = max(8.0, 8.0 * body.radius)
-        self.water = scene.add_grid(
-            "/water", width=size, height=size, plane="xy", cell_size=0.5, section_size=2.0,
-            cell_color=(120, 170, 220), section_color=(60, 120, 190), plane_color=(40, 120, 200), plane_opacity=0.35, shadow_opacity=0.2,
-        )  # fmt: skip
+        self.water = WaterView(server, size)
         self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
         self.arrows = scene.add_arrows(
             "/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
         )
-        server.initial_camera.position = (2.6 * size / 8, -3.4 * size / 8, 1.9 * size / 8)
+        view = size / 8 * (2.5 if waves else 1.0)  # a sea needs a wider view than a calm pond
+        server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
         server.initial_camera.look_at = (0.0, 0.0, -0.3)
         self.body: sim.Body | None = None
         self.mesh = self.points = None
@@ -69,7 +68,7 @@ class SceneView:
         if snap.body is not self.body:
             self.set_body(snap.body)
         layers, now = self.layers, time.monotonic()
-        for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.water, layers.water), (self.arrows, layers.forces)):
+        for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.arrows, layers.forces)):
             if node.visible != box.value:
                 node.visible = box.value
         frame = snap.frame
@@ -80,6 +79,7 @@ class SceneView:
                 self._send_colours(frame.wet_index, now)
             if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
                 self._send_arrows(snap, now)
+            self.water.show(snap.water, frame.t, frame.x_world, layers.water.value)
 
     def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
         if self._wet is not None and np.array_equal(self._wet, wet_index):

@@ -424,3 +424,32 @@ def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
     app.controls.drag_coefficient.value = 0.0
     app.sync()
     assert "drag" not in app.loop.sim.model.term_names
+
+
+def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
+    """Still water: the flat grid, and no surface is streamed. Waves (chosen live in the Waves folder):
+    the grid gives way to a mesh whose heights are the running Water's elevation, sent at most
+    WAVE_HZ times a second; switching the water layer off stops the stream."""
+    from app.water import WAVE_HZ
+
+    app = make_app("damped")
+    water = app.scene.water
+    wait_for(app, lambda s: s.frame.t > 0.5, what="the run to go on")
+    assert water.updates == 0 and water.grid.visible and not water.surface.visible
+    app.controls.kind.value = "regular"
+    app.controls.height.value = 0.6
+    snap = app.sync()
+    assert not snap.water.is_still and snap.settings.config.waves.kind == "regular"
+    started, before = time.monotonic(), water.updates
+    wait_for(app, lambda s: water.updates >= before + 5, what="wave surfaces")
+    elapsed = time.monotonic() - started
+    assert water.updates - before <= WAVE_HZ * elapsed + 2  # throttled
+    assert water.surface.visible and not water.grid.visible
+    vertices = np.asarray(water.surface.vertices, float)
+    np.testing.assert_allclose(vertices[:, 2], snap.water.elevation(vertices[:, :2], water.sent_time), atol=1e-6)
+    assert np.ptp(vertices[:, 2]) > 0.05 and np.abs(vertices[:, 2]).max() <= 0.3 + 1e-6  # a 0.3 m amplitude, 100 m long wave over 8 m
+    app.layers.water.value = False
+    time.sleep(0.3)
+    frozen = water.updates
+    time.sleep(0.5)
+    assert water.updates == frozen and not water.surface.visible

@@ -1,0 +1,64 @@
+"""The water in the 3D scene: a flat grid in still water; in waves an animated surface mesh whose
+heights come from the simulation's own `Water`, sent at most `WAVE_HZ` times a second and only while
+shown (ARCHITECTURE rule 7: stream only what changed and is visible)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import viser
+
+WAVE_HZ = 10.0
+CELLS = 48
+"""Grid cells per side of the wave surface ((CELLS + 1)^2 vertices, ~28 KB per update)."""
+WAVE_PATCH = 3.0
+"""The wave surface spans this many times the calm grid's width."""
+
+
+def grid_faces(n: int) -> np.ndarray:
+    """Two triangles per cell of an (n + 1) x (n + 1) vertex grid, counter-clockwise seen from above."""
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a = (i * (n + 1) + j).ravel()
+    b, c, d = a + n + 1, a + 1, a + n + 2
+    return np.concatenate([np.stack([a, b, d], axis=1), np.stack([a, d, c], axis=1)]).astype(np.uint32)
+
+
+class WaterView:
+    """Scene nodes for the water; `show` runs on the simulation thread only."""
+
+    def __init__(self, server: viser.ViserServer, size: float):
+        self.server = server
+        self.size = WAVE_PATCH * size  # waves are long: show more of them than of the calm grid
+        self.grid = server.scene.add_grid(
+            "/water", width=size, height=size, plane="xy", cell_size=0.5, section_size=2.0,
+            cell_color=(120, 170, 220), section_color=(60, 120, 190), plane_color=(40, 120, 200), plane_opacity=0.35, shadow_opacity=0.2,
+        )  # fmt: skip
+        c = (np.arange(CELLS + 1) / CELLS - 0.5) * self.size
+        gx, gy = np.meshgrid(c, c, indexing="ij")
+        self._xy = np.column_stack([gx.ravel(), gy.ravel()])
+        self.surface = server.scene.add_mesh_simple(
+            "/waves", np.column_stack([self._xy, np.zeros(len(self._xy))]).astype(np.float32), grid_faces(CELLS),
+            color=(30, 105, 185), opacity=0.7, flat_shading=True, side="double", cast_shadow=False, visible=False,
+        )  # fmt: skip
+        self._sent = -np.inf
+        self.sent_time = 0.0
+        """Simulated time of the surface last sent."""
+        self.updates = 0
+        """How many wave surfaces were sent (tests check the throttle and the still-water silence)."""
+
+    def show(self, water, t: float, centre: np.ndarray, visible: bool) -> None:
+        """Flat grid for still water; otherwise the surface around `centre` (x, y) at time t, throttled."""
+        still = water.is_still
+        if self.grid.visible != (visible and still):
+            self.grid.visible = visible and still
+        if self.surface.visible != (visible and not still):
+            self.surface.visible = visible and not still
+        now = time.monotonic()
+        if still or not visible or now - self._sent < 1.0 / WAVE_HZ:
+            return
+        origin = np.round(np.asarray(centre[:2]) / (self.size / CELLS)) * (self.size / CELLS)  # follow the body in whole cells
+        xy = self._xy + origin
+        self.surface.vertices = np.column_stack([xy, water.elevation(xy, t)]).astype(np.float32)
+        self._sent, self.sent_time = now, t
+        self.updates += 1

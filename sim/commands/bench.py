@@ -31,6 +31,8 @@ class BenchArgs:
     """Seconds of stepping per timed run (the step count adapts to it)."""
     ensemble: int = 100
     """Bodies in the ensemble row (0 to skip)."""
+    waves: bool = True
+    """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea) on both models."""
 
 
 def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
@@ -70,7 +72,7 @@ def bench(args: BenchArgs) -> int:
     compile_s = warm_up()
     base = load_scene(args.scene)
     cells = [("points", n, name) for n in args.sizes for name in args.integrators] + [("panels", 0, name) for name in args.integrators]
-    bar = progress_bar(len(cells) + (len(args.integrators) if args.ensemble else 0), unit="cell")
+    bar = progress_bar(len(cells) + (len(args.integrators) if args.ensemble else 0) + (2 if args.waves else 0), unit="cell")
     rows = []
     for forces, n, name in cells:
         scene = with_overrides(base, fluid__forces=forces, step__integrator=name, body__points_per_edge=n or base.body.points_per_edge)
@@ -96,6 +98,7 @@ def bench(args: BenchArgs) -> int:
                 costs.append(time.perf_counter() - t0)
             ens_rows.append((name, f"{args.ensemble * 100 / statistics.median(costs):,.0f}"))
             bar.update()
+    wave_rows = _wave_rows(base, args, bar) if args.waves else []
     bar.close()
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
     print(f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs")
@@ -110,4 +113,28 @@ def bench(args: BenchArgs) -> int:
         print("|---|---|")
         for name, rate in ens_rows:
             print(f"| {name} | {rate} |")
+    if wave_rows:
+        print()
+        print("| sea (implicit, N = 10) | model | us/step | vs still water | path |")
+        print("|---|---|---|---|---|")
+        for r in wave_rows:
+            print("| " + " | ".join(r) + " |")
     return 0
+
+
+SEAS = (("still", {}), ("regular (H 0.5 m, T 6 s)", {"waves__kind": "regular", "waves__height": 0.5, "waves__period": 6.0}),
+        ("JONSWAP, 64 components", {"waves__kind": "jonswap", "waves__hs": 3.0, "waves__tp": 9.0, "waves__components": 64}))  # fmt: skip
+
+
+def _wave_rows(base, args: BenchArgs, bar) -> list[tuple[str, ...]]:
+    """Cost per step of each sea state on both models, and its ratio to still water in the same run."""
+    rows = []
+    for forces in ("points", "panels"):
+        still = None
+        for label, changes in SEAS:
+            sim = Simulation(with_overrides(base, fluid__forces=forces, step__integrator="implicit", **changes))
+            cost = _median_step_seconds(sim, max(1, args.repeats // 2), args.budget)
+            still = still or cost
+            rows.append((label, forces, f"{cost * 1e6:.1f}", f"{cost / still:.1f}x", "compiled" if sim.compiled else "numpy (direct sum)"))
+        bar.update()
+    return rows

@@ -11,8 +11,8 @@ from ..ensemble import Ensemble
 from ..simulation import CSV_COLUMNS
 from .progress import progress_bar
 
-SWEPT = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid") and p.kind in ("float", "optional") and p.key != "mass"}
-"""Parameters a sweep can vary (every declared number of the body and the water, term coefficients included), plus z0."""
+SWEPT = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid", "waves") and p.kind in ("float", "optional") and p.key not in ("mass", "size")}
+"""Parameters a sweep can vary (every declared number of the body, the water and the waves, term coefficients included), plus z0."""
 
 
 @dataclass

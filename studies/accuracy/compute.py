@@ -92,6 +92,8 @@ FULL = Settings(
         Case("panels-damped", "damped", "panels"),
         Case("panels-spin", "spin", "panels"),
         Case("points-drop-d100", "drop", "points", 100.0),
+        Case("panels-waves", "waves", "panels"),
+        Case("panels-storm", "storm", "panels"),
     ),
     fixed_dts={"euler": _pow2(4, 10), "splitting": _pow2(2, 10), "implicit": _pow2(2, 10), "rk4": _pow2(2, 9)},
     rtols={"rk45": (1e-3, 1e-5, 1e-7, 1e-9), "dop853": (1e-4, 1e-6, 1e-8, 1e-10), "radau": (1e-3, 1e-5, 1e-7)},

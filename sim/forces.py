@@ -38,7 +38,7 @@ class Load(NamedTuple):
 ZERO = np.zeros(3)
 
 
-def _relative_velocity(water, wet: WetSurface, twist: np.ndarray, t: float) -> np.ndarray:
+def _relative_velocity(wet: WetSurface, twist: np.ndarray) -> np.ndarray:
     """(m, 3) velocity of each node relative to the water, m/s."""
     return twist[:3] + np.cross(twist[3:], wet.lever) - wet.flow
 
@@ -112,7 +112,7 @@ def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> Wet
 def drag(body, water, fluid, wet, twist, t) -> Load:
     """Quadratic drag: -(1/2) rho C_d (v_rel . n)^2 n per unit area where v_rel . n > 0, zero elsewhere."""
     nodes = _advancing_nodes(water, wet, twist, t)
-    vn = np.einsum("ki,ki->k", _relative_velocity(water, nodes, twist, t), nodes.normal)
+    vn = np.einsum("ki,ki->k", _relative_velocity(nodes, twist), nodes.normal)
     c = water.rho * fluid.drag_coefficient * nodes.weight * np.maximum(vn, 0.0)  # d|f|/d(v.n) per node
     f = (-0.5 * c * vn)[:, None] * nodes.normal
     load = _wrench(nodes, f)

@@ -142,16 +142,19 @@ def regular_waves(rho: float, g: float, height: float, period: float, direction_
                  np.array([phase]), depth)  # fmt: skip
 
 
+def _jonswap_shape(omega: np.ndarray, wp: float, gamma: float) -> np.ndarray:
+    sigma = np.where(omega <= wp, 0.07, 0.09)
+    return omega**-5.0 * np.exp(-1.25 * (wp / omega) ** 4) * gamma ** np.exp(-0.5 * ((omega - wp) / (sigma * wp)) ** 2)
+
+
 def jonswap_spectrum(omega: np.ndarray, hs: float, tp: float, gamma: float) -> np.ndarray:
     """S(omega), m^2 s/rad: the JONSWAP shape (gamma = 1: Pierson-Moskowitz) scaled so that 4 sqrt(m0) = Hs
     (DNV-RP-C205, 3.5.5)."""
     wp = 2 * math.pi / tp
-    sigma = np.where(omega <= wp, 0.07, 0.09)
-    shape = omega**-5.0 * np.exp(-1.25 * (wp / omega) ** 4) * gamma ** np.exp(-0.5 * ((omega - wp) / (sigma * wp)) ** 2)
     grid = np.linspace(0.2 * wp, 6.0 * wp, 4000)  # the normalising integral, far past where the shape matters
-    s_grid = grid**-5.0 * np.exp(-1.25 * (wp / grid) ** 4) * gamma ** np.exp(-0.5 * ((grid - wp) / (np.where(grid <= wp, 0.07, 0.09) * wp)) ** 2)
+    s_grid = _jonswap_shape(grid, wp, gamma)
     m0 = float(np.sum(0.5 * (s_grid[1:] + s_grid[:-1]) * np.diff(grid)))
-    return shape * (hs / 4.0) ** 2 / m0
+    return _jonswap_shape(np.asarray(omega, float), wp, gamma) * (hs / 4.0) ** 2 / m0
 
 
 def jonswap_waves(rho: float, g: float, hs: float, tp: float, gamma: float = 3.3, components: int = 64, seed: int = 0, direction_deg: float = 0.0,

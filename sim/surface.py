@@ -52,14 +52,18 @@ class WetSurface:
     """Time, s."""
 
     @cached_property
+    def _field(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.water.field(self.point, self.t) if len(self.weight) else (np.zeros(0), np.zeros((0, 3)))
+
+    @property
     def pressure(self) -> np.ndarray:
         """(m,) the water's pressure at the nodes, Pa."""
-        return self.water.pressure(self.point, self.t) if len(self.weight) else np.zeros(0)
+        return self._field[0]
 
-    @cached_property
+    @property
     def flow(self) -> np.ndarray:
         """(m, 3) the water's velocity at the nodes, m/s."""
-        return self.water.velocity(self.point, self.t) if len(self.weight) else np.zeros((0, 3))
+        return self._field[1]
 
     @cached_property
     def submerged_area(self) -> float:

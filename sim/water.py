@@ -43,6 +43,10 @@ class StillWater:
         """z - eta at (..., 3) points: negative where they are wet."""
         return points[..., 2] - self.elevation(points[..., :2], t)
 
+    def field(self, points: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(pressure, velocity) at the same points, in one pass."""
+        return self.pressure(points, t), self.velocity(points, t)
+
 
 @dataclass(frozen=True, eq=False)
 class Waves:
@@ -104,21 +108,26 @@ class Waves:
 
     def pressure(self, points: np.ndarray, t: float) -> np.ndarray:
         psi, zs = self._stretched(points, t)
-        dynamic = (self._decay(zs, "cosh") * np.cos(psi)) @ self.amplitude
-        return self.rho * self.g * (dynamic - points[..., 2])
+        return self.rho * self.g * ((self._decay(zs, "cosh") * np.cos(psi)) @ self.amplitude - points[..., 2])
 
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
-        psi, zs = self._stretched(points, t)
-        aw = self.amplitude * self.omega
-        horizontal = self._decay(zs, "cosh/sinh") * np.cos(psi) * aw
-        out = np.empty(np.shape(points))
-        out[..., 0] = horizontal @ np.cos(self.direction)
-        out[..., 1] = horizontal @ np.sin(self.direction)
-        out[..., 2] = (self._decay(zs, "sinh/sinh") * np.sin(psi)) @ aw
-        return out
+        return self.field(points, t)[1]
 
     def height_above_surface(self, points: np.ndarray, t: float) -> np.ndarray:
         return points[..., 2] - self.elevation(points[..., :2], t)
+
+    def field(self, points: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(pressure, velocity) at the same points, sharing the phases and depth factors."""
+        psi, zs = self._stretched(points, t)
+        cos, sin = np.cos(psi), np.sin(psi)
+        pressure = self.rho * self.g * ((self._decay(zs, "cosh") * cos) @ self.amplitude - points[..., 2])
+        aw = self.amplitude * self.omega
+        horizontal = self._decay(zs, "cosh/sinh") * cos * aw
+        velocity = np.empty(np.shape(points))
+        velocity[..., 0] = horizontal @ np.cos(self.direction)
+        velocity[..., 1] = horizontal @ np.sin(self.direction)
+        velocity[..., 2] = (self._decay(zs, "sinh/sinh") * sin) @ aw
+        return pressure, velocity
 
 
 def wavenumber(omega: np.ndarray, g: float, depth: float) -> np.ndarray:

@@ -35,9 +35,6 @@ class Load(NamedTuple):
     """(6,) (force, torque) + D (u, omega): the load of the linearised term at zero twist."""
 
 
-ZERO = np.zeros(3)
-
-
 def _relative_velocity(wet: WetSurface, twist: np.ndarray) -> np.ndarray:
     """(m, 3) velocity of each node relative to the water, m/s."""
     return twist[:3] + np.cross(twist[3:], wet.lever) - wet.flow
@@ -51,7 +48,7 @@ def _wrench(wet: WetSurface, f: np.ndarray) -> np.ndarray:
 
 def gravity(body, water, fluid, wet, twist, t) -> Load:
     """-M g z_hat at the centre of mass (no torque)."""
-    return Load(np.array([0.0, 0.0, -body.mass * water.g]), ZERO)
+    return Load(np.array([0.0, 0.0, -body.mass * water.g]), np.zeros(3))
 
 
 def pressure(body, water, fluid, wet, twist, t) -> Load:
@@ -165,10 +162,6 @@ class Model:
         self._wet_surface = WET_SURFACE[fluid.forces]
         self._cache_key: tuple | None = None
         self._cache: WetSurface | None = None
-
-    @property
-    def params(self):
-        return self.fluid
 
     @property
     def term_names(self) -> tuple[str, ...]:

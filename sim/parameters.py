@@ -54,6 +54,10 @@ class Param:
     flag_name: str = ""
     """The flag's name with underscores (default: the key), e.g. 'wave_height' for [waves] height."""
 
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise TypeError(f"parameter {self.section}.{self.key}: kind {self.kind!r} is not one of {KINDS}")
+
     @property
     def cli(self) -> str:
         return self.flag_name or self.key

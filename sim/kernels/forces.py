@@ -45,7 +45,8 @@ def pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc):
     term has a wet surface to act on."""
     r, nrm, area, verts, faces, fnormals, moments = geom
     F = np.zeros(3)
-    F[2] = -mass * coef[G]
+    if terms & GRAVITY:
+        F[2] = -mass * coef[G]
     T = np.zeros(3)
     D = np.zeros((6, 6))
     wet = False

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import JIT, njit
-from .forces import C_DAMPING, DAMPING, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
+from .forces import C_DAMPING, DAMPING, GRAVITY, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
 from .layout import RHO, G
 from .surface import clip, vertex_levers
 
@@ -63,7 +63,7 @@ def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
     r, nrm, area = geom[0], geom[1], geom[2]
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
     F0 = F1 = T0 = T1 = T2 = e_hyd = a_sub = v_sub = 0.0
-    F2 = -mass * coef[G]
+    F2 = -mass * coef[G] if terms & GRAVITY else 0.0
     rg = coef[RHO] * coef[G] if terms & WET_TERMS else 0.0
     d = coef[C_DAMPING] if terms & DAMPING else 0.0
     for k in range(r.shape[0]):

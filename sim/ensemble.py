@@ -50,7 +50,9 @@ class Ensemble:
         live = [i for i, why in enumerate(self.diverged) if why is None]
         if not live:
             return
-        if self.backend == "numba" and self.sims[0].compiled:
+        first = self.sims[live[0]]
+        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].state.t == first.state.t for i in live)
+        if self.backend == "numba" and first.compiled and one_sea:
             self._step_compiled(live, n)
             return
         for i in live:
@@ -72,7 +74,9 @@ class Ensemble:
             terms |= mask
         coefs = np.array([coef for _, coef in packed])
         scheme = kernels.SCHEMES[sims[0].integrator.name]
-        Y, done = kernels.advance_many(Y, n, self.dt, scheme, kernels.MODELS[sims[0].params.forces], self.shape.packed, masses, inertias, terms, coefs)
+        sea = kernels.sea_pack(sims[0].model.water, self.shape)
+        Y, done = kernels.advance_many(Y, sims[0].state.t, n, self.dt, scheme, kernels.MODELS[sims[0].params.forces], self.shape.packed, masses,
+                                       inertias, terms, coefs, sea)  # fmt: skip
         for i, s, y, k in zip(live, sims, Y, done):
             before = s.state
             s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])

@@ -92,18 +92,23 @@ def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> Wet
     """Nodes of the part of the wet surface that moves into the water (v_rel . n > 0).
 
     Points: the wet samples doing so. Panels: each wet triangle clipped again where v_rel . n
-    (linear over a flat panel of a rigid body in still water) changes sign, with a degree-4 rule."""
+    changes sign, with a degree-4 rule; v_rel is taken linear across the triangle (exact for a rigid
+    body in still water; in waves the water's velocity is interpolated from the triangle's vertices,
+    like the wave surface above it)."""
     if wet.triangles is None:
         return wet
     if not len(wet.triangles):
         return empty_surface(wet.x)
     n = wet.triangle_normal
-    vn = np.einsum("kvi,ki->kv", twist[:3] + np.cross(twist[3:], wet.triangles) - water.velocity(wet.x + wet.triangles, t), n)
-    T, owner = clip_triangles(wet.triangles, -vn)
-    area = triangle_areas(T, n[owner])
-    lever = np.einsum("qv,kvi->kqi", DUNAVANT4, T).reshape(-1, 3)
+    flow = water.velocity(wet.x + wet.triangles, t)
+    vn = np.einsum("kvi,ki->kv", twist[:3] + np.cross(twist[3:], wet.triangles) - flow, n)
+    T, owner = clip_triangles(np.concatenate([wet.triangles, flow], axis=2), -vn)
+    area = triangle_areas(T[..., :3], n[owner])
+    nodes = np.einsum("qv,kvi->kqi", DUNAVANT4, T).reshape(-1, 6)
     weight = (area[:, None] * DUNAVANT4_WEIGHTS).ravel()
-    return WetSurface(wet.x, wet.x + lever, lever, weight, np.repeat(n[owner], 6, axis=0), np.repeat(owner, 6), water=water, t=t)
+    lever = nodes[:, :3]
+    return WetSurface(wet.x, wet.x + lever, lever, weight, np.repeat(n[owner], 6, axis=0), np.repeat(owner, 6), water=water, t=t,
+                      given_flow=nodes[:, 3:])  # fmt: skip
 
 
 def drag(body, water, fluid, wet, twist, t) -> Load:

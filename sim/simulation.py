@@ -139,6 +139,10 @@ class Simulation:
         """Things the user should know about how this runs (a fallback to numpy, ...)."""
         self._frame_key: tuple | None = None
         self._frame: Frame | None = None
+        self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
+        self.expand_waves = True
+        """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
+        False: every component at every node (benchmarks and checks)."""
         body = body or make_body(scene.body, scene.base_dir)
         self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
@@ -172,10 +176,10 @@ class Simulation:
 
     @property
     def compiled(self) -> bool:
-        """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin, still water)."""
+        """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin)."""
         from .kernels.layout import SCHEMES
 
-        return self.backend == "numba" and self.integrator.name in SCHEMES and self.model.water.is_still
+        return self.backend == "numba" and self.integrator.name in SCHEMES
 
     def _check_backend(self) -> None:
         from .kernels.layout import SCHEMES
@@ -217,8 +221,10 @@ class Simulation:
 
         body = self.body
         terms, coef = kernels.pack(self.model)
-        y, done = kernels.advance(self.state.as_vector(), n, self.dt, kernels.SCHEMES[self.integrator.name], kernels.MODELS[self.params.forces],
-                                  body.packed, body.mass, body.inertia, terms, coef)  # fmt: skip
+        if self._sea[0] is not self.model or self._sea[1][2] != (self._sea[1][2] and self.expand_waves):
+            self._sea = (self.model, kernels.sea_pack(self.model.water, body, self.expand_waves))
+        y, done = kernels.advance(self.state.as_vector(), self.state.t, n, self.dt, kernels.SCHEMES[self.integrator.name],
+                                  kernels.MODELS[self.params.forces], body.packed, body.mass, body.inertia, terms, coef, self._sea[1])  # fmt: skip
         state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
         if done < n:
             self.state = state

@@ -50,6 +50,8 @@ class WetSurface:
     """The water it is wet in (asked lazily, once, for the pressure and flow at the nodes)."""
     t: float = 0.0
     """Time, s."""
+    given_flow: np.ndarray | None = None
+    """(m, 3) the water's velocity at the nodes when already known (interpolated), m/s."""
 
     @cached_property
     def _field(self) -> tuple[np.ndarray, np.ndarray]:
@@ -63,7 +65,7 @@ class WetSurface:
     @property
     def flow(self) -> np.ndarray:
         """(m, 3) the water's velocity at the nodes, m/s."""
-        return self._field[1]
+        return self._field[1] if self.given_flow is None else self.given_flow
 
     @cached_property
     def submerged_area(self) -> float:
@@ -107,8 +109,9 @@ def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
 
 
 def clip_triangles(P: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The parts of triangles P (k, 3, 3) where the linear function with vertex values h (k, 3) is
-    negative, as triangles (same winding) and the index of the triangle each came from.
+    """The parts of triangles P (k, 3, c) where the linear function with vertex values h (k, 3) is
+    negative, as triangles (same winding) and the index of the triangle each came from. Columns past
+    the position (c > 3) are interpolated like it.
 
     One vertex below keeps a triangle, two keep a quadrilateral (split in two); rolling the
     vertices to put the odd one first keeps the winding, hence the outward normal."""

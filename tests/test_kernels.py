@@ -7,11 +7,13 @@ from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, Simulation, SimulationDiverged, State, StillWater, load_scene, make_integrator, with_overrides
 from sim.body import make_box, make_mesh_body
-from sim.kernels import SCHEMES, advance, pack
+from sim.kernels import SCHEMES, advance, pack, sea_pack
 from sim.kernels.forces import linearised, pose_loads, twist_loads
 from sim.kernels.layout import MODELS
 from sim.kernels.simulation import observe as observe_kernel
-from sim.kernels.surface import wet_integrals
+from sim.kernels.surface import wet_integrals, workspace
+from sim.kernels.water import elevations, fields, prepare
+from sim.water import jonswap_waves, regular_waves
 
 CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
          for integrator in ["euler", "splitting", "implicit", "rk4"] for forces in ["points", "panels"]
@@ -74,13 +76,22 @@ POSES = list(zip(Rotation.random(6, random_state=11).as_quat(scalar_first=True),
 TWISTS = np.random.default_rng(2).normal(size=(6, 6))
 
 
-def model_of(body_name: str, forces: str, damping: float = 40.0, drag_coefficient: float = 0.7) -> Model:
+WATERS = {
+    "still": lambda: StillWater(),
+    "regular": lambda: regular_waves(1000.0, 9.81, 0.5, 6.0, 30.0),  # the direct sum
+    "jonswap": lambda: jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1, direction_deg=20.0),  # the local expansion
+    "spread": lambda: jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=24, seed=2, spreading=8.0, depth=25.0),  # direct, finite depth
+}
+T_WAVES = 3.7
+
+
+def model_of(body_name: str, forces: str, damping: float = 40.0, drag_coefficient: float = 0.7, water: str = "still") -> Model:
     fluid = FluidConfig(forces=forces, damping=damping, drag_coefficient=drag_coefficient)
-    return Model(BODIES[body_name](), StillWater(fluid.rho, fluid.g), fluid)
+    return Model(BODIES[body_name](), WATERS[water](), fluid)
 
 
-def close(a, b, scale=1.0):
-    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * max(1.0, scale, np.abs(b).max()))
+def close(a, b, scale=1.0, tol=1e-12):
+    np.testing.assert_allclose(a, b, rtol=0, atol=tol * max(1.0, scale, np.abs(b).max()))
 
 
 @pytest.mark.parametrize("body_name", BODIES)
@@ -105,47 +116,55 @@ def test_stage_wet_integrals(body_name, forces):
             np.testing.assert_array_equal(np.flatnonzero(flags), wet.index)
 
 
+@pytest.mark.parametrize("water", WATERS)
 @pytest.mark.parametrize("body_name", BODIES)
 @pytest.mark.parametrize("forces", ["points", "panels"])
-def test_stage_loads_and_linearisation(body_name, forces):
-    """Every term's total force and torque at a pose and twist, and the implicit scheme's linearised
-    loads (f, D), kernel against reference."""
-    model = model_of(body_name, forces)
+def test_stage_loads_and_linearisation(body_name, forces, water):
+    """Every term's total force and torque at a pose, time and twist, and the implicit scheme's
+    linearised loads (f, D), kernel against reference, in still water and in waves."""
+    model = model_of(body_name, forces, water=water)
     terms, coef = pack(model)
     assert terms == 0b1111  # gravity, pressure, damping, drag
-    flags, acc = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34)
+    flags, acc, ws = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34), workspace(model.body.packed)
+    sea = sea_pack(model.water, model.body)
     weight = model.body.mass * 9.81
+    tol = 1e-10 if water == "jonswap" else 1e-12  # the expansion's truncation bound is 1e-13 of the amplitudes
+    t = 0.0 if water == "still" else T_WAVES
     for (q, z), twist in zip(POSES, TWISTS):
         x, R = np.array([0.0, 0.2, z]), Rotation.from_quat(q, scalar_first=True).as_matrix()
-        wet = model.wetted(x, R)
+        wet = model.wetted(x, R, t)
         u, w = twist[:3], twist[3:]
-        F, T, D, is_wet = pose_loads(MODELS[forces], x, R, model.body.packed, model.body.mass, terms, coef, flags, acc)
+        F, T, D, is_wet = pose_loads(MODELS[forces], x, R, t, model.body.packed, model.body.mass, terms, coef, sea, flags, acc, ws)
         Fv, Tv = F.copy(), T.copy()
-        twist_loads(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, D, is_wet, flags, Fv, Tv)
-        F_ref, T_ref = model.loads(wet, u, w)
-        close(Fv, F_ref, weight)
-        close(Tv, T_ref, weight)
-        f, Dt = linearised(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, F, T, D, is_wet, flags)
-        f_ref, D_ref = model.linearised(wet, twist)
-        close(f, f_ref, weight)
-        close(Dt, D_ref, weight)
+        twist_loads(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, D, is_wet, flags, Fv, Tv, ws)
+        F_ref, T_ref = model.loads(wet, u, w, t)
+        close(Fv, F_ref, weight, tol)
+        close(Tv, T_ref, weight, tol)
+        f, Dt = linearised(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, F, T, D, is_wet, flags, ws)
+        f_ref, D_ref = model.linearised(wet, twist, t)
+        close(f, f_ref, weight, tol)
+        assert is_wet == (D_ref is not None)  # a wave trough can leave the body dry
+        close(Dt, np.zeros((6, 6)) if D_ref is None else D_ref, weight, tol)
 
 
+@pytest.mark.parametrize("water", WATERS)
 @pytest.mark.parametrize("body_name", BODIES)
 @pytest.mark.parametrize("forces", ["points", "panels"])
 @pytest.mark.parametrize("scheme", list(SCHEMES))
-def test_stage_one_step_of_each_scheme(body_name, forces, scheme):
-    model = model_of(body_name, forces)
+def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
+    model = model_of(body_name, forces, water=water)
     terms, coef = pack(model)
+    sea = sea_pack(model.water, model.body)
     integrator = make_integrator(scheme)
+    t = 0.0 if water == "still" else T_WAVES
     for (q, z), twist in zip(POSES[:3], TWISTS):
         R = Rotation.from_quat(q, scalar_first=True).as_matrix()
-        state = State(0.0, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
+        state = State(t, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
         ref = integrator.step(model, state, 0.01).as_vector()
-        y, done = advance(state.as_vector(), 1, 0.01, SCHEMES[scheme], MODELS[forces], model.body.packed, model.body.mass, model.body.inertia,
-                          terms, coef)  # fmt: skip
+        y, done = advance(state.as_vector(), t, 1, 0.01, SCHEMES[scheme], MODELS[forces], model.body.packed, model.body.mass, model.body.inertia,
+                          terms, coef, sea)  # fmt: skip
         assert done == 1
-        close(y, ref, np.abs(ref).max())
+        close(y, ref, np.abs(ref).max(), 1e-10 if water == "jonswap" else 1e-12)
 
 
 @pytest.mark.parametrize("body_name", BODIES)
@@ -191,3 +210,53 @@ def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(
     sim.step(20)
     reference.step(20)
     np.testing.assert_array_equal(sim.state.as_vector(), reference.state.as_vector())
+
+
+# ---- waves: the compiled sea against the reference --------------------------------------------------
+
+
+@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("scene, changes", [("waves", {}), ("storm", {}), ("storm", {"waves__spreading": 10.0, "waves__depth": 30.0, "waves__components": 16})])
+def test_compiled_path_matches_numpy_in_waves(scene, changes, forces):
+    """Trajectories in a regular swell (direct sum), the storm (local expansion, with drag) and a
+    short-crested finite-depth sea (direct sum): kernel and reference agree to round-off."""
+    config = with_overrides(load_scene(scene), fluid__forces=forces, **changes)
+    reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
+    assert compiled.compiled
+    for _ in range(3):
+        reference.step(20)
+        compiled.step(20)
+        a, b = reference.state.as_vector(), compiled.state.as_vector()
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * (1 + np.abs(a).max()))
+
+
+def test_local_expansion_of_the_sea_matches_the_direct_sum():
+    """Elevation, pressure and flow from the expansion about the body against every component summed,
+    at points spread over the body's reach (its radius, and stretched depths down to its draft)."""
+    body = BODIES["cube"]()
+    water = jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1, direction_deg=20.0)
+    x = np.array([3.0, -2.0, -0.4])
+    pts = x + np.random.default_rng(5).uniform(-1, 1, (400, 3)) * body.radius / np.sqrt(3)
+    results = []
+    for expand in (True, False):
+        sea = sea_pack(water, body, expand)
+        ex = prepare(sea, T_WAVES, x)
+        assert (ex[0] >= 0) == expand  # the expansion's degree, -1: direct sum
+        eta, out = np.empty(len(pts)), np.empty((len(pts), 4))
+        elevations(sea, ex, pts, len(pts), eta)
+        fields(sea, ex, pts, eta, len(pts), 1000.0, 9.81, True, out)
+        results.append((eta, out))
+    (eta, out), (eta_d, out_d) = results
+    np.testing.assert_allclose(eta_d, water.elevation(pts[:, :2], T_WAVES), rtol=0, atol=1e-12)  # the direct sum is the reference's
+    amplitude = water.amplitude.sum()
+    assert np.abs(eta - eta_d).max() < 1e-12 * amplitude
+    assert np.abs(out[:, 0] - out_d[:, 0]).max() < 1e-12 * 1000 * 9.81 * amplitude
+    assert np.abs(out[:, 1:] - out_d[:, 1:]).max() < 1e-12 * (water.amplitude * water.omega).sum()
+
+
+def test_a_body_large_against_the_waves_falls_back_to_the_direct_sum():
+    """A 300 m barge in a sea whose short waves are 14 m long: no expansion degree meets the bound."""
+    body = make_box((300.0, 60.0, 20.0), 2, 1.0e8)
+    water = jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1)
+    assert prepare(sea_pack(water, body), 0.0, np.zeros(3))[0] == -1
+    assert prepare(sea_pack(water, BODIES["cube"]()), 0.0, np.zeros(3))[0] > 0

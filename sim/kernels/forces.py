@@ -10,7 +10,9 @@ import numpy as np
 
 from . import JIT, njit
 from .layout import RHO, G, bit, slot
-from .surface import clip, vertex_levers, wet_integrals
+from .rotation import mv, rotate_tensor
+from .surface import clip, vertex_levers, wet_integrals, wet_triangles, world_normal
+from .water import elevations, fields, prepare
 
 GRAVITY, PRESSURE, DAMPING, DRAG = bit("gravity"), bit("pressure"), bit("damping"), bit("drag")
 C_DAMPING, C_DRAG = slot("damping"), slot("drag_coefficient")
@@ -40,9 +42,12 @@ def damping_matrix(coef, A, S, rr):
 
 
 @njit(**JIT)
-def pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc):
-    """Gravity and pressure at a pose, the linear damping matrix D there, and whether any twist
-    term has a wet surface to act on."""
+def pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
+    """Gravity and pressure at a pose and time, the linear damping matrix D there, and whether any
+    twist term has a wet surface to act on. Leaves in the workspace `ws` what the twist terms of this
+    pose need (surface.workspace): the wet triangles (for drag) and, in waves, the water's velocity."""
+    if sea[0].shape[0] > 0:
+        return wave_pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
     r, nrm, area, verts, faces, fnormals, moments = geom
     F = np.zeros(3)
     if terms & GRAVITY:
@@ -59,6 +64,185 @@ def pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc):
         wet = (terms & TWIST_TERMS) != 0 and A > 0.0
         if wet and terms & DAMPING:
             D = damping_matrix(coef, A, S, rr)
+        if wet and kind == 1 and terms & DRAG:
+            wet_triangles(x, R, verts, faces, fnormals, ws)
+    return F, T, D, wet
+
+
+@njit(inline="always", **JIT)
+def _node_load(lx, ly, lz, nx, ny, nz, a, p, d, ux, uy, uz, load):
+    """Add one wet node's pressure force -p a n to load[0] and damping's part from the water's
+    motion, d a u_water, to load[1] (each force and torque, (6,))."""
+    for row, fx, fy, fz in ((0, -p * a * nx, -p * a * ny, -p * a * nz), (1, d * a * ux, d * a * uy, d * a * uz)):
+        load[row, 0] += fx
+        load[row, 1] += fy
+        load[row, 2] += fz
+        load[row, 3] += ly * fz - lz * fy
+        load[row, 4] += lz * fx - lx * fz
+        load[row, 5] += lx * fy - ly * fx
+
+
+@njit(**JIT)
+def _water_at(sea, ex, points, m, rho, g, need_flow):
+    """(eta (m,), [pressure, flow] (m, 4)) at the first m points, each batch in one call."""
+    eta = np.empty(m)
+    elevations(sea, ex, points, m, eta)
+    out = np.empty((m, 4))
+    fields(sea, ex, points, eta, m, rho, g, need_flow, out)
+    return eta, out
+
+
+@njit(**JIT)
+def _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load):
+    """Pressure and the water-motion part of damping on the samples below the wave surface, summed
+    into load (2, 6); the samples' water velocity into ws. Returns the wet area and its moments
+    (A, S, rr), kept as running sums like in still water (they depend only on which samples are wet)."""
+    r, nrm, area, moments = geom[0], geom[1], geom[2], geom[6]
+    n = r.shape[0]
+    d = coef[C_DAMPING] if terms & DAMPING else 0.0
+    pressure_on = (terms & PRESSURE) != 0
+    lev = np.empty((n, 3))
+    pts = np.empty((n, 3))
+    for k in range(n):
+        for i in range(3):
+            lev[k, i] = R[i, 0] * r[k, 0] + R[i, 1] * r[k, 1] + R[i, 2] * r[k, 2]
+            pts[k, i] = x[i] + lev[k, i]
+    eta = np.empty(n)
+    elevations(sea, ex, pts, n, eta)
+    wet = np.empty(n, dtype=np.int64)
+    m = 0
+    for k in range(n):
+        w = pts[k, 2] - eta[k] < 0.0
+        if w != flags[k]:
+            flags[k] = w
+            sign = 1.0 if w else -1.0
+            for j in range(10):  # a, a r, a r r^T: the damping matrix's moments
+                acc[j] += sign * moments[k, j]
+        if w:
+            pts[m], eta[m], wet[m] = pts[k], eta[k], k  # gathered in place: m <= k
+            m += 1
+    if m == 0:  # all dry: restart the running sums (no round-off residue says "wet")
+        acc[:] = 0.0
+    out = np.empty((m, 4))
+    fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (terms & TWIST_TERMS) != 0, out)
+    flow = ws[0]
+    for i in range(m):
+        k = wet[i]
+        flow[k, 0], flow[k, 1], flow[k, 2] = out[i, 1], out[i, 2], out[i, 3]
+        nx, ny, nz = world_normal(R, nrm, k)
+        _node_load(lev[k, 0], lev[k, 1], lev[k, 2], nx, ny, nz, area[k], out[i, 0] if pressure_on else 0.0, d, out[i, 1], out[i, 2], out[i, 3], load)
+    Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
+    return acc[0], mv(R, acc[1:4].copy()), rotate_tensor(R, Q)
+
+
+@njit(**JIT)
+def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
+    """Pressure and the water-motion part of damping on the mesh clipped at the wave surface (the
+    plane through the surface points above each triangle's vertices), by Dunavant's rule, summed into
+    load (2, 6); the wet triangles with the water's velocity at their vertices into ws when drag needs
+    them. Returns the wet area and its moments (A, S, rr), exact for the clipped triangles."""
+    verts, faces, fnormals = geom[3], geom[4], geom[5]
+    rho, g = coef[RHO], coef[G]
+    d = coef[C_DAMPING] if terms & DAMPING else 0.0
+    pressure_on = (terms & PRESSURE) != 0
+    lev = vertex_levers(R, verts)
+    nv = verts.shape[0]
+    pv = np.empty((nv, 3))
+    for v in range(nv):
+        for i in range(3):
+            pv[v, i] = x[i] + lev[v, i]
+    hv = np.empty(nv)
+    elevations(sea, ex, pv, nv, hv)
+    for v in range(nv):
+        hv[v] = pv[v, 2] - hv[v]
+    P = np.zeros((3, 3))
+    h = np.empty(3)
+    nf = faces.shape[0]
+    subs = np.empty((2 * nf, 3, 3))
+    normals = np.empty((2 * nf, 3))
+    m = 0
+    for f in range(nf):
+        for v in range(3):
+            for i in range(3):
+                P[v, i] = lev[faces[f, v], i]
+            h[v] = hv[faces[f, v]]
+        c = clip(P, h, subs[m:])
+        nx, ny, nz = world_normal(R, fnormals, f)
+        for k in range(m, m + c):
+            normals[k, 0], normals[k, 1], normals[k, 2] = nx, ny, nz
+        m += c
+    nodes = np.empty((6 * m, 3))
+    for k in range(m):
+        t = subs[k]
+        for q in range(6):
+            b = DUNAVANT4[q]
+            for i in range(3):
+                nodes[6 * k + q, i] = x[i] + b[0] * t[0, i] + b[1] * t[1, i] + b[2] * t[2, i]
+    _, out = _water_at(sea, ex, nodes, 6 * m, rho, g, (terms & TWIST_TERMS) != 0)
+    A = 0.0
+    S = np.zeros(3)
+    rr = np.zeros((3, 3))
+    for k in range(m):
+        t = subs[k]
+        nx, ny, nz = normals[k, 0], normals[k, 1], normals[k, 2]
+        e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+        e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+        area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+        A += area
+        s0, s1, s2 = t[0, 0] + t[1, 0] + t[2, 0], t[0, 1] + t[1, 1] + t[2, 1], t[0, 2] + t[1, 2] + t[2, 2]
+        S[0] += area * s0 / 3.0
+        S[1] += area * s1 / 3.0
+        S[2] += area * s2 / 3.0
+        for i in range(3):
+            for j in range(3):
+                rr[i, j] += area / 12.0 * (t[0, i] * t[0, j] + t[1, i] * t[1, j] + t[2, i] * t[2, j] + (s0, s1, s2)[i] * (s0, s1, s2)[j])
+        for q in range(6):
+            o = out[6 * k + q]
+            nd = nodes[6 * k + q]
+            _node_load(nd[0] - x[0], nd[1] - x[1], nd[2] - x[2], nx, ny, nz, area * DUNAVANT4_WEIGHTS[q], o[0] if pressure_on else 0.0, d,
+                       o[1], o[2], o[3], load)  # fmt: skip
+    if terms & DRAG:  # the wet triangles and the water's velocity at their vertices
+        corners = np.empty((3 * m, 3))
+        for k in range(m):
+            for v in range(3):
+                for i in range(3):
+                    corners[3 * k + v, i] = x[i] + subs[k, v, i]
+        _, flow = _water_at(sea, ex, corners, 3 * m, rho, g, True)
+        tris, tnormals = ws[1], ws[2]
+        for k in range(m):
+            for v in range(3):
+                for i in range(3):
+                    tris[k, v, i] = subs[k, v, i]
+                    tris[k, v, 3 + i] = flow[3 * k + v, 1 + i]
+                tnormals[k, v] = normals[k, v]
+        ws[3][0] = m
+    return A, S, rr
+
+
+@njit(**JIT)
+def wave_pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
+    """pose_loads in waves: every integrand asks the water (kernels/water.py) at the wet nodes. The
+    water's motion makes linear damping affine, -D (v - u_water): its part d u_water is kept in
+    ws[4] for twist_loads and linearised, so the pose loads stay those of the pose terms."""
+    F = np.zeros(3)
+    if terms & GRAVITY:
+        F[2] = -mass * coef[G]
+    T = np.zeros(3)
+    D = np.zeros((6, 6))
+    if not terms & WET_TERMS:
+        return F, T, D, False
+    ex = prepare(sea, t, x)
+    load = np.zeros((2, 6))
+    if kind == 0:
+        A, S, rr = _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load)
+    else:
+        A, S, rr = _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load)
+    F += load[0, :3]
+    T += load[0, 3:]
+    wet = (terms & TWIST_TERMS) != 0 and A > 0.0
+    if wet and terms & DAMPING:
+        D = damping_matrix(coef, A, S, rr)
+    ws[4][:] = load[1]
     return F, T, D, wet
 
 
@@ -82,73 +266,67 @@ def _drag_node(lx, ly, lz, nx, ny, nz, a, vn, half_rc, F, T, D, need_D):
 
 
 @njit(**JIT)
-def drag(kind, x, R, u, w, geom, coef, flags, need_D):
+def drag(kind, x, R, u, w, geom, coef, flags, need_D, ws):
     """Quadratic drag on the wet surface moving into the water: force, torque and (need_D) its
-    Jacobian D = -d(F, T)/d(u, omega). Points: the wet samples (`flags`, set by the pose's wet
-    integrals). Panels: each wet triangle clipped again where v . n changes sign, with Dunavant's
-    degree-4 rule (exact for the cubic torque integrand)."""
-    r, nrm, area, verts, faces, fnormals, moments = geom
+    Jacobian D = -d(F, T)/d(u, omega). Points: the wet samples (`flags`, set by the pose's loads),
+    each with the water's velocity there (ws[0]). Panels: the pose's wet triangles (ws[1:4]), each
+    clipped again where v_rel . n changes sign (v_rel linear across it, the water's velocity too),
+    with Dunavant's degree-4 rule (exact for the cubic torque integrand)."""
+    r, nrm, area = geom[0], geom[1], geom[2]
     half_rc = 0.5 * coef[RHO] * coef[C_DRAG]
     F = np.zeros(3)
     T = np.zeros(3)
     D = np.zeros((6, 6))
     if kind == 0:
+        flow = ws[0]
         for k in range(r.shape[0]):
             if not flags[k]:
                 continue
             a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
-            b0, b1, b2 = nrm[k, 0], nrm[k, 1], nrm[k, 2]
             lx, ly, lz = R[0, 0] * a0 + R[0, 1] * a1 + R[0, 2] * a2, R[1, 0] * a0 + R[1, 1] * a1 + R[1, 2] * a2, R[2, 0] * a0 + R[2, 1] * a1 + R[2, 2] * a2
-            nx, ny, nz = R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2, R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2, R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2
-            vn = (u[0] + w[1] * lz - w[2] * ly) * nx + (u[1] + w[2] * lx - w[0] * lz) * ny + (u[2] + w[0] * ly - w[1] * lx) * nz
+            nx, ny, nz = world_normal(R, nrm, k)
+            vn = ((u[0] + w[1] * lz - w[2] * ly - flow[k, 0]) * nx + (u[1] + w[2] * lx - w[0] * lz - flow[k, 1]) * ny
+                  + (u[2] + w[0] * ly - w[1] * lx - flow[k, 2]) * nz)  # fmt: skip
             if vn > 0.0:
                 _drag_node(lx, ly, lz, nx, ny, nz, area[k], vn, half_rc, F, T, D, need_D)
         return F, T, D
-    lev = vertex_levers(R, verts)
-    P = np.empty((3, 3))
-    h = np.empty(3)
+    tris, tnormals = ws[1], ws[2]
     vn = np.empty(3)
-    wet = np.empty((2, 3, 3))
-    ahead = np.empty((2, 3, 3))
-    for f in range(faces.shape[0]):
+    ahead = np.empty((2, 3, 6))
+    node = np.empty(6)
+    for m in range(ws[3][0]):
+        nx, ny, nz = tnormals[m, 0], tnormals[m, 1], tnormals[m, 2]
+        wet = tris[m]
         for v in range(3):
-            for i in range(3):
-                P[v, i] = lev[faces[f, v], i]
-            h[v] = x[2] + P[v, 2]
-        m = clip(P, h, wet)
-        if m == 0:
-            continue
-        b0, b1, b2 = fnormals[f, 0], fnormals[f, 1], fnormals[f, 2]
-        nx, ny, nz = R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2, R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2, R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2
-        for k in range(m):
-            for v in range(3):
-                lx, ly, lz = wet[k, v, 0], wet[k, v, 1], wet[k, v, 2]
-                vn[v] = -((u[0] + w[1] * lz - w[2] * ly) * nx + (u[1] + w[2] * lx - w[0] * lz) * ny + (u[2] + w[0] * ly - w[1] * lx) * nz)
-            c = clip(wet[k], vn, ahead)
-            for j in range(c):
-                t = ahead[j]
-                e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
-                e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
-                tri_area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
-                for q in range(6):
-                    b = DUNAVANT4[q]
-                    lx = b[0] * t[0, 0] + b[1] * t[1, 0] + b[2] * t[2, 0]
-                    ly = b[0] * t[0, 1] + b[1] * t[1, 1] + b[2] * t[2, 1]
-                    lz = b[0] * t[0, 2] + b[1] * t[1, 2] + b[2] * t[2, 2]
-                    vq = (u[0] + w[1] * lz - w[2] * ly) * nx + (u[1] + w[2] * lx - w[0] * lz) * ny + (u[2] + w[0] * ly - w[1] * lx) * nz
-                    if vq > 0.0:
-                        _drag_node(lx, ly, lz, nx, ny, nz, tri_area * DUNAVANT4_WEIGHTS[q], vq, half_rc, F, T, D, need_D)
+            lx, ly, lz = wet[v, 0], wet[v, 1], wet[v, 2]
+            vn[v] = -((u[0] + w[1] * lz - w[2] * ly - wet[v, 3]) * nx + (u[1] + w[2] * lx - w[0] * lz - wet[v, 4]) * ny
+                      + (u[2] + w[0] * ly - w[1] * lx - wet[v, 5]) * nz)  # fmt: skip
+        c = clip(wet, vn, ahead)
+        for j in range(c):
+            t = ahead[j]
+            e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+            e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+            tri_area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+            for q in range(6):
+                b = DUNAVANT4[q]
+                for i in range(6):
+                    node[i] = b[0] * t[0, i] + b[1] * t[1, i] + b[2] * t[2, i]
+                lx, ly, lz = node[0], node[1], node[2]
+                vq = ((u[0] + w[1] * lz - w[2] * ly - node[3]) * nx + (u[1] + w[2] * lx - w[0] * lz - node[4]) * ny
+                      + (u[2] + w[0] * ly - w[1] * lx - node[5]) * nz)  # fmt: skip
+                if vq > 0.0:
+                    _drag_node(lx, ly, lz, nx, ny, nz, tri_area * DUNAVANT4_WEIGHTS[q], vq, half_rc, F, T, D, need_D)
     return F, T, D
 
 
 @njit(**JIT)
-def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D):
+def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D, ws):
     """Force, torque and (need_D) Jacobian of the nonlinear twist terms the scene uses."""
     F = np.zeros(3)
     T = np.zeros(3)
     D = np.zeros((6, 6))
     if terms & DRAG:
-        Fd, Td, Dd = drag(kind, x, R, u, w, geom, coef, flags, need_D)
+        Fd, Td, Dd = drag(kind, x, R, u, w, geom, coef, flags, need_D, ws)
         F += Fd
         T += Td
         D += Dd
@@ -156,33 +334,37 @@ def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D):
 
 
 @njit(**JIT)
-def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T):
+def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T, ws):
     """Add the force and torque of the twist terms at (u, w) to F, T in place (no allocation in the
-    hot loop): -D (u, w) for linear damping, plus the nonlinear ones."""
+    hot loop): d u_water - D (u, w) for linear damping (ws[4], zero in still water), plus the nonlinear ones."""
     if not wet:
         return
     if terms & DAMPING:
+        affine = ws[4]
         for i in range(3):
-            for j in range(3):
-                F[i] -= D[i, j] * u[j] + D[i, 3 + j] * w[j]
-                T[i] -= D[3 + i, j] * u[j] + D[3 + i, 3 + j] * w[j]
+            F[i] += affine[i] - (D[i, 0] * u[0] + D[i, 1] * u[1] + D[i, 2] * u[2] + D[i, 3] * w[0] + D[i, 4] * w[1] + D[i, 5] * w[2])
+            T[i] += affine[3 + i] - (D[3 + i, 0] * u[0] + D[3 + i, 1] * u[1] + D[3 + i, 2] * u[2] + D[3 + i, 3] * w[0] + D[3 + i, 4] * w[1]
+                                     + D[3 + i, 5] * w[2])  # fmt: skip
     if terms & NONLINEAR:
-        Fn, Tn, _ = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, False)
+        Fn, Tn, _ = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, False, ws)
         for i in range(3):
             F[i] += Fn[i]
             T[i] += Tn[i]
 
 
 @njit(**JIT)
-def linearised(kind, x, R, u, w, geom, coef, terms, F, T, D, wet, flags):
+def linearised(kind, x, R, u, w, geom, coef, terms, F, T, D, wet, flags, ws):
     """(f, D) with loads ~ f - D (u, w) near (u, w), as forces.Model.linearised: the pose loads
-    (F, T) plus each nonlinear term's affine part, and the sum of the Jacobians. Linear only: (F, T), D."""
+    (F, T), damping's part from the water's motion, plus each nonlinear term's affine part, and the
+    sum of the Jacobians. Linear only: those, D."""
     f = np.empty(6)
     f[:3] = F
     f[3:] = T
+    if wet and terms & DAMPING:
+        f += ws[4]
     if not (wet and terms & NONLINEAR):
         return f, D
-    Fn, Tn, Dn = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, True)
+    Fn, Tn, Dn = nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, True, ws)
     for i in range(6):
         acc = 0.0
         for j in range(3):

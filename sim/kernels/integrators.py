@@ -16,6 +16,7 @@ from .forces import NONLINEAR, linearised, pose_loads, twist_loads
 from .layout import COEF_BASE, TERM_PARAMS
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
+from .surface import workspace
 
 
 @njit(**JIT)
@@ -77,13 +78,13 @@ def twist_flow(K, R, u, L, h, mass, inertia):
 
 
 @njit(**JIT)
-def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags):
-    """integrators.twist_flow with nonlinear twist terms: explicit midpoint on the twist terms, pose frozen."""
+def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags, ws):
+    """integrators.twist_flow with nonlinear twist terms or in waves: explicit midpoint on the twist terms, pose frozen."""
     F, T = np.zeros(3), np.zeros(3)
-    twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags, F, T)
+    twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags, F, T, ws)
     u_mid, L_mid = u + 0.5 * h * F / mass, L + 0.5 * h * T
     F[:], T[:] = 0.0, 0.0
-    twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags, F, T)
+    twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags, F, T, ws)
     return u + h * F / mass, L + h * T
 
 
@@ -147,9 +148,9 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
 
 
 @njit(**JIT)
-def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
+def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws):
     """(u, L) after h under the loads linearised about the twist (uc, omega(Lc)), exactly."""
-    f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags)
+    f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags, ws)
     lam, V = np.zeros(6), np.eye(6)
     K = np.zeros((6, 6))
     if wet:
@@ -159,15 +160,15 @@ def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F
 
 
 @njit(**JIT)
-def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags):
+def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws):
     """integrators.linear_flow with nonlinear twist terms (drag): linearised about the end twist of the
     half step, found by fixed-point iteration from the start twist."""
-    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
-    if not wet:
+    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
+    if not (wet and terms & NONLINEAR):
         return un, Ln
     scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / mass)
     for _ in range(RELINEARISE):
-        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
+        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
         dw = angular_velocity(R, L2 - Ln, inertia)
         w2 = angular_velocity(R, L2, inertia)
         change = max(np.abs(u2 - un).max(), scale * np.abs(dw).max())
@@ -201,12 +202,12 @@ def free_rotation(q, L, h, inertia):
 
 
 @njit(**JIT)
-def derivative(kind, y, geom, mass, inertia, terms, coef, flags, acc):
+def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws):
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
     R = quat_to_matrix(q)
     w = angular_velocity(R, L, inertia)
-    F, T, D, wet = pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc)
-    twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T)
+    F, T, D, wet = pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
+    twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T, ws)
     out = np.empty(13)
     out[0:3] = u
     out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
@@ -224,68 +225,76 @@ def _finite(y):
 
 
 @njit(**JIT)
-def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
-    """Advance the state vector (layout.py) by up to n_steps; stop before the first non-finite
-    state. Returns (state, steps done)."""
+def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef, sea):
+    """Advance the state vector (layout.py) at time t0 by up to n_steps in the water `sea`
+    (layout.sea_pack); stop before the first non-finite state. Returns (state, steps done)."""
     y = y0.copy()
     flags = np.zeros(geom[0].shape[0], dtype=np.bool_)  # which samples are wet; the sums start afresh
     acc = np.zeros(34)
+    ws = workspace(geom)
     x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
     h = 0.5 * dt
-    nonlinear = (terms & NONLINEAR) != 0  # e.g. drag: relinearised at every half step
+    nonlinear = (terms & NONLINEAR) != 0  # drag: relinearised at every half step
+    # the water's motion makes damping affine, d u_water - D v (u_water . ws[4]): splitting's twist flow takes the general path
+    waves = sea[0].shape[0] > 0
+    general = nonlinear or waves
+    affine = ws[4]
     R = quat_to_matrix(q)
-    F, T, D, wet = pose_loads(kind, x, R, geom, mass, terms, coef, flags, acc)
+    F, T, D, wet = pose_loads(kind, x, R, t0, geom, mass, terms, coef, sea, flags, acc, ws)
     K = damping_modes(D, R, mass, inertia)
     lam, V = np.zeros(6), np.eye(6)
     if wet and scheme == 2 and not nonlinear:
         lam, V = exact_modes(K, h)
     for step in range(n_steps):
+        t = t0 + step * dt
         if scheme == 0:  # euler: drift, exact rotation, forces at the new pose, kick
             w = angular_velocity(R, L, inertia)
             xn = x + dt * u
             qn = normalized(quat_multiply(rotation_quat(dt * w), q))
             Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
-            twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags, Fc, Tc)  # euler carries no loads over
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
+            twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags, Fc, Tc, ws)  # euler carries no loads over
             un, Ln = u + dt * Fc / mass, L + dt * Tc
         elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
-            if wet and nonlinear:
-                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags)
+            if wet and general:
+                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws)
             elif wet:
                 un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia)
             un, Ln = un + h * F / mass, Ln + h * T
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             un, Ln = un + h * Fc / mass, Ln + h * Tc
-            if wetn and nonlinear:
-                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags)
+            if wetn and general:
+                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws)
             elif wetn:
                 K = damping_modes(Dn, Rn, mass, inertia)
                 un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
             if nonlinear:
-                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags)
+                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
             else:
-                un, Ln = linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet)
+                Fa, Ta = (F + affine[:3], T + affine[3:]) if waves else (F, T)
+                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, geom, mass, terms, coef, flags, acc)
+            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             if nonlinear:
-                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fc, Tc, Dn, wetn, flags)
+                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fc, Tc, Dn, wetn, flags, ws)
             else:
                 if wetn:  # the same modes serve the next step's first half, at this pose
                     K = damping_modes(Dn, Rn, mass, inertia)
                     lam, V = exact_modes(K, h)
-                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fc, Tc, h, mass, inertia, wetn)
+                Fa, Ta = (Fc + affine[:3], Tc + affine[3:]) if waves else (Fc, Tc)
+                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn)
         else:  # rk4 on (x, q, u, L), q renormalised
-            k1 = derivative(kind, y, geom, mass, inertia, terms, coef, flags, acc)
-            k2 = derivative(kind, y + 0.5 * dt * k1, geom, mass, inertia, terms, coef, flags, acc)
-            k3 = derivative(kind, y + 0.5 * dt * k2, geom, mass, inertia, terms, coef, flags, acc)
-            k4 = derivative(kind, y + dt * k3, geom, mass, inertia, terms, coef, flags, acc)
+            k1 = derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
+            k2 = derivative(kind, y + 0.5 * dt * k1, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
+            k3 = derivative(kind, y + 0.5 * dt * k2, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
+            k4 = derivative(kind, y + dt * k3, t + dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
             yn = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             xn, qn, un, Ln = yn[0:3].copy(), normalized(yn[3:7]), yn[7:10].copy(), yn[10:13].copy()
             Rn = quat_to_matrix(qn)
@@ -301,13 +310,13 @@ def advance(y0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef):
 
 
 @njit(**JIT)
-def advance_many(Y, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs):
+def advance_many(Y, t0, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs, sea):
     """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
     Returns the new states and each body's steps done (< n_steps where it diverged)."""
     out = np.empty_like(Y)
     done = np.empty(Y.shape[0], dtype=np.int64)
     for b in range(Y.shape[0]):
-        out[b], done[b] = advance(Y[b], n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b])
+        out[b], done[b] = advance(Y[b], t0, n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b], sea)
     return out, done
 
 
@@ -316,13 +325,17 @@ def warm_up() -> float:
     import time
 
     from ..body import make_box
+    from ..water import StillWater
+    from .layout import sea_pack
     from .simulation import observe
 
     start = time.perf_counter()
     body = make_box((1.0, 1.0, 1.0), 1, 1.0)
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     coef = np.ones(COEF_BASE + len(TERM_PARAMS))
-    advance(y, 1, 0.01, 2, 0, body.packed, body.mass, body.inertia, 15, coef)
+    sea = sea_pack(StillWater(), body)
+    for kind in (0, 1):
+        advance(y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea)
     for kind in (0, 1):
         observe(kind, y[0:3], np.eye(3), y[7:10], y[7:10], body.packed, body.mass, 15, coef, np.empty(body.n_samples, dtype=np.bool_))
     return time.perf_counter() - start

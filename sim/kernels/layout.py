@@ -9,6 +9,10 @@ Sample moments, per sample (sums over the wet set give every still-water integra
 in r): a | a r (3) | a r r^T as xx xy xz yy yz zz (6) | a n (3) | a n r^T row-major (9) | a c (3) |
 a c r^T row-major (9), with c = r x n.
 
+Sea `sea_pack(water, body)`: (components (n, 8): a, omega, k_x, k_y, k, phase, cos and sin of the
+direction; depth (inf: deep); long-crested (one direction for all); the body's radius about its
+centre of mass, m). Still water has no components.
+
 Coefficients `coef`, (COEF_BASE + number of term parameters,) float64: rho, g, then every force
 term's parameters in `forces.TERMS` order. Terms mask `terms`: bit i set when `forces.TERMS[i]` is
 used by the scene. So a new term gets its bit and its slots from its registry line alone.
@@ -51,3 +55,14 @@ def pack(model) -> tuple[int, np.ndarray]:
     for term in model.terms:
         mask |= bit(term.name)
     return mask, coefficients(model.fluid)
+
+
+def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float]:
+    """The water as the kernels take it (kernels/water.py), for this body. expand=False keeps the
+    kernels on the direct sum over components (for benchmarks and checks of the expansion)."""
+    radius = float(max(np.linalg.norm(body.r_body, axis=1).max(), np.linalg.norm(body.mesh_vertices, axis=1).max()))
+    if water.is_still:
+        return np.zeros((0, 8)), float("inf"), True, radius
+    beta = water.direction
+    comps = np.column_stack([water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)])
+    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius

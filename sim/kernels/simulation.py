@@ -1,4 +1,4 @@
-"""Compiled twin of simulation.observe: a frame's diagnostics (the sampled model in one pass)."""
+"""Compiled twin of simulation.observe in still water: a frame's diagnostics (the sampled model in one pass)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 from . import JIT, njit
 from .forces import C_DAMPING, DAMPING, GRAVITY, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
 from .layout import RHO, G
-from .surface import clip, vertex_levers
+from .surface import clip, vertex_levers, workspace
 
 
 @njit(**JIT)
@@ -22,9 +22,10 @@ def observe(kind, x, R, u, w, geom, mass, terms, coef, wet):
 @njit(**JIT)
 def observe_panels(x, R, u, w, geom, mass, terms, coef, wet):
     r, verts, faces = geom[0], geom[3], geom[4]
-    flags, acc = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34)
-    F, T, D, is_wet = pose_loads(1, x, R, geom, mass, terms, coef, flags, acc)
-    twist_loads(1, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T)
+    flags, acc, ws = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
+    still = (np.zeros((0, 8)), np.inf, True, 0.0)
+    F, T, D, is_wet = pose_loads(1, x, R, 0.0, geom, mass, terms, coef, still, flags, acc, ws)
+    twist_loads(1, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
     for k in range(r.shape[0]):
         wet[k] = x[2] + R[2, 0] * r[k, 0] + R[2, 1] * r[k, 1] + R[2, 2] * r[k, 2] < 0.0
     lev = vertex_levers(R, verts)
@@ -98,7 +99,7 @@ def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
         e_hyd = 0.0
     F, T = np.array([F0, F1, F2]), np.array([T0, T1, T2])
     if terms & NONLINEAR:  # their own pass over the wet samples just marked
-        Fn, Tn, _ = nonlinear_loads(0, x, R, u, w, geom, coef, terms, wet, False)
+        Fn, Tn, _ = nonlinear_loads(0, x, R, u, w, geom, coef, terms, wet, False, workspace(geom))  # still water: no flow
         F += Fn
         T += Tn
     return F, T, e_hyd, a_sub, v_sub

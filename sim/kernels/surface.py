@@ -50,20 +50,15 @@ def crossing(a, b, ha, hb):
 
 
 @njit(**JIT)
-def _put(out, k, a, b, c):
-    for i in range(3):
-        out[k, 0, i], out[k, 1, i], out[k, 2, i] = a[i], b[i], c[i]
-
-
-@njit(**JIT)
 def clip(p, h, out):
-    """Write the part of triangle p (3, 3) where the linear function with vertex values h is
-    negative into out[0:count] (triangles, same winding); return count (0, 1 or 2)."""
+    """Write the part of triangle p (3, c) where the linear function with vertex values h is
+    negative into out[0:count] (triangles, same winding); return count (0, 1 or 2). Columns past
+    the position (c > 3: e.g. the water's velocity at the vertices) are interpolated alike."""
     below = (h[0] < 0.0) + (h[1] < 0.0) + (h[2] < 0.0)
     if below == 0:
         return 0
     if below == 3:
-        _put(out, 0, p[0], p[1], p[2])
+        out[0] = p
         return 1
     first = 0
     for i in range(3):  # roll so the odd vertex (alone below, or alone above) comes first
@@ -71,14 +66,17 @@ def clip(p, h, out):
             first = i
             break
     i0, i1, i2 = first, (first + 1) % 3, (first + 2) % 3
-    e01 = crossing(p[i0], p[i1], h[i0], h[i1])
-    e20 = crossing(p[i2], p[i0], h[i2], h[i0])
-    if below == 1:
-        _put(out, 0, p[i0], e01, e20)
-        return 1
-    _put(out, 0, e01, p[i1], p[i2])  # quadrilateral e01 -> p1 -> p2 -> e20
-    _put(out, 1, e01, p[i2], e20)
-    return 2
+    t01 = h[i0] / (h[i0] - h[i1])
+    t20 = h[i2] / (h[i2] - h[i0])
+    for c in range(p.shape[1]):
+        e01 = p[i0, c] + (p[i1, c] - p[i0, c]) * t01
+        e20 = p[i2, c] + (p[i0, c] - p[i2, c]) * t20
+        if below == 1:
+            out[0, 0, c], out[0, 1, c], out[0, 2, c] = p[i0, c], e01, e20
+        else:  # quadrilateral e01 -> p1 -> p2 -> e20
+            out[0, 0, c], out[0, 1, c], out[0, 2, c] = e01, p[i1, c], p[i2, c]
+            out[1, 0, c], out[1, 1, c], out[1, 2, c] = e01, p[i2, c], e20
+    return 2 if below == 2 else 1
 
 
 @njit(inline="always", **JIT)
@@ -164,9 +162,46 @@ def wet_panels(x, R, verts, faces, fnormals, need_rr):
     return zn, zt, A, S, rr
 
 
+@njit(inline="always", **JIT)
+def world_normal(R, fnormals, f):
+    b0, b1, b2 = fnormals[f, 0], fnormals[f, 1], fnormals[f, 2]
+    return (R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2, R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2, R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2)
+
+
+@njit(**JIT)
+def wet_triangles(x, R, verts, faces, fnormals, ws):
+    """Store the mesh's triangles clipped at the still water line in the workspace (layout.workspace),
+    with the water at rest at their vertices, for the terms that integrate over them (drag)."""
+    tris, tnormals, count = ws[1], ws[2], ws[3]
+    lev = vertex_levers(R, verts)
+    P = np.zeros((3, 6))
+    h = np.empty(3)
+    m = 0
+    for f in range(faces.shape[0]):
+        for v in range(3):
+            for i in range(3):
+                P[v, i] = lev[faces[f, v], i]
+            h[v] = x[2] + P[v, 2]
+        c = clip(P, h, tris[m:])
+        nx, ny, nz = world_normal(R, fnormals, f)
+        for k in range(m, m + c):
+            tnormals[k, 0], tnormals[k, 1], tnormals[k, 2] = nx, ny, nz
+        m += c
+    count[0] = m
+
+
 @njit(**JIT)
 def wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, need_rr, flags, acc):
     """(zn, zt, A, S, rr) of the model `kind` (layout.MODELS); S and rr only when need_rr."""
     if kind == 0:
         return wet_points(x, R, r, need_rr, moments, flags, acc)
     return wet_panels(x, R, verts, faces, fnormals, need_rr)
+
+
+@njit(**JIT)
+def workspace(geom):
+    """Scratch a pose's loads leave for the twist terms of the same pose: the water's velocity at
+    each sample (n, 3); the wet triangles as vertex levers and water velocities (2 f, 3, 6), their
+    normals (2 f, 3), and how many there are (1,); damping's part from the water's motion (6,)."""
+    n, f = geom[0].shape[0], geom[4].shape[0]
+    return np.zeros((n, 3)), np.zeros((2 * f, 3, 6)), np.zeros((2 * f, 3)), np.zeros(1, dtype=np.int64), np.zeros(6)

@@ -65,8 +65,8 @@ class Frame:
 
 
 def observe(model: Model, state: State, compiled: bool = False) -> Frame:
-    """All diagnostics of a state, from one wet surface (in still water with compiled=True, from the
-    compiled twin: the same numbers to round-off)."""
+    """All diagnostics of a state, from one wet surface (with compiled=True, from the compiled twin:
+    the same numbers to round-off, or to the bound of its sea expansion)."""
     body, water = model.body, model.water
     R = state.R_world_body
     omega = angular_velocity(body, R, state.L_world)
@@ -74,14 +74,14 @@ def observe(model: Model, state: State, compiled: bool = False) -> Frame:
     E_grav = body.mass * water.g * float(state.x_world[2])
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)))  # fmt: skip
-    if compiled and water.is_still:
-        from .kernels import MODELS, pack
+    if compiled:
+        from .kernels import MODELS, pack, sea_pack
         from .kernels.simulation import observe as observe_kernel
 
         wet = np.empty(body.n_samples, dtype=bool)
         terms, coef = pack(model)
-        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.u_world, omega, body.packed, body.mass,
-                                                   terms, coef, wet)  # fmt: skip
+        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.t, state.u_world, omega, body.packed,
+                                                   body.mass, terms, coef, sea_pack(water, body), wet)  # fmt: skip
         return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
                      wet_index=np.flatnonzero(wet))  # fmt: skip
     wet = model.wetted(state.x_world, R, state.t)

@@ -167,23 +167,29 @@ def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
         close(y, ref, np.abs(ref).max(), 1e-10 if water == "jonswap" else 1e-12)
 
 
+@pytest.mark.parametrize("water", WATERS)
 @pytest.mark.parametrize("body_name", BODIES)
 @pytest.mark.parametrize("forces", ["points", "panels"])
-def test_stage_frame_with_every_term(body_name, forces):
-    model = model_of(body_name, forces)
+def test_stage_frame_with_every_term(body_name, forces, water):
+    model = model_of(body_name, forces, water=water)
     terms, coef = pack(model)
+    sea = sea_pack(model.water, model.body)
+    t = 0.0 if water == "still" else T_WAVES
+    tol = 1e-10 if water == "jonswap" else 1e-12
     for (q, z), twist in zip(POSES, TWISTS):
         R = Rotation.from_quat(q, scalar_first=True).as_matrix()
         x = np.array([0.0, 0.0, z])
         wet = np.empty(model.body.n_samples, dtype=bool)
-        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[forces], x, R, twist[:3], twist[3:], model.body.packed, model.body.mass, terms, coef, wet)
-        ref = model.wetted(x, R)
-        F_ref, T_ref = model.loads(ref, twist[:3], twist[3:])
-        close(F, F_ref, model.body.mass * 9.81)
-        close(T, T_ref, model.body.mass * 9.81)
-        assert e_hyd == pytest.approx(model.hydrostatic_energy(ref), rel=1e-12, abs=1e-9)
-        assert (a_sub, v_sub) == pytest.approx((ref.submerged_area, ref.submerged_volume), rel=1e-12, abs=1e-12)
-        np.testing.assert_array_equal(np.flatnonzero(wet), np.flatnonzero(x[2] + model.body.r_body @ R[2] < 0))
+        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[forces], x, R, t, twist[:3], twist[3:], model.body.packed, model.body.mass, terms, coef,
+                                                   sea, wet)  # fmt: skip
+        ref = model.wetted(x, R, t)
+        F_ref, T_ref = model.loads(ref, twist[:3], twist[3:], t)
+        close(F, F_ref, model.body.mass * 9.81, tol)
+        close(T, T_ref, model.body.mass * 9.81, tol)
+        assert e_hyd == pytest.approx(model.hydrostatic_energy(ref), rel=tol, abs=1e-9)
+        assert (a_sub, v_sub) == pytest.approx((ref.submerged_area, ref.submerged_volume), rel=tol, abs=1e-12)
+        heights = model.water.height_above_surface(x + model.body.r_body @ R.T, t)
+        np.testing.assert_array_equal(np.flatnonzero(wet), np.flatnonzero(heights < 0))
 
 
 @pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4"])

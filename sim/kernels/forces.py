@@ -82,6 +82,14 @@ def _node_load(lx, ly, lz, nx, ny, nz, a, p, d, ux, uy, uz, load):
         load[row, 5] += lx * fy - ly * fx
 
 
+@njit(inline="always", **JIT)
+def _diagnostics(diag, a, z, nz):
+    """Add a wet node's share of the frame's integrals: area, volume (z nu_z, divergence theorem) and z^2 nu_z."""
+    diag[0] += a
+    diag[1] += a * z * nz
+    diag[2] += a * z * z * nz
+
+
 @njit(**JIT)
 def _water_at(sea, ex, points, m, rho, g, need_flow):
     """(eta (m,), [pressure, flow] (m, 4)) at the first m points, each batch in one call."""
@@ -125,11 +133,13 @@ def _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load):
         acc[:] = 0.0
     out = np.empty((m, 4))
     fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (terms & TWIST_TERMS) != 0, out)
-    flow = ws[0]
+    flow, diag = ws[0], ws[5]
+    diag[:] = 0.0
     for i in range(m):
         k = wet[i]
         flow[k, 0], flow[k, 1], flow[k, 2] = out[i, 1], out[i, 2], out[i, 3]
         nx, ny, nz = world_normal(R, nrm, k)
+        _diagnostics(diag, area[k], pts[i, 2], nz)
         _node_load(lev[k, 0], lev[k, 1], lev[k, 2], nx, ny, nz, area[k], out[i, 0] if pressure_on else 0.0, d, out[i, 1], out[i, 2], out[i, 3], load)
     Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
     return acc[0], mv(R, acc[1:4].copy()), rotate_tensor(R, Q)
@@ -182,6 +192,7 @@ def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
     A = 0.0
     S = np.zeros(3)
     rr = np.zeros((3, 3))
+    ws[5][:] = 0.0
     for k in range(m):
         t = subs[k]
         nx, ny, nz = normals[k, 0], normals[k, 1], normals[k, 2]
@@ -199,6 +210,7 @@ def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
         for q in range(6):
             o = out[6 * k + q]
             nd = nodes[6 * k + q]
+            _diagnostics(ws[5], area * DUNAVANT4_WEIGHTS[q], nd[2], nz)
             _node_load(nd[0] - x[0], nd[1] - x[1], nd[2] - x[2], nx, ny, nz, area * DUNAVANT4_WEIGHTS[q], o[0] if pressure_on else 0.0, d,
                        o[1], o[2], o[3], load)  # fmt: skip
     if terms & DRAG:  # the wet triangles and the water's velocity at their vertices

@@ -337,5 +337,5 @@ def warm_up() -> float:
     for kind in (0, 1):
         advance(y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea)
     for kind in (0, 1):
-        observe(kind, y[0:3], np.eye(3), y[7:10], y[7:10], body.packed, body.mass, 15, coef, np.empty(body.n_samples, dtype=np.bool_))
+        observe(kind, y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], body.packed, body.mass, 15, coef, sea, np.empty(body.n_samples, dtype=np.bool_))
     return time.perf_counter() - start

@@ -20,6 +20,8 @@ used by the scene. So a new term gets its bit and its slots from its registry li
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ..forces import TERMS
@@ -57,6 +59,7 @@ def pack(model) -> tuple[int, np.ndarray]:
     return mask, coefficients(model.fluid)
 
 
+@lru_cache(maxsize=8)  # asked at every frame; water and body are immutable
 def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float]:
     """The water as the kernels take it (kernels/water.py), for this body. expand=False keeps the
     kernels on the direct sum over components (for benchmarks and checks of the expansion)."""

@@ -1,4 +1,4 @@
-"""Compiled twin of simulation.observe in still water: a frame's diagnostics (the sampled model in one pass)."""
+"""Compiled twin of simulation.observe: a frame's diagnostics (in still water, the sampled model in one pass)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,15 @@ from . import JIT, njit
 from .forces import C_DAMPING, DAMPING, GRAVITY, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
 from .layout import RHO, G
 from .surface import clip, vertex_levers, workspace
+from .water import elevations, prepare
 
 
 @njit(**JIT)
-def observe(kind, x, R, u, w, geom, mass, terms, coef, wet):
-    """(force, torque, hydrostatic energy, wet area, submerged volume) at a state, every used term
-    included; marks the wet samples in `wet` (for either model: the viewer colours samples)."""
+def observe(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
+    """(force, torque, hydrostatic energy, wet area, submerged volume) at a state and time, every
+    used term included; marks the wet samples in `wet` (for either model: the viewer colours samples)."""
+    if sea[0].shape[0] > 0:
+        return observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet)
     if kind == 0:
         return observe_points(x, R, u, w, geom, mass, terms, coef, wet)
     return observe_panels(x, R, u, w, geom, mass, terms, coef, wet)
@@ -102,4 +105,25 @@ def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
         Fn, Tn, _ = nonlinear_loads(0, x, R, u, w, geom, coef, terms, wet, False, workspace(geom))  # still water: no flow
         F += Fn
         T += Tn
+    return F, T, e_hyd, a_sub, v_sub
+
+
+@njit(**JIT)
+def observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
+    """observe in waves: the loads as the integrators see them, the integrals over the model's wet
+    nodes, and the samples under the wave surface."""
+    r = geom[0]
+    flags, acc, ws = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
+    F, T, D, is_wet = pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)  # leaves the nodes' integrals in ws[5]
+    twist_loads(kind, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
+    a_sub, v_sub, z2n = ws[5][0], ws[5][1], ws[5][2]
+    pts = np.empty((r.shape[0], 3))
+    for k in range(r.shape[0]):
+        for i in range(3):
+            pts[k, i] = x[i] + R[i, 0] * r[k, 0] + R[i, 1] * r[k, 1] + R[i, 2] * r[k, 2]
+    eta = np.empty(r.shape[0])
+    elevations(sea, prepare(sea, t, x), pts, r.shape[0], eta)
+    for k in range(r.shape[0]):
+        wet[k] = pts[k, 2] - eta[k] < 0.0
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
     return F, T, e_hyd, a_sub, v_sub

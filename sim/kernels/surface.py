@@ -202,6 +202,7 @@ def wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, need_rr, flags
 def workspace(geom):
     """Scratch a pose's loads leave for the twist terms of the same pose: the water's velocity at
     each sample (n, 3); the wet triangles as vertex levers and water velocities (2 f, 3, 6), their
-    normals (2 f, 3), and how many there are (1,); damping's part from the water's motion (6,)."""
+    normals (2 f, 3), and how many there are (1,); damping's part from the water's motion (6,); in
+    waves, the frame's integrals over the wet nodes: area, volume (z nu_z) and z^2 nu_z (3,)."""
     n, f = geom[0].shape[0], geom[4].shape[0]
-    return np.zeros((n, 3)), np.zeros((2 * f, 3, 6)), np.zeros((2 * f, 3)), np.zeros(1, dtype=np.int64), np.zeros(6)
+    return np.zeros((n, 3)), np.zeros((2 * f, 3, 6)), np.zeros((2 * f, 3)), np.zeros(1, dtype=np.int64), np.zeros(6), np.zeros(3)

@@ -307,7 +307,7 @@ class SimLoop:
             self._history.popleft()
 
     def _step_within_budget(self, n: int) -> None:
-        """Up to n steps in chunks of about a quarter of the tick's budget; stop once the budget is spent.
+        """Up to n steps in chunks of about half the tick's budget; stop once the budget is spent.
 
         The chunk size comes from the measured cost per step, which a new integrator or body makes
         wrong: `_cost_unknown` starts those with one-step chunks, so a slow scheme cannot stall a tick.
@@ -315,7 +315,7 @@ class SimLoop:
         started = time.perf_counter()
         done = 0
         while done < n and not self._paused:
-            k = min(n - done, max(1, int(0.25 * self._budget / self._step_cost)))
+            k = min(n - done, max(1, int(0.5 * self._budget / self._step_cost)))
             chunk_started = time.perf_counter()
             self._step(k)
             done += k

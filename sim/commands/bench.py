@@ -32,7 +32,8 @@ class BenchArgs:
     ensemble: int = 100
     """Bodies in the ensemble row (0 to skip)."""
     waves: bool = True
-    """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea) on both models."""
+    """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea with and without drag) on
+    both models, against the direct sum over components and the numpy reference."""
 
 
 def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
@@ -115,26 +116,38 @@ def bench(args: BenchArgs) -> int:
             print(f"| {name} | {rate} |")
     if wave_rows:
         print()
-        print("| sea (implicit, N = 10) | model | us/step | vs still water | path |")
-        print("|---|---|---|---|---|")
+        print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
+        print()
+        print("| sea | model | us/step | vs still water | direct sum us/step | direct / this | numpy us/step |")
+        print("|---|---|---|---|---|---|---|")
         for r in wave_rows:
             print("| " + " | ".join(r) + " |")
     return 0
 
 
 SEAS = (("still", {}), ("regular (H 0.5 m, T 6 s)", {"waves__kind": "regular", "waves__height": 0.5, "waves__period": 6.0}),
-        ("JONSWAP, 64 components", {"waves__kind": "jonswap", "waves__hs": 3.0, "waves__tp": 9.0, "waves__components": 64}))  # fmt: skip
+        ("JONSWAP, 64 components", {"waves__kind": "jonswap", "waves__hs": 3.0, "waves__tp": 9.0, "waves__components": 64}),
+        ("JONSWAP, 64 components, C_d 1 (storm)", {"waves__kind": "jonswap", "waves__hs": 3.0, "waves__tp": 9.0, "waves__components": 64,
+                                                   "fluid__drag_coefficient": 1.0}))  # fmt: skip
 
 
 def _wave_rows(base, args: BenchArgs, bar) -> list[tuple[str, ...]]:
-    """Cost per step of each sea state on both models, and its ratio to still water in the same run."""
+    """Cost per step of each sea state on both models (N = 10 samples a side), its ratio to still water,
+    and to the direct sum over components and the numpy reference, all in the same run."""
     rows = []
     for forces in ("points", "panels"):
         still = None
         for label, changes in SEAS:
-            sim = Simulation(with_overrides(base, fluid__forces=forces, step__integrator="implicit", **changes))
-            cost = _median_step_seconds(sim, max(1, args.repeats // 2), args.budget)
+            scene = with_overrides(base, fluid__forces=forces, step__integrator="implicit", body__points_per_edge=10, **changes)
+            sim = Simulation(scene)
+            direct = Simulation(scene)
+            direct.expand_waves = False
+            ref = Simulation(scene, backend="numpy")
+            cost = _median_step_seconds(sim, args.repeats, args.budget)
+            cost_direct = _median_step_seconds(direct, args.repeats, args.budget)
+            cost_ref = _median_step_seconds(ref, max(1, args.repeats // 2), args.budget)
             still = still or cost
-            rows.append((label, forces, f"{cost * 1e6:.1f}", f"{cost / still:.1f}x", "compiled" if sim.compiled else "numpy (direct sum)"))
+            rows.append((label, forces, f"{cost * 1e6:.1f}", f"{cost / still:.1f}x", f"{cost_direct * 1e6:.1f}", f"{cost_direct / cost:.1f}x",
+                         f"{cost_ref * 1e6:.0f}"))  # fmt: skip
         bar.update()
     return rows

@@ -109,12 +109,10 @@ def _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load):
     n = r.shape[0]
     d = coef[C_DAMPING] if terms & DAMPING else 0.0
     pressure_on = (terms & PRESSURE) != 0
-    lev = np.empty((n, 3))
     pts = np.empty((n, 3))
     for k in range(n):
         for i in range(3):
-            lev[k, i] = R[i, 0] * r[k, 0] + R[i, 1] * r[k, 1] + R[i, 2] * r[k, 2]
-            pts[k, i] = x[i] + lev[k, i]
+            pts[k, i] = x[i] + R[i, 0] * r[k, 0] + R[i, 1] * r[k, 1] + R[i, 2] * r[k, 2]
     eta = np.empty(n)
     elevations(sea, ex, pts, n, eta)
     wet = np.empty(n, dtype=np.int64)
@@ -127,20 +125,35 @@ def _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load):
             for j in range(10):  # a, a r, a r r^T: the damping matrix's moments
                 acc[j] += sign * moments[k, j]
         if w:
-            pts[m], eta[m], wet[m] = pts[k], eta[k], k  # gathered in place: m <= k
+            pts[m, 0], pts[m, 1], pts[m, 2], eta[m], wet[m] = pts[k, 0], pts[k, 1], pts[k, 2], eta[k], k  # gathered in place: m <= k
             m += 1
     if m == 0:  # all dry: restart the running sums (no round-off residue says "wet")
         acc[:] = 0.0
     out = np.empty((m, 4))
     fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (terms & TWIST_TERMS) != 0, out)
-    flow, diag = ws[0], ws[5]
-    diag[:] = 0.0
+    flow = ws[0]
+    fp0 = fp1 = fp2 = tp0 = tp1 = tp2 = fd0 = fd1 = fd2 = td0 = td1 = td2 = a_sub = v_sub = z2n = 0.0  # pressure, damping's flow part, frame integrals
     for i in range(m):
         k = wet[i]
-        flow[k, 0], flow[k, 1], flow[k, 2] = out[i, 1], out[i, 2], out[i, 3]
+        p, ux, uy, uz = out[i, 0] if pressure_on else 0.0, out[i, 1], out[i, 2], out[i, 3]
+        flow[k, 0], flow[k, 1], flow[k, 2] = ux, uy, uz
         nx, ny, nz = world_normal(R, nrm, k)
-        _diagnostics(diag, area[k], pts[i, 2], nz)
-        _node_load(lev[k, 0], lev[k, 1], lev[k, 2], nx, ny, nz, area[k], out[i, 0] if pressure_on else 0.0, d, out[i, 1], out[i, 2], out[i, 3], load)
+        lx, ly, lz = pts[i, 0] - x[0], pts[i, 1] - x[1], pts[i, 2] - x[2]
+        a = area[k]
+        fx, fy, fz = -p * a * nx, -p * a * ny, -p * a * nz
+        fp0, fp1, fp2 = fp0 + fx, fp1 + fy, fp2 + fz
+        tp0, tp1, tp2 = tp0 + ly * fz - lz * fy, tp1 + lz * fx - lx * fz, tp2 + lx * fy - ly * fx
+        if d != 0.0:
+            fx, fy, fz = d * a * ux, d * a * uy, d * a * uz
+            fd0, fd1, fd2 = fd0 + fx, fd1 + fy, fd2 + fz
+            td0, td1, td2 = td0 + ly * fz - lz * fy, td1 + lz * fx - lx * fz, td2 + lx * fy - ly * fx
+        z = pts[i, 2]
+        a_sub += a
+        v_sub += a * z * nz
+        z2n += a * z * z * nz
+    load[0, 0], load[0, 1], load[0, 2], load[0, 3], load[0, 4], load[0, 5] = fp0, fp1, fp2, tp0, tp1, tp2
+    load[1, 0], load[1, 1], load[1, 2], load[1, 3], load[1, 4], load[1, 5] = fd0, fd1, fd2, td0, td1, td2
+    ws[5][0], ws[5][1], ws[5][2] = a_sub, v_sub, z2n
     Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
     return acc[0], mv(R, acc[1:4].copy()), rotate_tensor(R, Q)
 

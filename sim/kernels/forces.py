@@ -41,7 +41,7 @@ def damping_matrix(coef, A, S, rr):
     return D
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
     """Gravity and pressure at a pose and time, the linear damping matrix D there, and whether any
     twist term has a wet surface to act on. Leaves in the workspace `ws` what the twist terms of this
@@ -358,7 +358,7 @@ def nonlinear_loads(kind, x, R, u, w, geom, coef, terms, flags, need_D, ws):
     return F, T, D
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T, ws):
     """Add the force and torque of the twist terms at (u, w) to F, T in place (no allocation in the
     hot loop): d u_water - D (u, w) for linear damping (ws[4], zero in still water), plus the nonlinear ones."""

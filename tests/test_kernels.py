@@ -250,7 +250,7 @@ def test_local_expansion_of_the_sea_matches_the_direct_sum():
         assert (ex[0] >= 0) == expand  # the expansion's degree, -1: direct sum
         eta, out = np.empty(len(pts)), np.empty((len(pts), 4))
         elevations(sea, ex, pts, len(pts), eta)
-        fields(sea, ex, pts, eta, len(pts), 1000.0, 9.81, True, out)
+        fields(sea, ex, pts, eta, len(pts), 1000.0, 9.81, True, out, True)
         results.append((eta, out))
     (eta, out), (eta_d, out_d) = results
     np.testing.assert_allclose(eta_d, water.elevation(pts[:, :2], T_WAVES), rtol=0, atol=1e-12)  # the direct sum is the reference's

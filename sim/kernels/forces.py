@@ -92,12 +92,10 @@ def _diagnostics(diag, a, z, nz):
 
 @njit(**JIT)
 def _water_at(sea, ex, points, m, rho, g, need_flow):
-    """(eta (m,), [pressure, flow] (m, 4)) at the first m points, each batch in one call."""
-    eta = np.empty(m)
-    elevations(sea, ex, points, m, eta)
+    """[pressure, flow] (m, 4) at the first m points, in one call."""
     out = np.empty((m, 4))
-    fields(sea, ex, points, eta, m, rho, g, need_flow, out)
-    return eta, out
+    fields(sea, ex, points, np.empty(m), m, rho, g, need_flow, out, False)
+    return out
 
 
 @njit(**JIT)
@@ -130,7 +128,7 @@ def _wave_points(x, R, sea, ex, geom, terms, coef, flags, acc, ws, load):
     if m == 0:  # all dry: restart the running sums (no round-off residue says "wet")
         acc[:] = 0.0
     out = np.empty((m, 4))
-    fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (terms & TWIST_TERMS) != 0, out)
+    fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (terms & TWIST_TERMS) != 0, out, True)
     flow = ws[0]
     fp0 = fp1 = fp2 = tp0 = tp1 = tp2 = fd0 = fd1 = fd2 = td0 = td1 = td2 = a_sub = v_sub = z2n = 0.0  # pressure, damping's flow part, frame integrals
     for i in range(m):
@@ -201,7 +199,7 @@ def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
             b = DUNAVANT4[q]
             for i in range(3):
                 nodes[6 * k + q, i] = x[i] + b[0] * t[0, i] + b[1] * t[1, i] + b[2] * t[2, i]
-    _, out = _water_at(sea, ex, nodes, 6 * m, rho, g, (terms & TWIST_TERMS) != 0)
+    out = _water_at(sea, ex, nodes, 6 * m, rho, g, (terms & TWIST_TERMS) != 0)
     A = 0.0
     S = np.zeros(3)
     rr = np.zeros((3, 3))
@@ -232,7 +230,7 @@ def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
             for v in range(3):
                 for i in range(3):
                     corners[3 * k + v, i] = x[i] + subs[k, v, i]
-        _, flow = _water_at(sea, ex, corners, 3 * m, rho, g, True)
+        flow = _water_at(sea, ex, corners, 3 * m, rho, g, True)
         tris, tnormals = ws[1], ws[2]
         for k in range(m):
             for v in range(3):

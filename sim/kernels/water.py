@@ -121,29 +121,42 @@ def elevations(sea, ex, points, m, out):
 
 
 @njit(**JIT)
-def fields(sea, ex, points, eta, m, rho, g, need_flow, out):
-    """out[i] = (pressure, flow x, y, z) at points[i] under the elevation eta[i] there, i < m:
-    water.Waves.field, with Wheeler's stretching."""
+def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
+    """out[i] = (pressure, flow x, y, z) at points[i], i < m: water.Waves.field, with Wheeler's
+    stretching. known: eta[i] holds the elevation there; else it is computed here and stored (on
+    the direct sum sharing each component's cosine between elevation and pressure)."""
     comps, depth = sea[0], sea[1]
-    P, offset, cx, cy, z0, k_scale, Mp, Mv = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[7], ex[8]
+    P, offset, cx, cy, z0, k_scale, Me, Mp, Mv = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[6], ex[7], ex[8]
     deep = math.isinf(depth)
     cb, sb = comps[0, COS], comps[0, SIN]
+    n = comps.shape[0]
+    cosines = np.empty(n if P < 0 else 0)
     for i in range(m):
         X, Y, Z = points[i, 0], points[i, 1], points[i, 2]
+        s = cb * (X - cx) + sb * (Y - cy)
+        if not known:
+            if P >= 0:
+                eta[i] = _horner(Me, complex(0.0, k_scale * s)).real
+            else:
+                e = 0.0
+                for j in range(n):
+                    cosines[j] = math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
+                    e += comps[j, A] * cosines[j]
+                eta[i] = e
         zs = Z - eta[i] if deep else (Z - eta[i]) * depth / (depth + eta[i])
         zc = min(zs, 0.0)
         p = ux = uy = uz = 0.0
         if P >= 0:
-            w = complex(k_scale * (zc - z0), k_scale * (cb * (X - cx) + sb * (Y - cy)))
+            w = complex(k_scale * (zc - z0), k_scale * s)
             p = _horner(Mp, w).real
             if need_flow:
                 v = _horner(Mv, w)
                 ux, uy, uz = v.real * cb, v.real * sb, v.imag
         else:
-            for j in range(comps.shape[0]):
+            for j in range(n):
                 a, k = comps[j, A], comps[j, K]
                 psi = comps[j, KX] * X + comps[j, KY] * Y + offset[j]
-                c = math.cos(psi)
+                c = math.cos(psi) if known else cosines[j]
                 e = math.exp(k * zc)
                 if deep:
                     dp = dh = dv = e

@@ -64,9 +64,9 @@ class Frame:
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta]  # fmt: skip
 
 
-def observe(model: Model, state: State, compiled: bool = False) -> Frame:
+def observe(model: Model, state: State, compiled: bool = False, expand: bool = True) -> Frame:
     """All diagnostics of a state, from one wet surface (with compiled=True, from the compiled twin:
-    the same numbers to round-off, or to the bound of its sea expansion)."""
+    the same numbers to round-off, or to the bound of its sea expansion; expand=False: the direct sum)."""
     body, water = model.body, model.water
     R = state.R_world_body
     omega = angular_velocity(body, R, state.L_world)
@@ -81,7 +81,7 @@ def observe(model: Model, state: State, compiled: bool = False) -> Frame:
         wet = np.empty(body.n_samples, dtype=bool)
         terms, coef = pack(model)
         F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.t, state.u_world, omega, body.packed,
-                                                   body.mass, terms, coef, sea_pack(water, body), wet)  # fmt: skip
+                                                   body.mass, terms, coef, sea_pack(water, body, expand), wet)  # fmt: skip
         return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
                      wet_index=np.flatnonzero(wet))  # fmt: skip
     wet = model.wetted(state.x_world, R, state.t)
@@ -171,7 +171,7 @@ class Simulation:
         """Diagnostics of the current state (computed once per state and model)."""
         key = (self.state, self.model)
         if self._frame_key != key:
-            self._frame, self._frame_key = observe(self.model, self.state, self.backend == "numba"), key
+            self._frame, self._frame_key = observe(self.model, self.state, self.backend == "numba", self.expand_waves), key
         return self._frame
 
     @property
@@ -221,8 +221,8 @@ class Simulation:
 
         body = self.body
         terms, coef = kernels.pack(self.model)
-        if self._sea[0] is not self.model or self._sea[1][2] != (self._sea[1][2] and self.expand_waves):
-            self._sea = (self.model, kernels.sea_pack(self.model.water, body, self.expand_waves))
+        if self._sea[0] != (self.model, self.expand_waves):
+            self._sea = ((self.model, self.expand_waves), kernels.sea_pack(self.model.water, body, self.expand_waves))
         y, done = kernels.advance(self.state.as_vector(), self.state.t, n, self.dt, kernels.SCHEMES[self.integrator.name],
                                   kernels.MODELS[self.params.forces], body.packed, body.mass, body.inertia, terms, coef, self._sea[1])  # fmt: skip
         state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])

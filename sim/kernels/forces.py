@@ -45,7 +45,9 @@ def damping_matrix(coef, A, S, rr):
 def pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
     """Gravity and pressure at a pose and time, the linear damping matrix D there, and whether any
     twist term has a wet surface to act on. Leaves in the workspace `ws` what the twist terms of this
-    pose need (surface.workspace): the wet triangles (for drag) and, in waves, the water's velocity."""
+    pose need (surface.workspace): the wet triangles (for drag) and, in waves, the water's velocity.
+    flags and acc (the sampled model's running wet sums) belong to one sea: waves keep only the
+    first 10 sums, so start them afresh (as advance and observe do) when the water changes."""
     if sea[0].shape[0] > 0:
         return wave_pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
     r, nrm, area, verts, faces, fnormals, moments = geom
@@ -237,7 +239,7 @@ def _wave_panels(x, R, sea, ex, geom, terms, coef, ws, load):
                 for i in range(3):
                     tris[k, v, i] = subs[k, v, i]
                     tris[k, v, 3 + i] = flow[3 * k + v, 1 + i]
-                tnormals[k, v] = normals[k, v]
+            tnormals[k] = normals[k]
         ws[3][0] = m
     return A, S, rr
 

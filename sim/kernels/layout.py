@@ -59,11 +59,15 @@ def pack(model) -> tuple[int, np.ndarray]:
     return mask, coefficients(model.fluid)
 
 
-@lru_cache(maxsize=8)  # asked at every frame; water and body are immutable
 def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float]:
     """The water as the kernels take it (kernels/water.py), for this body. expand=False keeps the
     kernels on the direct sum over components (for benchmarks and checks of the expansion)."""
-    radius = float(max(np.linalg.norm(body.r_body, axis=1).max(), np.linalg.norm(body.mesh_vertices, axis=1).max()))
+    reach = float(max(body.radius, np.linalg.norm(body.mesh_vertices, axis=1).max()))
+    return _sea(water, reach, expand)
+
+
+@lru_cache(maxsize=256)  # asked at every frame, by every body of an ensemble; the water is immutable
+def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, float]:
     if water.is_still:
         return np.zeros((0, 8)), float("inf"), True, radius
     beta = water.direction

@@ -1,0 +1,85 @@
+"""Radiation coefficients through floatsim: Capytaine's solve, the disk cache, and published answers."""
+
+import numpy as np
+import pytest
+import trimesh
+
+import sim.bem as bem
+from sim.bem import Coefficients, radiation_coefficients, wet_mesh
+from sim.errors import ConfigError
+
+# Hulme (1982), J. Fluid Mech. 121: 443-463: a floating hemisphere of radius a in deep water, heave
+KA = np.array([0.05, 0.3, 0.5, 1.0, 2.0, 5.0])
+MU = np.array([0.8764, 0.7157, 0.5861, 0.4284, 0.3884, 0.4471])  # A33 / (rho 2/3 pi a^3)
+LAMBDA = np.array([0.1036, 0.3254, 0.3391, 0.2484, 0.1031, 0.0116])  # B33 / (rho 2/3 pi a^3 omega)
+
+
+def hemisphere(subdivisions: int, panel: float, **kw) -> Coefficients:
+    s = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    return radiation_coefficients(s.vertices, s.faces, omega=np.sqrt(KA * 9.81), panel=panel, progress=False, **kw)
+
+
+def heave(c: Coefficients) -> tuple[np.ndarray, np.ndarray]:
+    volume = 2 / 3 * np.pi
+    return c.added_mass[:, 2, 2] / (1000.0 * volume), c.damping[:, 2, 2] / (1000.0 * volume * c.omega)
+
+
+def test_hemisphere_matches_hulme_from_the_shipped_solve(monkeypatch):
+    """The shipped solve (2592 panels, `python -m pytest -m bem` redoes it) against Hulme's table, within 3 %."""
+    monkeypatch.setattr(bem, "solve", lambda *a, **k: pytest.fail("the shipped coefficients were not found"))
+    mu, lam = heave(hemisphere(3, 0.12))
+    np.testing.assert_allclose(mu, MU, rtol=0.03)
+    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03)
+    assert mu[-1] < 0.5 < mu[0]  # heading for 1/2 as ka grows
+
+
+@pytest.mark.bem
+def test_hemisphere_matches_hulme_solved_afresh(monkeypatch, tmp_path):
+    monkeypatch.setattr(bem, "SHIPPED", tmp_path / "none")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    mu, lam = heave(hemisphere(3, 0.12))
+    np.testing.assert_allclose(mu, MU, rtol=0.03)
+    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03)
+
+
+def test_a_coarse_solve_is_physical_and_cached(monkeypatch, tmp_path):
+    """A 170-panel hemisphere solved live: A symmetric, B positive semi-definite (the body only loses
+    energy to the waves), heave near Hulme; the second call comes from the cache, keyed by rho too."""
+    pytest.importorskip("capytaine")
+    monkeypatch.setattr(bem, "SHIPPED", tmp_path / "none")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    c = hemisphere(2, 0.5)
+    assert 100 < c.panels < 400
+    for A, B in zip(c.added_mass, c.damping):
+        np.testing.assert_allclose(A, A.T, atol=0.03 * np.abs(A).max())
+        assert np.linalg.eigvalsh(0.5 * (B + B.T)).min() > -0.01 * np.abs(B).max()
+    mu, lam = heave(c)
+    np.testing.assert_allclose(mu[1:5], MU[1:5], rtol=0.1)
+    np.testing.assert_allclose(lam[1:5], LAMBDA[1:5], rtol=0.1)
+    assert len(list((tmp_path / "floatsim" / "bem").glob("*.npz"))) == 1
+    monkeypatch.setattr(bem, "solve", lambda *a, **k: pytest.fail("solved again"))
+    again = hemisphere(2, 0.5)
+    np.testing.assert_array_equal(again.added_mass, c.added_mass)
+    with pytest.raises(pytest.fail.Exception, match="solved again"):
+        hemisphere(2, 0.5, rho=1025.0)
+
+
+def test_wet_mesh_is_the_part_under_the_water_line():
+    s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    v, f = wet_mesh(s.vertices, s.faces, 0.2)
+    assert v[:, 2].max() <= 1e-12
+    edges = np.linalg.norm(v[f] - v[f][:, [1, 2, 0]], axis=2)
+    assert edges.max() <= 0.2 + 1e-9
+    area = 0.5 * np.linalg.norm(np.cross(v[f][:, 1] - v[f][:, 0], v[f][:, 2] - v[f][:, 0]), axis=1).sum()
+    assert area == pytest.approx(trimesh.Trimesh(s.vertices, s.faces).area / 2, rel=1e-3)  # half the polyhedron
+
+
+def test_missing_capytaine_is_one_clear_line(monkeypatch, tmp_path):
+    import builtins
+
+    real = builtins.__import__
+    monkeypatch.setattr(builtins, "__import__", lambda name, *a, **k: (_ for _ in ()).throw(ImportError()) if name == "capytaine" else real(name, *a, **k))
+    monkeypatch.setattr(bem, "SHIPPED", tmp_path / "none")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    with pytest.raises(ConfigError, match=r"pip install -e \"\.\[bem\]\""):
+        hemisphere(1, 0.8)

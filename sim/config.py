@@ -41,6 +41,8 @@ FLUID = (
     Param("fluid", "g", 9.81, "Gravitational acceleration", "m/s^2", lo=0.0, hi=1e3, name="gravity g"),
     Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model) or panels (exactly "
           "over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
+    Param("fluid", "radiation", "none", "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
+          "boundary-element solve about the rest pose, Cummins' equation)", kind="choice", choices=("none", "bem"), label="Radiation", gui=()),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (

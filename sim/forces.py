@@ -157,8 +157,10 @@ class Model:
     Caches the wet surface of the last pose asked for, so an integrator step that ends where the
     next begins, and the frame read in between, find it once."""
 
-    def __init__(self, body, water, fluid):
+    def __init__(self, body, water, fluid, radiation=None):
         self.body, self.water, self.fluid = body, water, fluid
+        self.radiation = radiation
+        """radiation.Radiation (added mass and memory about the rest pose), or None."""
         self.terms = tuple(term for term in TERMS if term.is_used(fluid))
         self.pose_terms = tuple(term for term in self.terms if not term.twist)
         self.twist_terms = tuple(term for term in self.terms if term.twist)

@@ -10,7 +10,40 @@ import numpy as np
 
 from .forces import Model
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotate_body, rotate_world
-from .state import State, angular_velocity
+from .state import State, angular_momentum, angular_velocity
+
+
+def kick(model: Model, R: np.ndarray, u, L, F, T, h: float):
+    """(u, L) after the impulse h (F, T). With radiation the water's added mass takes its share:
+    the twist changes by h (M_RB + A_inf)^-1 (F, T), and L = R I R^T omega stays the rigid body's."""
+    rad = model.radiation
+    if rad is None:
+        return u + h * F / model.body.mass, L + h * T
+    dnu = np.linalg.solve(rad.mass_matrix(model.body, R), h * np.concatenate([F, T]))
+    return u + dnu[:3], L + angular_momentum(model.body, R, dnu[3:])
+
+
+def with_memory(model: Model, R: np.ndarray, F, T, memory):
+    """The loads plus the radiation memory's force (when the scene has radiation)."""
+    if model.radiation is None:
+        return F, T
+    f = model.radiation.force(R, memory)
+    return F + f[:3], T + f[3:]
+
+
+def drift_memory(model: Model, s: State, R0: np.ndarray, R1: np.ndarray, u, L, dt: float):
+    """(memory, E_rad) after a drift of dt at the twist (u, L): the memory advanced exactly with the
+    body-frame twist averaged over the drift's two orientations, and the energy it took from the body,
+    dt nu . mu averaged likewise (mu = -the memory's force)."""
+    rad = model.radiation
+    if rad is None:
+        return s.memory, s.E_rad
+    body = model.body
+    nu0 = np.concatenate([u, angular_velocity(body, R0, L)])
+    nu1 = np.concatenate([u, angular_velocity(body, R1, L)])
+    memory = rad.advance(s.memory, 0.5 * (rad.body_velocity(R0, nu0) + rad.body_velocity(R1, nu1)), dt)
+    power = -0.5 * (nu0 @ rad.force(R0, s.memory) + nu1 @ rad.force(R1, memory))
+    return memory, s.E_rad + dt * power
 
 
 def free_rotation(model: Model, q: np.ndarray, L: np.ndarray, h: float) -> np.ndarray:
@@ -32,11 +65,10 @@ def twist_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
     explicit midpoint step: second order; for linear damping stable while h lambda_max <= 2."""
     if not model.twist_terms or not len(wet.weight):
         return u, L
-    M = model.body.mass
     F, T = model.twist_loads(wet, np.concatenate([u, angular_velocity(model.body, R, L)]), t)
-    u_mid, L_mid = u + 0.5 * h * F / M, L + 0.5 * h * T
+    u_mid, L_mid = kick(model, R, u, L, F, T, 0.5 * h)
     F, T = model.twist_loads(wet, np.concatenate([u_mid, angular_velocity(model.body, R, L_mid)]), t)
-    return u + h * F / M, L + h * T
+    return kick(model, R, u, L, F, T, h)
 
 
 class Euler:
@@ -51,9 +83,10 @@ class Euler:
         omega = angular_velocity(model.body, s.R_world_body, s.L_world)
         q = normalized(rotate_world(s.q_world_body, dt * omega))
         R = quat_to_matrix(q)
+        memory, E_rad = drift_memory(model, s, s.R_world_body, R, s.u_world, s.L_world, dt)
         wet = model.wetted(x, R, s.t + dt)
-        F, T = model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world), s.t + dt)
-        return State(s.t + dt, x, q, s.u_world + dt * F / model.body.mass, s.L_world + dt * T)
+        F, T = with_memory(model, R, *model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world), s.t + dt), memory)
+        return State(s.t + dt, x, q, *kick(model, R, s.u_world, s.L_world, F, T, dt), memory, E_rad)
 
 
 class Splitting:
@@ -66,22 +99,20 @@ class Splitting:
 
     def step(self, model: Model, s: State, dt: float) -> State:
         h = 0.5 * dt
-        M = model.body.mass
         x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
         R = quat_to_matrix(q)
         wet = model.wetted(x, R, s.t)
         u, L = twist_flow(model, wet, R, u, L, h, s.t)
-        F, T = model.pose_loads(wet, s.t)
-        u, L = u + h * F / M, L + h * T
+        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, s.t), s.memory), h)
         x = x + dt * u
         q = free_rotation(model, q, L, dt)
-        R = quat_to_matrix(q)
+        R0, R = R, quat_to_matrix(q)
+        memory, E_rad = drift_memory(model, s, R0, R, u, L, dt)
         t = s.t + dt
         wet = model.wetted(x, R, t)
-        F, T = model.pose_loads(wet, t)
-        u, L = u + h * F / M, L + h * T
+        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, t), memory), h)
         u, L = twist_flow(model, wet, R, u, L, h, t)
-        return State(t, x, q, u, L)
+        return State(t, x, q, u, L, memory, E_rad)
 
 
 RELINEARISE = 60
@@ -90,7 +121,7 @@ RELINEARISE_TOL = 1e-13
 """They stop once the end velocity changes by less than this, relative to the body's velocity scale."""
 
 
-def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
+def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float, memory=None):
     """Advance (u, L) by h under every load linearised about a twist, pose frozen:
     d(M u, L)/dt = f - D (u, omega) (`Model.linearised`), a linear system with a constant forcing,
     solved exactly (`exact_linear_flow`): stable for any damping, no overshoot, and an overdamped
@@ -100,14 +131,17 @@ def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float):
     linearised about the twist at the *end* of the half step, found by fixed-point iteration from the
     start twist: about the start alone, a body at rest would feel no drag for a whole step however
     stiff it is. At the end twist the iteration is Newton's method for the drag balance, so the
-    terminal speed is the exact fixed point and a stiff start converges instead of overshooting."""
+    terminal speed is the exact fixed point and a stiff start converges instead of overshooting.
+    With radiation the memory's force (`memory`, frozen over the half step) joins the forcing."""
     body = model.body
     twist = np.concatenate([u, angular_velocity(body, R, L)])
-    un, Ln = exact_linear_flow(model, R, u, L, *model.linearised(wet, twist, t), h)
+    extra = np.zeros(6) if model.radiation is None else model.radiation.force(R, memory)
+    f, D = model.linearised(wet, twist, t)
+    un, Ln = exact_linear_flow(model, R, u, L, f + extra, D, h)
     if model.linear_in_twist:
         return un, Ln
     scale = velocity_scale(body)
-    pose = np.concatenate(model.pose_loads(wet, t))
+    pose = np.concatenate(model.pose_loads(wet, t)) + extra
     for _ in range(RELINEARISE):
         end = np.concatenate([un, angular_velocity(body, R, Ln)])
         u2, L2 = exact_linear_flow(model, R, u, L, *model.linearised(wet, end, t, pose), h)
@@ -130,7 +164,16 @@ def exact_linear_flow(model: Model, R: np.ndarray, u, L, f: np.ndarray, D: np.nd
     body = model.body
     F, T = f[:3], f[3:]
     if D is None:
-        return u + h * F / body.mass, L + h * T
+        return kick(model, R, u, L, F, T, h)
+    if model.radiation is not None:  # the same with the generalised mass M_RB + A_inf: W = its inverse square root
+        lam_m, V_m = np.linalg.eigh(model.radiation.mass_matrix(body, R))
+        W = (V_m / np.sqrt(lam_m)) @ V_m.T
+        y = np.linalg.solve(W, np.concatenate([u, angular_velocity(body, R, L)]))
+        lam, V = np.linalg.eigh(W @ D @ W)
+        x = h * np.maximum(lam, 0.0)
+        phi = np.where(x > 1e-12, -np.expm1(-x) / np.where(x > 1e-12, x, 1.0), 1.0 - 0.5 * x)
+        nu = W @ (V @ (np.exp(-x) * (V.T @ y) + h * phi * (V.T @ (W @ f))))
+        return nu[:3], angular_momentum(body, R, nu[3:])
     sqrt_m, w_half = np.sqrt(body.mass), np.sqrt(body.inertia)
     y = np.concatenate([sqrt_m * u, R @ ((R.T @ L) / w_half)])
     g = np.concatenate([F / sqrt_m, R @ ((R.T @ T) / w_half)])
@@ -158,23 +201,34 @@ class ImplicitSplitting(Splitting):
         h = 0.5 * dt
         x, q, u, L = s.x_world, s.q_world_body, s.u_world, s.L_world
         R = quat_to_matrix(q)
-        u, L = linear_flow(model, model.wetted(x, R, s.t), R, u, L, h, s.t)
+        u, L = linear_flow(model, model.wetted(x, R, s.t), R, u, L, h, s.t, s.memory)
         x = x + dt * u
         q = free_rotation(model, q, L, dt)
-        R = quat_to_matrix(q)
+        R0, R = R, quat_to_matrix(q)
+        memory, E_rad = drift_memory(model, s, R0, R, u, L, dt)
         t = s.t + dt
-        u, L = linear_flow(model, model.wetted(x, R, t), R, u, L, h, t)
-        return State(t, x, q, u, L)
+        u, L = linear_flow(model, model.wetted(x, R, t), R, u, L, h, t, memory)
+        return State(t, x, q, u, L, memory, E_rad)
 
 
 def derivative(model: Model, t: float, y: np.ndarray) -> np.ndarray:
-    """d/dt of (x, q, u, L) stacked, for RK4 and solve_ivp; q need not be normalised."""
+    """d/dt of (x, q, u, L) stacked, for RK4 and solve_ivp; q need not be normalised. With radiation
+    y also carries the memory and E_rad: (M_RB + A_inf) nu' = f - mu - (0, omega x L), L' = I nu'_w + omega x L."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
     R = quat_to_matrix(q)
     omega = angular_velocity(model.body, R, L)
     F, T = model.loads(model.wetted(x, R, t), u, omega, t)
     dq = 0.5 * quat_multiply(np.array([0.0, *omega]), q / np.sqrt(q @ q))
-    return np.concatenate([u, dq, F / model.body.mass, T])
+    rad = model.radiation
+    if rad is None:
+        return np.concatenate([u, dq, F / model.body.mass, T])
+    memory = y[13:-1]
+    nu = np.concatenate([u, omega])
+    f = np.concatenate([F, T]) + rad.force(R, memory)
+    spin = np.cross(omega, L)
+    f[3:] -= spin
+    dnu = np.linalg.solve(rad.mass_matrix(model.body, R), f)
+    return np.concatenate([u, dq, dnu[:3], angular_momentum(model.body, R, dnu[3:]) + spin, rad.rate(R, memory, nu), [-nu @ rad.force(R, memory)]])
 
 
 class RK4:

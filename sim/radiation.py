@@ -147,3 +147,93 @@ def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, signific
         H[e.row, k : k + m] = e.H
         k += m
     return RadiationMemory(F, G, H, tuple(entries), c.added_mass_inf)
+
+
+class Radiation:
+    """A body's added mass and radiation memory in its own frame, for the integrators.
+
+    In the Cummins equation (M_RB + A_inf) nu' = f - mu, mu = H x the memory force, x' = F x + G nu:
+    A_inf and the memory are linear about the rest pose and ride with the body (body-frame dofs), so
+    the generalised mass rotates with it. The gyroscopic terms of the added mass (Munk moments) are
+    left out: second order in the motion, like the linearisation itself."""
+
+    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory):
+        self.added_mass_body = added_mass_body
+        self.F, self.G, self.H = memory.F, memory.G, memory.H
+        self.memory = memory
+        self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+
+    @property
+    def states(self) -> int:
+        return self.F.shape[0]
+
+    @staticmethod
+    def _frame(R: np.ndarray) -> np.ndarray:
+        T = np.zeros((6, 6))
+        T[:3, :3] = T[3:, 3:] = R
+        return T
+
+    def mass_matrix(self, body, R: np.ndarray) -> np.ndarray:
+        """(6, 6) M_RB + A_inf in world axes: diag(M, R I R^T) plus the rotated added mass."""
+        T = self._frame(R)
+        Mg = T @ self.added_mass_body @ T.T
+        Mg[:3, :3] += body.mass * np.eye(3)
+        Mg[3:, 3:] += (R * body.inertia) @ R.T
+        return Mg
+
+    def force(self, R: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """(6,) the memory's force and torque on the body, world frame: -R mu."""
+        return -self._frame(R) @ (self.H @ x)
+
+    def rate(self, R: np.ndarray, x: np.ndarray, nu: np.ndarray) -> np.ndarray:
+        """x' = F x + G nu_body."""
+        return self.F @ x + self.G @ (self._frame(R).T @ nu)
+
+    def advance(self, x: np.ndarray, nu_body: np.ndarray, dt: float) -> np.ndarray:
+        """The memory after dt with a constant body-frame velocity, exactly (zero-order hold)."""
+        if dt not in self._steps:
+            from scipy.linalg import expm
+
+            n = self.states
+            aug = np.zeros((n + 6, n + 6))
+            aug[:n, :n], aug[:n, n:] = self.F, self.G
+            E = expm(aug * dt)
+            self._steps = {dt: (E[:n, :n], E[:n, n:])}  # one dt at a time
+        Phi, Gamma = self._steps[dt]
+        return Phi @ x + Gamma @ nu_body
+
+    def body_velocity(self, R: np.ndarray, nu: np.ndarray) -> np.ndarray:
+        return self._frame(R).T @ nu
+
+
+def rest_height(body, fluid, R: np.ndarray) -> float:
+    """The centre of mass's height at which the body, held at orientation R, displaces its own mass
+    (exact clipped volume), m. ConfigError when it cannot float."""
+    from scipy.optimize import brentq
+
+    from .errors import ConfigError
+    from .surface import wet_panels
+    from .water import StillWater
+
+    water = StillWater(fluid.rho, fluid.g)
+
+    def excess(z: float) -> float:
+        return fluid.rho * wet_panels(body, water, np.array([0.0, 0.0, z]), R, 0.0).submerged_volume - body.mass
+
+    reach = float(np.linalg.norm(body.mesh_vertices, axis=1).max()) * 1.01
+    if excess(-reach) <= 0.0:
+        raise ConfigError(f"radiation = 'bem' needs a floating body: this one ({body.mass:.4g} kg) is heavier than the water it can displace")
+    return float(brentq(excess, -reach, reach, xtol=1e-10))
+
+
+def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiation:
+    """The body's radiation model about its rest pose at orientation R0 (BEM coefficients from the
+    shipped files, the cache or Capytaine; then the memory fit), in the body frame."""
+    from .bem import radiation_coefficients
+
+    z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
+    c = radiation_coefficients(body.mesh_vertices @ R0.T + [0.0, 0.0, z], body.mesh_faces, fluid.rho, fluid.g, progress=progress)
+    memory = fit_memory(c)
+    T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
+    body_memory = RadiationMemory(memory.F, memory.G @ T0, T0.T @ memory.H, memory.entries, T0.T @ c.added_mass_inf @ T0)
+    return Radiation(T0.T @ c.added_mass_inf @ T0, body_memory)

@@ -19,7 +19,7 @@ from .state import State, angular_momentum, angular_velocity
 from .water import make_water
 
 CSV_COLUMNS = (
-    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta".split(",")
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad".split(",")
 )
 
 
@@ -53,6 +53,8 @@ class Frame:
     """Indices of the samples under the water surface (for either force model)."""
     eta: float = 0.0
     """Water surface elevation at the centre of mass's (x, y), m."""
+    E_rad: float = 0.0
+    """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
 
     @property
     def E_total(self) -> float:
@@ -61,7 +63,7 @@ class Frame:
     def row(self) -> list[float]:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
-                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta]  # fmt: skip
+                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad]  # fmt: skip
 
 
 def observe(model: Model, state: State, compiled: bool = False, expand: bool = True) -> Frame:
@@ -72,8 +74,12 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
     omega = angular_velocity(body, R, state.L_world)
     E_kin = 0.5 * body.mass * float(state.u_world @ state.u_world) + 0.5 * float(omega @ state.L_world)
     E_grav = body.mass * water.g * float(state.x_world[2])
+    if model.radiation is not None:  # the water moving with the body: 1/2 nu^T A_inf nu
+        nu = np.concatenate([state.u_world, omega])
+        E_kin += 0.5 * float(nu @ (model.radiation.mass_matrix(body, R) @ nu)) - 0.5 * body.mass * float(state.u_world @ state.u_world) \
+            - 0.5 * float(omega @ state.L_world)
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
-                  L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)))  # fmt: skip
+                  L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
     if compiled:
         from .kernels import MODELS, pack, sea_pack
         from .kernels.simulation import observe as observe_kernel
@@ -86,6 +92,9 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
                      wet_index=np.flatnonzero(wet))  # fmt: skip
     wet = model.wetted(state.x_world, R, state.t)
     F, T = model.loads(wet, state.u_world, omega, state.t)
+    if model.radiation is not None:
+        f = model.radiation.force(R, state.memory)
+        F, T = F + f[:3], T + f[3:]
     wet_samples = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
     return Frame(**common, force_world=F, torque_world=T, E_hyd=model.hydrostatic_energy(wet), submerged_area=wet.submerged_area,
                  submerged_volume=wet.submerged_volume, wet_index=wet_samples)  # fmt: skip
@@ -148,11 +157,17 @@ class Simulation:
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.state = initial_state(body, scene)
         self._check_backend()
+        self._sync_memory()
         self._rebase_energy()
 
     def _model(self, body: Body) -> Model:
         fluid = self.scene.fluid
-        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g), fluid)
+        radiation = None
+        if fluid.radiation == "bem":
+            from .radiation import make_radiation
+
+            radiation = make_radiation(body, fluid, initial_state(body, self.scene).R_world_body)
+        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g), fluid, radiation)
 
     @property
     def body(self) -> Body:
@@ -179,7 +194,7 @@ class Simulation:
         """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin)."""
         from .kernels.layout import SCHEMES
 
-        return self.backend == "numba" and self.integrator.name in SCHEMES
+        return self.backend == "numba" and self.integrator.name in SCHEMES and self.model.radiation is None
 
     def _check_backend(self) -> None:
         from .kernels.layout import SCHEMES
@@ -258,6 +273,15 @@ class Simulation:
         replace the model; step changes the integrator or dt. Velocities are kept."""
         old, scene = self.scene, with_overrides(self.scene, **changes)
         self.scene = scene
+        try:
+            self._apply(old, scene)
+        except Exception:
+            self.scene = old  # e.g. radiation asked for a body that sinks: nothing changed
+            raise
+        self._sync_memory()
+        self._rebase_energy()
+
+    def _apply(self, old: SceneConfig, scene: SceneConfig) -> None:
         body = self.body
         if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY):
             self._rebuild_body(make_body(scene.body, scene.base_dir))
@@ -271,7 +295,12 @@ class Simulation:
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
             self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
             self._check_backend()
-        self._rebase_energy()
+
+    def _sync_memory(self) -> None:
+        """The state carries as many radiation memory states as the model has (zero when they appear)."""
+        n = 0 if self.model.radiation is None else self.model.radiation.states
+        if len(self.state.memory) != n:
+            self.state = dataclasses.replace(self.state, memory=np.zeros(n), E_rad=self.state.E_rad if n else 0.0)
 
     def _rebuild_body(self, body: Body) -> None:
         """Swap in a new body of the same shape given in the same world orientation (its principal
@@ -301,4 +330,5 @@ class Simulation:
     def reset(self, state: State | None = None) -> None:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""
         self.state = state or initial_state(self.body, self.scene)
+        self._sync_memory()
         self._rebase_energy()

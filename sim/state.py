@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -22,21 +22,28 @@ class State:
     """(3,) centre-of-mass velocity, world frame, m/s."""
     L_world: np.ndarray
     """(3,) angular momentum about the centre of mass, world frame, kg m^2/s."""
+    memory: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Radiation memory states (radiation.Radiation; empty without radiation)."""
+    E_rad: float = 0.0
+    """Energy the body has given to the waves it radiates so far, J."""
 
     @property
     def R_world_body(self) -> np.ndarray:
         return quat_to_matrix(self.q_world_body)
 
     def is_finite(self) -> bool:
-        return bool(np.isfinite(self.x_world).all() and np.isfinite(self.q_world_body).all() and np.isfinite(self.u_world).all() and np.isfinite(self.L_world).all())
+        return bool(np.isfinite(self.as_vector()).all())
 
     def as_vector(self) -> np.ndarray:
-        """(13,) x, q, u, L stacked (for solve_ivp)."""
-        return np.concatenate([self.x_world, self.q_world_body, self.u_world, self.L_world])
+        """(13,) x, q, u, L stacked (for solve_ivp); with radiation, then the memory and E_rad."""
+        if not len(self.memory):
+            return np.concatenate([self.x_world, self.q_world_body, self.u_world, self.L_world])
+        return np.concatenate([self.x_world, self.q_world_body, self.u_world, self.L_world, self.memory, [self.E_rad]])
 
     @staticmethod
     def from_vector(t: float, y: np.ndarray) -> "State":
-        return State(t, y[0:3].copy(), y[3:7] / np.linalg.norm(y[3:7]), y[7:10].copy(), y[10:13].copy())
+        extra = (y[13:-1].copy(), float(y[-1])) if len(y) > 13 else ()
+        return State(t, y[0:3].copy(), y[3:7] / np.linalg.norm(y[3:7]), y[7:10].copy(), y[10:13].copy(), *extra)
 
 
 def angular_velocity(body: Body, R: np.ndarray, L: np.ndarray) -> np.ndarray:

@@ -206,30 +206,11 @@ class Radiation:
         return self._frame(R).T @ nu
 
 
-def rest_height(body, fluid, R: np.ndarray) -> float:
-    """The centre of mass's height at which the body, held at orientation R, displaces its own mass
-    (exact clipped volume), m. ConfigError when it cannot float."""
-    from scipy.optimize import brentq
-
-    from .errors import ConfigError
-    from .surface import wet_panels
-    from .water import StillWater
-
-    water = StillWater(fluid.rho, fluid.g)
-
-    def excess(z: float) -> float:
-        return fluid.rho * wet_panels(body, water, np.array([0.0, 0.0, z]), R, 0.0).submerged_volume - body.mass
-
-    reach = float(np.linalg.norm(body.mesh_vertices, axis=1).max()) * 1.01
-    if excess(-reach) <= 0.0:
-        raise ConfigError(f"radiation = 'bem' needs a floating body: this one ({body.mass:.4g} kg) is heavier than the water it can displace")
-    return float(brentq(excess, -reach, reach, xtol=1e-10))
-
-
 def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiation:
     """The body's radiation model about its rest pose at orientation R0 (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame."""
     from .bem import radiation_coefficients
+    from .equilibrium import rest_height
 
     z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
     c = radiation_coefficients(body.mesh_vertices @ R0.T + [0.0, 0.0, z], body.mesh_faces, fluid.rho, fluid.g, progress=progress)

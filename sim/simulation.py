@@ -149,6 +149,8 @@ class Simulation:
         self._frame_key: tuple | None = None
         self._frame: Frame | None = None
         self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
+        self.largest_turn = 0.0
+        """With radiation: the largest rotation away from the rest orientation so far, degrees."""
         self.expand_waves = True
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
@@ -200,6 +202,10 @@ class Simulation:
         from .kernels.layout import SCHEMES
 
         integ = self.integrator
+        if self.backend == "numba" and self.model.radiation is not None:
+            note = "radiation has no compiled twin yet: this run steps on the numpy reference (slower)"
+            if note not in self.notes:
+                self.notes.append(note)
         if self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
             if note not in self.notes:
@@ -209,6 +215,10 @@ class Simulation:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
         checked = self.state
         self.state = self._advance_compiled(n) if self.compiled else self._advance_numpy(n)
+        if self.model.radiation is not None:
+            rest = initial_state(self.body, self.scene).q_world_body
+            turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
+            self.largest_turn = max(self.largest_turn, turn)
         energy = self.frame().E_total
         if energy - self._E_ref > 10.0 * self._E_scale:
             t, self.state = self.state.t, checked  # back to the last state that passed this check
@@ -257,6 +267,13 @@ class Simulation:
     def stability_numbers(self) -> dict[str, float]:
         return stability.numbers(self.model, self.dt)
 
+    def validity_notes(self) -> list[str]:
+        """Where the run has left the range of its models (radiation is linear about the rest pose)."""
+        if self.model.radiation is not None and self.largest_turn > 20.0:
+            return [f"radiation: the body turned up to {self.largest_turn:.0f} degrees from its rest pose; the added mass and radiation "
+                    "damping are linear about that pose, so past about 20 degrees they are only indicative"]  # fmt: skip
+        return []
+
     def warnings(self) -> list[str]:
         """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up)."""
         return stability.warnings(self.stability_numbers(), self.integrator, self.dt)
@@ -292,6 +309,7 @@ class Simulation:
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
         elif old.fluid != scene.fluid or old.waves != scene.waves:
             self.model = self._model(body)
+            self._check_backend()
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
             self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
             self._check_backend()

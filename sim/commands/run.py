@@ -105,6 +105,8 @@ def run(args: RunArgs) -> int:
             out.close()
     if error:
         print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
+    for note in sim.validity_notes():
+        print(f"floatsim: note: {note}", file=sys.stderr)
     wall = time.perf_counter() - started
     last = sim.frame()
     steps = round(last.t / sim.dt)
@@ -113,7 +115,7 @@ def run(args: RunArgs) -> int:
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}")  # fmt: skip
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "
-          f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)")  # fmt: skip
+          f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)" + (f", E_rad = {last.E_rad:.6g} J radiated" if sim.model.radiation else ""))  # fmt: skip
     rate = steps / wall if wall > 0 else math.inf
     print(f"{steps} steps in {wall:.3g} s wall ({rate:.0f} steps/s, {last.t / wall if wall > 0 else math.inf:.3g}x real time)"
           + (f"; {rows} rows -> {args.out}" if out else ""))  # fmt: skip

@@ -51,7 +51,8 @@ class Ensemble:
         if not live:
             return
         first = self.sims[live[0]]
-        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].state.t == first.state.t for i in live)
+        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].state.t == first.state.t and self.sims[i].model.radiation is None
+                      for i in live)  # fmt: skip
         if self.backend == "numba" and first.compiled and one_sea:
             self._step_compiled(live, n)
             return
@@ -76,10 +77,10 @@ class Ensemble:
         scheme = kernels.SCHEMES[sims[0].integrator.name]
         sea = kernels.sea_pack(sims[0].model.water, self.shape)
         Y, done = kernels.advance_many(Y, sims[0].state.t, n, self.dt, scheme, kernels.MODELS[sims[0].params.forces], self.shape.packed, masses,
-                                       inertias, terms, coefs, sea)  # fmt: skip
+                                       inertias, terms, coefs, sea, kernels.NO_RADIATION)  # fmt: skip
         for i, s, y, k in zip(live, sims, Y, done):
             before = s.state
-            s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
+            s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])  # the ensemble steps bodies without radiation
             if k < n:
                 self.diverged[i] = s.diagnose(s.state.t + self.dt, "the state became non-finite")
             elif s.frame().E_total - s._E_ref > 10.0 * s._E_scale:

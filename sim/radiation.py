@@ -158,7 +158,7 @@ class Radiation:
     left out: second order in the motion, like the linearisation itself."""
 
     def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory):
-        self.added_mass_body = added_mass_body
+        self.added_mass_body = 0.5 * (added_mass_body + added_mass_body.T)  # symmetric in theory; the BEM's is to ~1e-4
         self.F, self.G, self.H = memory.F, memory.G, memory.H
         self.memory = memory
         self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
@@ -204,6 +204,24 @@ class Radiation:
 
     def body_velocity(self, R: np.ndarray, nu: np.ndarray) -> np.ndarray:
         return self._frame(R).T @ nu
+
+    def kernel_arrays(self, body, dt: float) -> tuple:
+        """(Minv_b, W_b, S_b, H, Phi, Gamma, F, G, start) for the compiled kernels (kernels/radiation.py).
+        The memory is block diagonal (one block per fitted entry), so Phi and F go as bands: row i holds
+        its block's columns start[i], start[i] + 1, ..."""
+        Mb = self.added_mass_body + np.diag([body.mass] * 3 + list(body.inertia))
+        lam, V = np.linalg.eigh(Mb)
+        self.advance(np.zeros(self.states), np.zeros(6), dt)  # fills the exact step for dt
+        Phi, Gamma = self._steps[dt]
+        sizes = [len(e.G) for e in self.memory.entries]
+        start = np.repeat(np.cumsum([0, *sizes[:-1]]), sizes).astype(np.int64)
+        width = max(sizes)
+        rows = np.arange(self.states)
+        cols = np.minimum(start[:, None] + np.arange(width), self.states - 1)
+        inside = start[:, None] + np.arange(width) < (start + np.repeat(sizes, sizes))[:, None]
+        band = lambda M: np.where(inside, M[rows[:, None], cols], 0.0)  # noqa: E731
+        arrays = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, self.H, band(Phi), Gamma, band(self.F), self.G)
+        return (*(np.ascontiguousarray(a, dtype=float) for a in arrays), start)
 
 
 def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiation:

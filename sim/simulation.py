@@ -88,6 +88,9 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
         terms, coef = pack(model)
         F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.t, state.u_world, omega, body.packed,
                                                    body.mass, terms, coef, sea_pack(water, body, expand), wet)  # fmt: skip
+        if model.radiation is not None:
+            f = model.radiation.force(R, state.memory)
+            F, T = F + f[:3], T + f[3:]
         return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
                      wet_index=np.flatnonzero(wet))  # fmt: skip
     wet = model.wetted(state.x_world, R, state.t)
@@ -149,6 +152,7 @@ class Simulation:
         self._frame_key: tuple | None = None
         self._frame: Frame | None = None
         self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
+        self._rad: tuple = (None, None)  # ((model, dt), its radiation packed for the kernels)
         self.largest_turn = 0.0
         """With radiation: the largest rotation away from the rest orientation so far, degrees."""
         self.expand_waves = True
@@ -196,16 +200,12 @@ class Simulation:
         """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin)."""
         from .kernels.layout import SCHEMES
 
-        return self.backend == "numba" and self.integrator.name in SCHEMES and self.model.radiation is None
+        return self.backend == "numba" and self.integrator.name in SCHEMES
 
     def _check_backend(self) -> None:
         from .kernels.layout import SCHEMES
 
         integ = self.integrator
-        if self.backend == "numba" and self.model.radiation is not None:
-            note = "radiation has no compiled twin yet: this run steps on the numpy reference (slower)"
-            if note not in self.notes:
-                self.notes.append(note)
         if self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
             if note not in self.notes:
@@ -248,9 +248,13 @@ class Simulation:
         terms, coef = kernels.pack(self.model)
         if self._sea[0] != (self.model, self.expand_waves):
             self._sea = ((self.model, self.expand_waves), kernels.sea_pack(self.model.water, body, self.expand_waves))
+        if self._rad[0] != (self.model, self.dt):
+            self._rad = ((self.model, self.dt), kernels.radiation_pack(self.model.radiation, body, self.dt))
         y, done = kernels.advance(self.state.as_vector(), self.state.t, n, self.dt, kernels.SCHEMES[self.integrator.name],
-                                  kernels.MODELS[self.params.forces], body.packed, body.mass, body.inertia, terms, coef, self._sea[1])  # fmt: skip
-        state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])
+                                  kernels.MODELS[self.params.forces], body.packed, body.mass, body.inertia, terms, coef, self._sea[1],
+                                  self._rad[1])  # fmt: skip
+        extra = (y[13:-1].copy(), float(y[-1])) if len(y) > 13 else ()  # radiation: the memory and E_rad
+        state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13], *extra)
         if done < n:
             self.state = state
             raise SimulationDiverged(self.diagnose(state.t + self.dt, "the state became non-finite"))

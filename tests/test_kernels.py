@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, Simulation, SimulationDiverged, State, StillWater, load_scene, make_integrator, with_overrides
 from sim.body import make_box, make_mesh_body
-from sim.kernels import SCHEMES, advance, pack, sea_pack
+from sim.kernels import NO_RADIATION, SCHEMES, advance, pack, sea_pack
 from sim.kernels.forces import linearised, pose_loads, twist_loads
 from sim.kernels.layout import MODELS
 from sim.kernels.simulation import observe as observe_kernel
@@ -162,7 +162,7 @@ def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
         state = State(t, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
         ref = integrator.step(model, state, 0.01).as_vector()
         y, done = advance(state.as_vector(), t, 1, 0.01, SCHEMES[scheme], MODELS[forces], model.body.packed, model.body.mass, model.body.inertia,
-                          terms, coef, sea)  # fmt: skip
+                          terms, coef, sea, NO_RADIATION)  # fmt: skip
         assert done == 1
         close(y, ref, np.abs(ref).max(), 1e-10 if water == "jonswap" else 1e-12)
 

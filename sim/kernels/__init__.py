@@ -31,9 +31,9 @@ _users_cache_dir = numba.config.CACHE_DIR
 numba.config.CACHE_DIR = _cache_dir()  # read by numba as each kernel below is decorated; others' code keeps the user's
 try:
     from .integrators import advance, advance_many, warm_up  # noqa: E402
-    from .layout import MODELS, SCHEMES, pack, sea_pack  # noqa: E402
+    from .layout import MODELS, NO_RADIATION, SCHEMES, pack, radiation_pack, sea_pack  # noqa: E402
     from .simulation import observe  # noqa: E402, F401
 finally:
     numba.config.CACHE_DIR = _users_cache_dir
 
-__all__ = ["JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "SCHEMES", "pack", "sea_pack"]
+__all__ = ["JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "NO_RADIATION", "SCHEMES", "pack", "radiation_pack", "sea_pack"]

@@ -16,6 +16,8 @@ from .forces import NONLINEAR, linearised, pose_loads, twist_loads
 from .layout import COEF_BASE, TERM_PARAMS
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
+from .radiation import derivative_extra, drift_memory, from_scaled, general_modes, memory_load, radiating, to_scaled
+from .radiation import kick as rad_kick
 from .surface import workspace
 
 
@@ -64,6 +66,22 @@ def exact_modes(K, h):
 
 
 @njit(**JIT)
+def kick(rad, R, u, L, F, T, h, mass, inertia):
+    """(u, L) after the impulse h (F, T) (integrators.kick): through the added mass when radiating."""
+    if radiating(rad):
+        return rad_kick(rad, R, u, L, F, T, h, inertia)
+    return u + h * F / mass, L + h * T
+
+
+@njit(**JIT)
+def modes(D, R, mass, inertia, rad):
+    """K = W D W, W the inverse square root of the (generalised) mass."""
+    if radiating(rad):
+        return general_modes(D, R, rad)
+    return damping_modes(D, R, mass, inertia)
+
+
+@njit(**JIT)
 def twist_flow(K, R, u, L, h, mass, inertia):
     """(u, L) after h of linear damping alone by one explicit midpoint step (integrators.twist_flow
     when damping is the only twist term)."""
@@ -78,30 +96,34 @@ def twist_flow(K, R, u, L, h, mass, inertia):
 
 
 @njit(**JIT)
-def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags, ws):
-    """integrators.twist_flow with nonlinear twist terms or in waves: explicit midpoint on the twist terms, pose frozen."""
+def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags, ws, rad):
+    """integrators.twist_flow with nonlinear twist terms, in waves or with radiation: explicit midpoint
+    on the twist terms, pose frozen."""
     F, T = np.zeros(3), np.zeros(3)
     twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags, F, T, ws)
-    u_mid, L_mid = u + 0.5 * h * F / mass, L + 0.5 * h * T
+    u_mid, L_mid = kick(rad, R, u, L, F, T, 0.5 * h, mass, inertia)
     F[:], T[:] = 0.0, 0.0
     twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags, F, T, ws)
-    return u + h * F / mass, L + h * T
+    return kick(rad, R, u, L, F, T, h, mass, inertia)
 
 
 @njit(**JIT)
-def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
+def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad):
     """(u, L) after h under the linearised loads f - D (u, omega) at a frozen pose, exactly, as in
-    integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f."""
+    integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f (W: the generalised mass's when radiating)."""
     if not wet:
-        return u + h * F / mass, L + h * T
+        return kick(rad, R, u, L, F, T, h, mass, inertia)
     sqrt_m = math.sqrt(mass)
     w_half = np.sqrt(inertia)
-    y = np.empty(6)
-    y[:3] = sqrt_m * u
-    y[3:] = mv(R, mtv(R, L) / w_half)
-    gv = np.empty(6)
-    gv[:3] = F / sqrt_m
-    gv[3:] = mv(R, mtv(R, T) / w_half)
+    if radiating(rad):
+        y, gv = to_scaled(rad, R, u, L, F, T, inertia)
+    else:
+        y = np.empty(6)
+        y[:3] = sqrt_m * u
+        y[3:] = mv(R, mtv(R, L) / w_half)
+        gv = np.empty(6)
+        gv[:3] = F / sqrt_m
+        gv[3:] = mv(R, mtv(R, T) / w_half)
     if lam[0] < 0.0:  # mild (see exact_modes): both series, sum (-hK)^n y/n! + h (-hK)^n g/(n+1)!
         a = y.copy()
         b = h * gv
@@ -144,31 +166,33 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet):
             for j in range(6):
                 acc += V[i, j] * c[j]
             y[i] = acc
+    if radiating(rad):
+        return from_scaled(rad, R, y, inertia)
     return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
 
 
 @njit(**JIT)
-def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws):
+def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad):
     """(u, L) after h under the loads linearised about the twist (uc, omega(Lc)), exactly."""
     f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags, ws)
     lam, V = np.zeros(6), np.eye(6)
     K = np.zeros((6, 6))
     if wet:
-        K = damping_modes(Dt, R, mass, inertia)
+        K = modes(Dt, R, mass, inertia, rad)
         lam, V = exact_modes(K, h)
-    return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet)
+    return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet, rad)
 
 
 @njit(**JIT)
-def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws):
+def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad):
     """integrators.linear_flow with nonlinear twist terms (drag): linearised about the end twist of the
     half step, found by fixed-point iteration from the start twist."""
-    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
+    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad)
     if not (wet and terms & NONLINEAR):
         return un, Ln
     scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / mass)
     for _ in range(RELINEARISE):
-        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
+        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad)
         dw = angular_velocity(R, L2 - Ln, inertia)
         w2 = angular_velocity(R, L2, inertia)
         change = max(np.abs(u2 - un).max(), scale * np.abs(dw).max())
@@ -202,15 +226,20 @@ def free_rotation(q, L, h, inertia):
 
 
 @njit(**JIT)
-def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws):
+def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad):
+    """d/dt of the state vector (integrators.derivative); with radiation also of the memory and E_rad."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
     R = quat_to_matrix(q)
     w = angular_velocity(R, L, inertia)
     F, T, D, wet = pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
     twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T, ws)
-    out = np.empty(13)
+    out = np.empty(y.shape[0])
     out[0:3] = u
     out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
+    if radiating(rad):
+        du, dL, dx, de = derivative_extra(rad, R, u, L, F, T, y[13:-1], inertia)
+        out[7:10], out[10:13], out[13:-1], out[-1] = du, dL, dx, de
+        return out
     out[7:10] = F / mass
     out[10:13] = T
     return out
@@ -225,98 +254,126 @@ def _finite(y):
 
 
 @njit(**JIT)
-def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef, sea):
-    """Advance the state vector (layout.py) at time t0 by up to n_steps in the water `sea`
-    (layout.sea_pack); stop before the first non-finite state. Returns (state, steps done)."""
+def _with_memory(rad, R, F, T, x):
+    """The loads plus the radiation memory's force (integrators.with_memory)."""
+    if not radiating(rad):
+        return F, T
+    Fm, Tm = memory_load(rad, R, x)
+    return F + Fm, T + Tm
+
+
+@njit(**JIT)
+def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef, sea, rad):
+    """Advance the state vector (layout.py; with radiation followed by the memory and E_rad) at time t0
+    by up to n_steps in the water `sea` (layout.sea_pack) with the radiation `rad` (layout.radiation_pack,
+    empty without); stop before the first non-finite state. Returns (state, steps done)."""
     y = y0.copy()
     flags = np.zeros(geom[0].shape[0], dtype=np.bool_)  # which samples are wet; the sums start afresh
     acc = np.zeros(34)
     ws = workspace(geom)
     x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
+    rad_on = radiating(rad)
+    mem, e_rad = (y[13:-1].copy(), y[-1]) if rad_on else (np.zeros(0), 0.0)
     h = 0.5 * dt
     nonlinear = (terms & NONLINEAR) != 0  # drag: relinearised at every half step
     # the water's motion makes damping affine, d u_water - D v (u_water . ws[4]): splitting's twist flow takes the general path
     waves = sea[0].shape[0] > 0
-    general = nonlinear or waves
+    general = nonlinear or waves or rad_on
     affine = ws[4]
     R = quat_to_matrix(q)
     F, T, D, wet = pose_loads(kind, x, R, t0, geom, mass, terms, coef, sea, flags, acc, ws)
-    K = damping_modes(D, R, mass, inertia)
+    K = modes(D, R, mass, inertia, rad)
     lam, V = np.zeros(6), np.eye(6)
     if wet and scheme == 2 and not nonlinear:
         lam, V = exact_modes(K, h)
     for step in range(n_steps):
         t = t0 + step * dt
+        memn, e_radn = mem, e_rad
         if scheme == 0:  # euler: drift, exact rotation, forces at the new pose, kick
             w = angular_velocity(R, L, inertia)
             xn = x + dt * u
             qn = normalized(quat_multiply(rotation_quat(dt * w), q))
             Rn = quat_to_matrix(qn)
+            if rad_on:
+                memn, e_radn = drift_memory(rad, R, Rn, u, L, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags, Fc, Tc, ws)  # euler carries no loads over
-            un, Ln = u + dt * Fc / mass, L + dt * Tc
+            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
+            un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
         elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
             if wet and general:
-                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws)
+                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
             elif wet:
                 un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia)
-            un, Ln = un + h * F / mass, Ln + h * T
+            Fk, Tk = _with_memory(rad, R, F, T, mem)
+            un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
+            if rad_on:
+                memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
-            un, Ln = un + h * Fc / mass, Ln + h * Tc
+            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
+            un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
             if wetn and general:
-                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws)
+                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
             elif wetn:
                 K = damping_modes(Dn, Rn, mass, inertia)
                 un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
+            Fk, Tk = _with_memory(rad, R, F, T, mem)
             if nonlinear:
-                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws)
+                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, Fk, Tk, D, wet, flags, ws, rad)
             else:
-                Fa, Ta = (F + affine[:3], T + affine[3:]) if waves else (F, T)
-                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet)
+                Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
+                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
+            if rad_on:
+                memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
+            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
             if nonlinear:
-                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fc, Tc, Dn, wetn, flags, ws)
+                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fk, Tk, Dn, wetn, flags, ws, rad)
             else:
                 if wetn:  # the same modes serve the next step's first half, at this pose
-                    K = damping_modes(Dn, Rn, mass, inertia)
+                    K = modes(Dn, Rn, mass, inertia, rad)
                     lam, V = exact_modes(K, h)
-                Fa, Ta = (Fc + affine[:3], Tc + affine[3:]) if waves else (Fc, Tc)
-                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn)
-        else:  # rk4 on (x, q, u, L), q renormalised
-            k1 = derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
-            k2 = derivative(kind, y + 0.5 * dt * k1, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
-            k3 = derivative(kind, y + 0.5 * dt * k2, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
-            k4 = derivative(kind, y + dt * k3, t + dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws)
-            yn = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            xn, qn, un, Ln = yn[0:3].copy(), normalized(yn[3:7]), yn[7:10].copy(), yn[10:13].copy()
+                Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
+                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn, rad)
+        else:  # rk4 on (x, q, u, L[, memory, E_rad]), q renormalised
+            k1 = derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
+            k2 = derivative(kind, y + 0.5 * dt * k1, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
+            k3 = derivative(kind, y + 0.5 * dt * k2, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
+            k4 = derivative(kind, y + dt * k3, t + dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
+            yr = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            xn, qn, un, Ln = yr[0:3].copy(), normalized(yr[3:7]), yr[7:10].copy(), yr[10:13].copy()
+            if rad_on:
+                memn, e_radn = yr[13:-1].copy(), yr[-1]
             Rn = quat_to_matrix(qn)
             Fc, Tc, Dn, wetn = F, T, D, wet  # unused by rk4
-        yn = np.empty(13)
+        yn = np.empty(y.shape[0])
         yn[0:3], yn[3:7], yn[7:10], yn[10:13] = xn, qn, un, Ln
+        if rad_on:
+            yn[13:-1], yn[-1] = memn, e_radn
         if not _finite(yn):
             return y, step
-        y, x, q, u, L, R = yn, xn, qn, un, Ln, Rn
+        y, x, q, u, L, R, mem, e_rad = yn, xn, qn, un, Ln, Rn, memn, e_radn
         if scheme != 3:
             F, T, D, wet = Fc, Tc, Dn, wetn
     return y, n_steps
 
 
 @njit(**JIT)
-def advance_many(Y, t0, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs, sea):
+def advance_many(Y, t0, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs, sea, rad):
     """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
     Returns the new states and each body's steps done (< n_steps where it diverged)."""
     out = np.empty_like(Y)
     done = np.empty(Y.shape[0], dtype=np.int64)
     for b in range(Y.shape[0]):
-        out[b], done[b] = advance(Y[b], t0, n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b], sea)
+        out[b], done[b] = advance(Y[b], t0, n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b], sea, rad)
     return out, done
 
 
@@ -326,7 +383,7 @@ def warm_up() -> float:
 
     from ..body import make_box
     from ..water import StillWater
-    from .layout import sea_pack
+    from .layout import NO_RADIATION, sea_pack
     from .simulation import observe
 
     start = time.perf_counter()
@@ -335,7 +392,7 @@ def warm_up() -> float:
     coef = np.ones(COEF_BASE + len(TERM_PARAMS))
     sea = sea_pack(StillWater(), body)
     for kind in (0, 1):
-        advance(y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea)
+        advance(y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, NO_RADIATION)
     for kind in (0, 1):
         observe(kind, y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], body.packed, body.mass, 15, coef, sea, np.empty(body.n_samples, dtype=np.bool_))
     return time.perf_counter() - start

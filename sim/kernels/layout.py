@@ -73,3 +73,16 @@ def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, f
     beta = water.direction
     comps = np.column_stack([water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)])
     return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius
+
+
+NO_RADIATION = (*(np.zeros((0, 0)) for _ in range(8)), np.zeros(0, dtype=np.int64))
+"""radiation_pack of a scene without radiation."""
+
+
+def radiation_pack(radiation, body, dt: float) -> tuple:
+    """A radiation.Radiation as the kernels take it (kernels/radiation.py): the generalised mass's
+    inverse, inverse square root and square root in the body frame, the memory's output, its exact
+    step over dt and its system (block-diagonal: bands and each row's block start). None: NO_RADIATION."""
+    if radiation is None:
+        return NO_RADIATION
+    return radiation.kernel_arrays(body, dt)

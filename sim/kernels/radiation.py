@@ -1,0 +1,146 @@
+"""Compiled twin of the radiation terms the integrators use (radiation.Radiation, integrators.kick,
+with_memory, drift_memory and exact_linear_flow's generalised mass).
+
+`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, H, Phi, Gamma, F, G, start): the inverse,
+the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6), the memory's
+output (6, n), its exact step over dt (band (n, w) and (n, 6)), its system (band (n, w), (n, 6)) and
+each row's block start (n,): the memory is block diagonal, one small block per fitted entry.
+Without radiation every array is empty. Vectors in the body frame are R^T times the world ones.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import JIT, njit
+from .rotation import mtv, mv
+
+
+@njit(inline="always", **JIT)
+def radiating(rad):
+    return rad[0].shape[0] == 6
+
+
+@njit(**JIT)
+def to_world(R, Mb):
+    """R6 Mb R6^T, R6 = diag(R, R): a body-frame 6x6 matrix in world axes."""
+    out = np.empty((6, 6))
+    for bi in range(2):
+        for bj in range(2):
+            for i in range(3):
+                for j in range(3):
+                    acc = 0.0
+                    for k in range(3):
+                        for m in range(3):
+                            acc += R[i, k] * Mb[3 * bi + k, 3 * bj + m] * R[j, m]
+                    out[3 * bi + i, 3 * bj + j] = acc
+    return out
+
+
+@njit(**JIT)
+def band_matvec(band, start, x):
+    """M x for a block-diagonal M stored as a band: row i's entries sit in columns start[i] + j."""
+    out = np.empty(band.shape[0])
+    for i in range(band.shape[0]):
+        acc = 0.0
+        for j in range(band.shape[1]):
+            acc += band[i, j] * x[min(start[i] + j, x.shape[0] - 1)]
+        out[i] = acc
+    return out
+
+
+@njit(**JIT)
+def matvec(M, x):
+    out = np.zeros(M.shape[0])
+    for i in range(M.shape[0]):
+        acc = 0.0
+        for j in range(M.shape[1]):
+            acc += M[i, j] * x[j]
+        out[i] = acc
+    return out
+
+
+@njit(**JIT)
+def body_twist(R, u, L, inertia):
+    """(u_b, omega_b) stacked: the twist in the body frame."""
+    nu = np.empty(6)
+    nu[:3] = mtv(R, u)
+    nu[3:] = mtv(R, L) / inertia
+    return nu
+
+
+@njit(**JIT)
+def kick(rad, R, u, L, F, T, h, inertia):
+    """(u, L) after the impulse h (F, T) through the generalised mass (integrators.kick)."""
+    fb = np.empty(6)
+    fb[:3] = mtv(R, F)
+    fb[3:] = mtv(R, T)
+    d = h * matvec(rad[0], fb)
+    return u + mv(R, d[:3].copy()), L + mv(R, inertia * d[3:])
+
+
+@njit(**JIT)
+def memory_load(rad, R, x):
+    """The memory's force and torque on the body, world frame: -R (H x)."""
+    mu = matvec(rad[3], x)
+    return -mv(R, mu[:3].copy()), -mv(R, mu[3:].copy())
+
+
+@njit(**JIT)
+def drift_memory(rad, R0, R1, u, L, x, e_rad, dt, inertia):
+    """(memory, E_rad) after a drift (integrators.drift_memory): the memory advanced exactly with the
+    body-frame twist averaged over the drift's two orientations; the energy as dt nu . mu averaged."""
+    nu0 = body_twist(R0, u, L, inertia)
+    nu1 = body_twist(R1, u, L, inertia)
+    xn = band_matvec(rad[4], rad[8], x) + matvec(rad[5], 0.5 * (nu0 + nu1))
+    mu0, mu1 = matvec(rad[3], x), matvec(rad[3], xn)
+    power = 0.0
+    for i in range(6):
+        power += 0.5 * (nu0[i] * mu0[i] + nu1[i] * mu1[i])
+    return xn, e_rad + dt * power
+
+
+@njit(**JIT)
+def general_modes(D, R, rad):
+    """K = W D W with W = (M_RB + A_inf)^(-1/2) in world axes (damping_modes with the added mass)."""
+    W = to_world(R, rad[1])
+    return np.dot(np.dot(W, D), W)
+
+
+@njit(**JIT)
+def to_scaled(rad, R, u, L, F, T, inertia):
+    """(y, g) = (S nu, W f): the twist and the forcing in mass-normalised coordinates."""
+    nu = np.empty(6)
+    nu[:3] = u
+    nu[3:] = mv(R, mtv(R, L) / inertia)
+    f = np.empty(6)
+    f[:3] = F
+    f[3:] = T
+    return matvec(to_world(R, rad[2]), nu), matvec(to_world(R, rad[1]), f)
+
+
+@njit(**JIT)
+def from_scaled(rad, R, y, inertia):
+    """(u, L) from y = S nu."""
+    nu = matvec(to_world(R, rad[1]), y)
+    return nu[:3].copy(), mv(R, inertia * mtv(R, nu[3:].copy()))
+
+
+@njit(**JIT)
+def derivative_extra(rad, R, u, L, F, T, x, inertia):
+    """For rk4: (du/dt, dL/dt, dx/dt, dE_rad/dt) with the generalised mass and the memory
+    (integrators.derivative): (M_RB + A_inf) nu' = f - mu - (0, omega x L), L' = I nu'_omega + omega x L."""
+    w = mv(R, mtv(R, L) / inertia)
+    spin = np.array([w[1] * L[2] - w[2] * L[1], w[2] * L[0] - w[0] * L[2], w[0] * L[1] - w[1] * L[0]])
+    Fm, Tm = memory_load(rad, R, x)
+    fb = np.empty(6)
+    fb[:3] = mtv(R, F + Fm)
+    fb[3:] = mtv(R, T + Tm - spin)
+    d = matvec(rad[0], fb)
+    nub = body_twist(R, u, L, inertia)
+    mu = matvec(rad[3], x)
+    e_rate = 0.0
+    for i in range(6):
+        e_rate += nub[i] * mu[i]
+    return mv(R, d[:3].copy()), mv(R, inertia * d[3:]) + spin, band_matvec(rad[6], rad[8], x) + matvec(rad[7], nub), e_rate
+

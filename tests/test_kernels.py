@@ -266,3 +266,28 @@ def test_a_body_large_against_the_waves_falls_back_to_the_direct_sum():
     water = jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1)
     assert prepare(sea_pack(water, body), 0.0, np.zeros(3))[0] == -1
     assert prepare(sea_pack(water, BODIES["cube"]()), 0.0, np.zeros(3))[0] > 0
+
+
+# ---- radiation: the compiled Cummins terms against the reference ------------------------------------
+
+
+@pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4"])
+@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("changes", [{"initial__omega": (0.3, -0.2, 0.1)}, {"fluid__drag_coefficient": 0.8, "fluid__damping": 30.0},
+                                     {"waves__kind": "regular", "waves__height": 0.3, "fluid__damping": 20.0}])  # fmt: skip
+def test_compiled_radiation_matches_numpy(integrator, forces, changes):
+    """Added mass in the kicks and the exact linear flow, the memory and E_rad, alone, with damping and
+    drag (relinearised) and in waves: kernel and reference to round-off, memory states included."""
+    config = with_overrides(load_scene("rest"), fluid__forces=forces, step__integrator=integrator, fluid__radiation="bem",
+                            initial__position=(0.0, 0.0, -0.3), **changes)  # fmt: skip
+    reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
+    assert compiled.compiled and len(compiled.state.memory) > 20
+    for _ in range(3):
+        reference.step(30)
+        compiled.step(30)
+        a, b = reference.state.as_vector(), compiled.state.as_vector()
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * (1 + np.abs(a).max()))
+    assert compiled.state.E_rad > 0
+    fa, fb = reference.frame(), compiled.frame()
+    np.testing.assert_allclose(fb.force_world, fa.force_world, rtol=1e-9, atol=1e-6)
+    assert fb.E_kin == pytest.approx(fa.E_kin, rel=1e-9)

@@ -129,9 +129,9 @@ def test_energy_given_to_the_waves_balances_the_body_energy(cube, integrator, to
     assert abs(f.E_total + f.E_rad - start) < tol * f.E_rad
 
 
-def test_radiation_runs_on_numpy_and_a_sinking_body_is_refused():
+def test_radiation_switches_on_and_off_and_a_sinking_body_is_refused():
     sim = Simulation(with_overrides(load_scene("rest"), fluid__radiation="bem"))
-    assert not sim.compiled and len(sim.state.memory) == sim.model.radiation.states
+    assert sim.compiled and len(sim.state.memory) == sim.model.radiation.states
     sim.update(fluid__radiation="none")
     assert sim.compiled and len(sim.state.memory) == 0 and sim.state.as_vector().shape == (13,)
     with pytest.raises(ConfigError, match="no floating equilibrium"):

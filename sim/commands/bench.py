@@ -31,6 +31,8 @@ class BenchArgs:
     """Seconds of stepping per timed run (the step count adapts to it)."""
     ensemble: int = 100
     """Bodies in the ensemble row (0 to skip)."""
+    radiation: bool = True
+    """Also time each fixed-step integrator with radiation (added mass and memory, the cube's shipped coefficients) against without."""
     waves: bool = True
     """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea with and without drag) on
     both models, against the direct sum over components and the numpy reference."""
@@ -99,6 +101,7 @@ def bench(args: BenchArgs) -> int:
                 costs.append(time.perf_counter() - t0)
             ens_rows.append((name, f"{args.ensemble * 100 / statistics.median(costs):,.0f}"))
             bar.update()
+    radiation_rows = _radiation_rows(base, args) if args.radiation else []
     wave_rows = _wave_rows(base, args, bar) if args.waves else []
     bar.close()
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
@@ -114,6 +117,12 @@ def bench(args: BenchArgs) -> int:
         print("|---|---|")
         for name, rate in ens_rows:
             print(f"| {name} | {rate} |")
+    if radiation_rows:
+        print()
+        print("| radiation (N = 10) | model | integrator | us/step without | us/step with | with / without |")
+        print("|---|---|---|---|---|---|")
+        for r in radiation_rows:
+            print("| " + " | ".join(r) + " |")
     if wave_rows:
         print()
         print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
@@ -123,6 +132,18 @@ def bench(args: BenchArgs) -> int:
         for r in wave_rows:
             print("| " + " | ".join(r) + " |")
     return 0
+
+
+def _radiation_rows(base, args: BenchArgs) -> list[tuple[str, ...]]:
+    """Cost per step with radiation = 'bem' against without, each integrator and model, in the same run."""
+    rows = []
+    for forces in ("points", "panels"):
+        for name in args.integrators:
+            scene = with_overrides(base, fluid__forces=forces, step__integrator=name, body__points_per_edge=10)
+            off = _median_step_seconds(Simulation(scene), args.repeats, args.budget)
+            on = _median_step_seconds(Simulation(with_overrides(scene, fluid__radiation="bem")), args.repeats, args.budget)
+            rows.append(("cube at rest, 10 fitted entries", forces, name, f"{off * 1e6:.2f}", f"{on * 1e6:.2f}", f"{on / off:.2f}x"))
+    return rows
 
 
 SEAS = (("still", {}), ("regular (H 0.5 m, T 6 s)", {"waves__kind": "regular", "waves__height": 0.5, "waves__period": 6.0}),

@@ -14,10 +14,10 @@ from ..integrators import RELINEARISE, RELINEARISE_TOL
 from . import JIT, njit
 from .forces import NONLINEAR, linearised, pose_loads, twist_loads
 from .layout import COEF_BASE, TERM_PARAMS
+from .radiation import derivative_extra, drift_memory, frames, from_scaled, general_modes, memory_load, radiating, to_scaled
+from .radiation import kick as rad_kick
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
-from .radiation import derivative_extra, drift_memory, from_scaled, general_modes, memory_load, radiating, to_scaled
-from .radiation import kick as rad_kick
 from .surface import workspace
 
 
@@ -74,17 +74,22 @@ def kick(rad, R, u, L, F, T, h, mass, inertia):
 
 
 @njit(**JIT)
-def modes(D, R, mass, inertia, rad):
-    """K = W D W, W the inverse square root of the (generalised) mass."""
+def modes(D, R, mass, inertia, rad, WS):
+    """K = W D W, W the inverse square root of the (generalised) mass (WS: its frames at R, radiation.frames)."""
     if radiating(rad):
-        return general_modes(D, R, rad)
+        return general_modes(D, WS)
     return damping_modes(D, R, mass, inertia)
 
 
 @njit(**JIT)
-def twist_flow(K, R, u, L, h, mass, inertia):
+def twist_flow(K, R, u, L, h, mass, inertia, rad, WS):
     """(u, L) after h of linear damping alone by one explicit midpoint step (integrators.twist_flow
-    when damping is the only twist term)."""
+    when damping is the only twist term), in mass-normalised coordinates (the generalised mass's
+    when radiating)."""
+    if radiating(rad):
+        y, _ = to_scaled(WS, R, u, L, u, u, inertia)
+        y_mid = y - 0.5 * h * mat6v(K, y)
+        return from_scaled(WS, R, y - h * mat6v(K, y_mid), inertia)
     sqrt_m = math.sqrt(mass)
     w_half = np.sqrt(inertia)
     y = np.empty(6)
@@ -108,7 +113,7 @@ def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D,
 
 
 @njit(**JIT)
-def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad):
+def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
     """(u, L) after h under the linearised loads f - D (u, omega) at a frozen pose, exactly, as in
     integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f (W: the generalised mass's when radiating)."""
     if not wet:
@@ -116,7 +121,7 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad):
     sqrt_m = math.sqrt(mass)
     w_half = np.sqrt(inertia)
     if radiating(rad):
-        y, gv = to_scaled(rad, R, u, L, F, T, inertia)
+        y, gv = to_scaled(WS, R, u, L, F, T, inertia)
     else:
         y = np.empty(6)
         y[:3] = sqrt_m * u
@@ -167,7 +172,7 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad):
                 acc += V[i, j] * c[j]
             y[i] = acc
     if radiating(rad):
-        return from_scaled(rad, R, y, inertia)
+        return from_scaled(WS, R, y, inertia)
     return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
 
 
@@ -177,10 +182,11 @@ def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F
     f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags, ws)
     lam, V = np.zeros(6), np.eye(6)
     K = np.zeros((6, 6))
+    WS = frames(rad, R)
     if wet:
-        K = modes(Dt, R, mass, inertia, rad)
+        K = modes(Dt, R, mass, inertia, rad, WS)
         lam, V = exact_modes(K, h)
-    return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet, rad)
+    return linear_flow(K, lam, V, R, u, L, f[:3], f[3:], h, mass, inertia, wet, rad, WS)
 
 
 @njit(**JIT)
@@ -278,11 +284,12 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
     nonlinear = (terms & NONLINEAR) != 0  # drag: relinearised at every half step
     # the water's motion makes damping affine, d u_water - D v (u_water . ws[4]): splitting's twist flow takes the general path
     waves = sea[0].shape[0] > 0
-    general = nonlinear or waves or rad_on
+    general = nonlinear or waves
     affine = ws[4]
     R = quat_to_matrix(q)
+    WS = frames(rad, R)
     F, T, D, wet = pose_loads(kind, x, R, t0, geom, mass, terms, coef, sea, flags, acc, ws)
-    K = modes(D, R, mass, inertia, rad)
+    K = modes(D, R, mass, inertia, rad, WS)
     lam, V = np.zeros(6), np.eye(6)
     if wet and scheme == 2 and not nonlinear:
         lam, V = exact_modes(K, h)
@@ -305,12 +312,13 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             if wet and general:
                 un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
             elif wet:
-                un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia)
+                un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
             Fk, Tk = _with_memory(rad, R, F, T, mem)
             un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
+            WS = frames(rad, Rn)
             if rad_on:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
@@ -319,18 +327,19 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             if wetn and general:
                 un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
             elif wetn:
-                K = damping_modes(Dn, Rn, mass, inertia)
-                un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia)
+                K = modes(Dn, Rn, mass, inertia, rad, WS)
+                un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
             Fk, Tk = _with_memory(rad, R, F, T, mem)
             if nonlinear:
                 un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, Fk, Tk, D, wet, flags, ws, rad)
             else:
                 Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
-                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad)
+                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
+            WS = frames(rad, Rn)
             if rad_on:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
@@ -339,10 +348,10 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
                 un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fk, Tk, Dn, wetn, flags, ws, rad)
             else:
                 if wetn:  # the same modes serve the next step's first half, at this pose
-                    K = modes(Dn, Rn, mass, inertia, rad)
+                    K = modes(Dn, Rn, mass, inertia, rad, WS)
                     lam, V = exact_modes(K, h)
                 Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
-                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn, rad)
+                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn, rad, WS)
         else:  # rk4 on (x, q, u, L[, memory, E_rad]), q renormalised
             k1 = derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
             k2 = derivative(kind, y + 0.5 * dt * k1, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)

@@ -101,14 +101,33 @@ def drift_memory(rad, R0, R1, u, L, x, e_rad, dt, inertia):
 
 
 @njit(**JIT)
-def general_modes(D, R, rad):
-    """K = W D W with W = (M_RB + A_inf)^(-1/2) in world axes (damping_modes with the added mass)."""
-    W = to_world(R, rad[1])
-    return np.dot(np.dot(W, D), W)
+def frames(rad, R):
+    """(W, S): the inverse square root and the square root of M_RB + A_inf in world axes at R
+    (empty without radiation); computed once per pose and shared by its half steps."""
+    if not radiating(rad):
+        return np.zeros((0, 0)), np.zeros((0, 0))
+    return to_world(R, rad[1]), to_world(R, rad[2])
 
 
 @njit(**JIT)
-def to_scaled(rad, R, u, L, F, T, inertia):
+def general_modes(D, WS):
+    """K = W D W with W = (M_RB + A_inf)^(-1/2) in world axes (damping_modes with the added mass)."""
+    W = WS[0]
+    WD = np.zeros((6, 6))
+    for i in range(6):
+        for k in range(6):
+            for j in range(6):
+                WD[i, j] += W[i, k] * D[k, j]
+    K = np.zeros((6, 6))
+    for i in range(6):
+        for k in range(6):
+            for j in range(6):
+                K[i, j] += WD[i, k] * W[k, j]
+    return K
+
+
+@njit(**JIT)
+def to_scaled(WS, R, u, L, F, T, inertia):
     """(y, g) = (S nu, W f): the twist and the forcing in mass-normalised coordinates."""
     nu = np.empty(6)
     nu[:3] = u
@@ -116,13 +135,13 @@ def to_scaled(rad, R, u, L, F, T, inertia):
     f = np.empty(6)
     f[:3] = F
     f[3:] = T
-    return matvec(to_world(R, rad[2]), nu), matvec(to_world(R, rad[1]), f)
+    return matvec(WS[1], nu), matvec(WS[0], f)
 
 
 @njit(**JIT)
-def from_scaled(rad, R, y, inertia):
+def from_scaled(WS, R, y, inertia):
     """(u, L) from y = S nu."""
-    nu = matvec(to_world(R, rad[1]), y)
+    nu = matvec(WS[0], y)
     return nu[:3].copy(), mv(R, inertia * mtv(R, nu[3:].copy()))
 
 

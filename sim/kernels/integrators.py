@@ -14,7 +14,7 @@ from ..integrators import RELINEARISE, RELINEARISE_TOL
 from . import JIT, njit
 from .forces import NONLINEAR, linearised, pose_loads, twist_loads
 from .layout import COEF_BASE, TERM_PARAMS
-from .radiation import derivative_extra, drift_memory, frames, from_scaled, general_modes, memory_load, radiating, to_scaled
+from .radiation import derivative_extra, drift_memory, frames, from_scaled, general_modes, memory_load, to_scaled
 from .radiation import kick as rad_kick
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .state import angular_velocity
@@ -65,28 +65,28 @@ def exact_modes(K, h):
     return np.linalg.eigh(K)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def kick(rad, R, u, L, F, T, h, mass, inertia):
     """(u, L) after the impulse h (F, T) (integrators.kick): through the added mass when radiating."""
-    if radiating(rad):
+    if rad is not None:
         return rad_kick(rad, R, u, L, F, T, h, inertia)
     return u + h * F / mass, L + h * T
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def modes(D, R, mass, inertia, rad, WS):
     """K = W D W, W the inverse square root of the (generalised) mass (WS: its frames at R, radiation.frames)."""
-    if radiating(rad):
+    if rad is not None:
         return general_modes(D, WS)
     return damping_modes(D, R, mass, inertia)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def twist_flow(K, R, u, L, h, mass, inertia, rad, WS):
     """(u, L) after h of linear damping alone by one explicit midpoint step (integrators.twist_flow
     when damping is the only twist term), in mass-normalised coordinates (the generalised mass's
     when radiating)."""
-    if radiating(rad):
+    if rad is not None:
         y, _ = to_scaled(WS, R, u, L, u, u, inertia)
         y_mid = y - 0.5 * h * mat6v(K, y)
         return from_scaled(WS, R, y - h * mat6v(K, y_mid), inertia)
@@ -112,7 +112,7 @@ def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D,
     return kick(rad, R, u, L, F, T, h, mass, inertia)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
     """(u, L) after h under the linearised loads f - D (u, omega) at a frozen pose, exactly, as in
     integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f (W: the generalised mass's when radiating)."""
@@ -120,7 +120,7 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
         return kick(rad, R, u, L, F, T, h, mass, inertia)
     sqrt_m = math.sqrt(mass)
     w_half = np.sqrt(inertia)
-    if radiating(rad):
+    if rad is not None:
         y, gv = to_scaled(WS, R, u, L, F, T, inertia)
     else:
         y = np.empty(6)
@@ -171,7 +171,7 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
             for j in range(6):
                 acc += V[i, j] * c[j]
             y[i] = acc
-    if radiating(rad):
+    if rad is not None:
         return from_scaled(WS, R, y, inertia)
     return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
 
@@ -242,7 +242,7 @@ def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws
     out = np.empty(y.shape[0])
     out[0:3] = u
     out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
-    if radiating(rad):
+    if rad is not None:
         du, dL, dx, de = derivative_extra(rad, R, u, L, F, T, y[13:-1], inertia)
         out[7:10], out[10:13], out[13:-1], out[-1] = du, dL, dx, de
         return out
@@ -259,10 +259,10 @@ def _finite(y):
     return True
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def _with_memory(rad, R, F, T, x):
     """The loads plus the radiation memory's force (integrators.with_memory)."""
-    if not radiating(rad):
+    if rad is None:
         return F, T
     Fm, Tm = memory_load(rad, R, x)
     return F + Fm, T + Tm
@@ -278,8 +278,7 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
     acc = np.zeros(34)
     ws = workspace(geom)
     x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
-    rad_on = radiating(rad)
-    mem, e_rad = (y[13:-1].copy(), y[-1]) if rad_on else (np.zeros(0), 0.0)
+    mem, e_rad = (np.zeros(0), 0.0) if rad is None else (y[13:-1].copy(), y[-1])
     h = 0.5 * dt
     nonlinear = (terms & NONLINEAR) != 0  # drag: relinearised at every half step
     # the water's motion makes damping affine, d u_water - D v (u_water . ws[4]): splitting's twist flow takes the general path
@@ -301,7 +300,7 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             xn = x + dt * u
             qn = normalized(quat_multiply(rotation_quat(dt * w), q))
             Rn = quat_to_matrix(qn)
-            if rad_on:
+            if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, u, L, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags, Fc, Tc, ws)  # euler carries no loads over
@@ -318,8 +317,9 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            WS = frames(rad, Rn)
-            if rad_on:
+            if rad is not None:
+                WS = frames(rad, Rn)
+            if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
@@ -339,8 +339,9 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            WS = frames(rad, Rn)
-            if rad_on:
+            if rad is not None:
+                WS = frames(rad, Rn)
+            if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
@@ -359,13 +360,13 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             k4 = derivative(kind, y + dt * k3, t + dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
             yr = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
             xn, qn, un, Ln = yr[0:3].copy(), normalized(yr[3:7]), yr[7:10].copy(), yr[10:13].copy()
-            if rad_on:
+            if rad is not None:
                 memn, e_radn = yr[13:-1].copy(), yr[-1]
             Rn = quat_to_matrix(qn)
             Fc, Tc, Dn, wetn = F, T, D, wet  # unused by rk4
         yn = np.empty(y.shape[0])
         yn[0:3], yn[3:7], yn[7:10], yn[10:13] = xn, qn, un, Ln
-        if rad_on:
+        if rad is not None:
             yn[13:-1], yn[-1] = memn, e_radn
         if not _finite(yn):
             return y, step
@@ -400,8 +401,11 @@ def warm_up() -> float:
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     coef = np.ones(COEF_BASE + len(TERM_PARAMS))
     sea = sea_pack(StillWater(), body)
-    for kind in (0, 1):
-        advance(y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, NO_RADIATION)
+    eye, one = np.eye(6), np.ones((1, 1))
+    radiating = (eye, eye, eye, np.zeros((6, 1)), one, np.zeros((1, 6)), -one, np.zeros((1, 6)), np.zeros(1, dtype=np.int64))  # the types only
+    for rad in (NO_RADIATION, radiating):
+        for kind in (0, 1):
+            advance(np.concatenate([y, np.zeros(2)]) if rad else y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, rad)
     for kind in (0, 1):
         observe(kind, y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], body.packed, body.mass, 15, coef, sea, np.empty(body.n_samples, dtype=np.bool_))
     return time.perf_counter() - start

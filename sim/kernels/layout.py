@@ -75,8 +75,8 @@ def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, f
     return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius
 
 
-NO_RADIATION = (*(np.zeros((0, 0)) for _ in range(8)), np.zeros(0, dtype=np.int64))
-"""radiation_pack of a scene without radiation."""
+NO_RADIATION = None
+"""radiation_pack of a scene without radiation (the kernels specialise on it: see kernels/radiation.py)."""
 
 
 def radiation_pack(radiation, body, dt: float) -> tuple:

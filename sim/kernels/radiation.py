@@ -5,7 +5,8 @@ with_memory, drift_memory and exact_linear_flow's generalised mass).
 the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6), the memory's
 output (6, n), its exact step over dt (band (n, w) and (n, 6)), its system (band (n, w), (n, 6)) and
 each row's block start (n,): the memory is block diagonal, one small block per fitted entry.
-Without radiation every array is empty. Vectors in the body frame are R^T times the world ones.
+Without radiation `rad` is None: numba compiles that case apart and prunes every radiation branch
+(`rad is None` tests on an argument are resolved at compile time), so still scenes pay nothing. Vectors in the body frame are R^T times the world ones.
 """
 
 from __future__ import annotations
@@ -14,11 +15,6 @@ import numpy as np
 
 from . import JIT, njit
 from .rotation import mtv, mv
-
-
-@njit(inline="always", **JIT)
-def radiating(rad):
-    return rad[0].shape[0] == 6
 
 
 @njit(**JIT)
@@ -104,7 +100,7 @@ def drift_memory(rad, R0, R1, u, L, x, e_rad, dt, inertia):
 def frames(rad, R):
     """(W, S): the inverse square root and the square root of M_RB + A_inf in world axes at R
     (empty without radiation); computed once per pose and shared by its half steps."""
-    if not radiating(rad):
+    if rad is None:
         return np.zeros((0, 0)), np.zeros((0, 0))
     return to_world(R, rad[1]), to_world(R, rad[2])
 

@@ -206,22 +206,28 @@ class Radiation:
         return self._frame(R).T @ nu
 
     def kernel_arrays(self, body, dt: float) -> tuple:
-        """(Minv_b, W_b, S_b, H, Phi, Gamma, F, G, start) for the compiled kernels (kernels/radiation.py).
-        The memory is block diagonal (one block per fitted entry), so Phi and F go as bands: row i holds
-        its block's columns start[i], start[i] + 1, ..."""
+        """(Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h) for the compiled kernels
+        (kernels/radiation.py). The memory is block diagonal, one block per fitted entry, each block
+        fed by one twist component and feeding one load component: Phi and F go as bands (row i holds
+        its block's columns start[i], start[i] + 1, ...), Gamma, G and H as one number per state with
+        its twist component col[i] and load component row[i]."""
         Mb = self.added_mass_body + np.diag([body.mass] * 3 + list(body.inertia))
         lam, V = np.linalg.eigh(Mb)
         self.advance(np.zeros(self.states), np.zeros(6), dt)  # fills the exact step for dt
         Phi, Gamma = self._steps[dt]
-        sizes = [len(e.G) for e in self.memory.entries]
+        entries = self.memory.entries
+        sizes = [len(e.G) for e in entries]
         start = np.repeat(np.cumsum([0, *sizes[:-1]]), sizes).astype(np.int64)
-        width = max(sizes)
-        rows = np.arange(self.states)
-        cols = np.minimum(start[:, None] + np.arange(width), self.states - 1)
-        inside = start[:, None] + np.arange(width) < (start + np.repeat(sizes, sizes))[:, None]
-        band = lambda M: np.where(inside, M[rows[:, None], cols], 0.0)  # noqa: E731
-        arrays = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, self.H, band(Phi), Gamma, band(self.F), self.G)
-        return (*(np.ascontiguousarray(a, dtype=float) for a in arrays), start)
+        col = np.repeat([e.col for e in entries], sizes).astype(np.int64)
+        row = np.repeat([e.row for e in entries], sizes).astype(np.int64)
+        states = np.arange(self.states)
+        offsets = np.arange(max(sizes))
+        inside = offsets < np.repeat(sizes, sizes)[:, None]
+        cols = np.where(inside, start[:, None] + offsets, 0)
+        band = lambda M: np.where(inside, M[states[:, None], cols], 0.0)  # noqa: E731
+        dense = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, band(Phi), band(self.F))
+        per_state = (Gamma[states, col], self.G[states, col], self.H[row, states])
+        return (*(np.ascontiguousarray(a, dtype=float) for a in dense), start, col, row, *(np.ascontiguousarray(a, dtype=float) for a in per_state))
 
 
 def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiation:

@@ -402,7 +402,8 @@ def warm_up() -> float:
     coef = np.ones(COEF_BASE + len(TERM_PARAMS))
     sea = sea_pack(StillWater(), body)
     eye, one = np.eye(6), np.ones((1, 1))
-    radiating = (eye, eye, eye, np.zeros((6, 1)), one, np.zeros((1, 6)), -one, np.zeros((1, 6)), np.zeros(1, dtype=np.int64))  # the types only
+    index, zero = np.zeros(1, dtype=np.int64), np.zeros(1)
+    radiating = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero)  # the types only
     for rad in (NO_RADIATION, radiating):
         for kind in (0, 1):
             advance(np.concatenate([y, np.zeros(2)]) if rad else y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, rad)

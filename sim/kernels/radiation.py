@@ -1,10 +1,12 @@
 """Compiled twin of the radiation terms the integrators use (radiation.Radiation, integrators.kick,
 with_memory, drift_memory and exact_linear_flow's generalised mass).
 
-`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, H, Phi, Gamma, F, G, start): the inverse,
-the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6), the memory's
-output (6, n), its exact step over dt (band (n, w) and (n, 6)), its system (band (n, w), (n, 6)) and
-each row's block start (n,): the memory is block diagonal, one small block per fitted entry.
+`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h): the
+inverse, the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6); the
+memory's exact step over dt and its system as bands (n, w), row i holding columns start[i] + j (the
+memory is block diagonal, one small block per fitted entry); and per state i the twist component
+col[i] feeding it (through gamma[i] over a step, g[i] in the system) and the load component row[i]
+it feeds (through h[i]).
 Without radiation `rad` is None: numba compiles that case apart and prunes every radiation branch
 (`rad is None` tests on an argument are resolved at compile time), so still scenes pay nothing. Vectors in the body frame are R^T times the world ones.
 """
@@ -45,6 +47,16 @@ def band_matvec(band, start, x):
     return out
 
 
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
+def memory_output(rad, x):
+    """mu = H x (6,): each state adds h[i] x[i] to its load component."""
+    mu = np.zeros(6)
+    row, h = rad[7], rad[10]
+    for i in range(x.shape[0]):
+        mu[row[i]] += h[i] * x[i]
+    return mu
+
+
 @njit(**JIT)
 def matvec(M, x):
     out = np.zeros(M.shape[0])
@@ -65,7 +77,7 @@ def body_twist(R, u, L, inertia):
     return nu
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def kick(rad, R, u, L, F, T, h, inertia):
     """(u, L) after the impulse h (F, T) through the generalised mass (integrators.kick)."""
     fb = np.empty(6)
@@ -75,28 +87,31 @@ def kick(rad, R, u, L, F, T, h, inertia):
     return u + mv(R, d[:3].copy()), L + mv(R, inertia * d[3:])
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def memory_load(rad, R, x):
     """The memory's force and torque on the body, world frame: -R (H x)."""
-    mu = matvec(rad[3], x)
+    mu = memory_output(rad, x)
     return -mv(R, mu[:3].copy()), -mv(R, mu[3:].copy())
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def drift_memory(rad, R0, R1, u, L, x, e_rad, dt, inertia):
     """(memory, E_rad) after a drift (integrators.drift_memory): the memory advanced exactly with the
     body-frame twist averaged over the drift's two orientations; the energy as dt nu . mu averaged."""
     nu0 = body_twist(R0, u, L, inertia)
     nu1 = body_twist(R1, u, L, inertia)
-    xn = band_matvec(rad[4], rad[8], x) + matvec(rad[5], 0.5 * (nu0 + nu1))
-    mu0, mu1 = matvec(rad[3], x), matvec(rad[3], xn)
+    xn = band_matvec(rad[3], rad[5], x)
+    col, gamma = rad[6], rad[8]
+    for i in range(xn.shape[0]):
+        xn[i] += gamma[i] * 0.5 * (nu0[col[i]] + nu1[col[i]])
+    mu0, mu1 = memory_output(rad, x), memory_output(rad, xn)
     power = 0.0
     for i in range(6):
         power += 0.5 * (nu0[i] * mu0[i] + nu1[i] * mu1[i])
     return xn, e_rad + dt * power
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def frames(rad, R):
     """(W, S): the inverse square root and the square root of M_RB + A_inf in world axes at R
     (empty without radiation); computed once per pose and shared by its half steps."""
@@ -122,7 +137,7 @@ def general_modes(D, WS):
     return K
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def to_scaled(WS, R, u, L, F, T, inertia):
     """(y, g) = (S nu, W f): the twist and the forcing in mass-normalised coordinates."""
     nu = np.empty(6)
@@ -134,14 +149,14 @@ def to_scaled(WS, R, u, L, F, T, inertia):
     return matvec(WS[1], nu), matvec(WS[0], f)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)
 def from_scaled(WS, R, y, inertia):
     """(u, L) from y = S nu."""
     nu = matvec(WS[0], y)
     return nu[:3].copy(), mv(R, inertia * mtv(R, nu[3:].copy()))
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def derivative_extra(rad, R, u, L, F, T, x, inertia):
     """For rk4: (du/dt, dL/dt, dx/dt, dE_rad/dt) with the generalised mass and the memory
     (integrators.derivative): (M_RB + A_inf) nu' = f - mu - (0, omega x L), L' = I nu'_omega + omega x L."""
@@ -153,9 +168,13 @@ def derivative_extra(rad, R, u, L, F, T, x, inertia):
     fb[3:] = mtv(R, T + Tm - spin)
     d = matvec(rad[0], fb)
     nub = body_twist(R, u, L, inertia)
-    mu = matvec(rad[3], x)
+    mu = memory_output(rad, x)
     e_rate = 0.0
     for i in range(6):
         e_rate += nub[i] * mu[i]
-    return mv(R, d[:3].copy()), mv(R, inertia * d[3:]) + spin, band_matvec(rad[6], rad[8], x) + matvec(rad[7], nub), e_rate
+    dx = band_matvec(rad[4], rad[5], x)
+    col, g = rad[6], rad[9]
+    for i in range(dx.shape[0]):
+        dx[i] += g[i] * nub[col[i]]
+    return mv(R, d[:3].copy()), mv(R, inertia * d[3:]) + spin, dx, e_rate
 

@@ -89,7 +89,7 @@ def warm_kernels() -> None:
         return
     from sim.kernels import warm_up
 
-    note = threading.Timer(5.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about a minute)...",
+    note = threading.Timer(5.0, lambda: print("floatsim: compiling the fast kernels (first run on this machine only, about two minutes)...",
                                               file=sys.stderr, flush=True))  # fmt: skip
     note.start()
     try:

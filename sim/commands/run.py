@@ -59,7 +59,7 @@ def announce_compile(sim: Simulation) -> None:
         from ..kernels import warm_up
 
         seconds = warm_up()
-        if seconds > 5.0:  # loading from the cache takes under a second; compiling, about a minute
+        if seconds > 5.0:  # loading from the cache takes under a second; compiling, about two minutes
             print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
 
 

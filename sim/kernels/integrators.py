@@ -100,6 +100,21 @@ def twist_flow(K, R, u, L, h, mass, inertia, rad, WS):
     return y[:3] / sqrt_m, mv(R, w_half * mtv(R, y[3:]))
 
 
+@njit(inline="always", **JIT)
+def damped_kick(K, WS, R, u, L, F, T, h, inertia, damping_first):
+    """Splitting's half step with radiation and linear damping: the damping's explicit midpoint
+    flow and the kick h (F, T), both in the generalised mass's normalised coordinates y = S nu
+    (there the kick is y + h W f), so the twist is converted once (twist_flow, then kick, in one)."""
+    y, g = to_scaled(WS, R, u, L, F, T, inertia)
+    if not damping_first:
+        y = y + h * g
+    y_mid = y - 0.5 * h * mat6v(K, y)
+    y = y - h * mat6v(K, y_mid)
+    if damping_first:
+        y = y + h * g
+    return from_scaled(WS, R, y, inertia)
+
+
 @njit(**JIT)
 def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags, ws, rad):
     """integrators.twist_flow with nonlinear twist terms, in waves or with radiation: explicit midpoint
@@ -308,12 +323,15 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
         elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
-            if wet and general:
-                un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
-            elif wet:
-                un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
             Fk, Tk = _with_memory(rad, R, F, T, mem)
-            un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
+            if rad is not None and wet and not general:
+                un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
+            else:
+                if wet and general:
+                    un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
+                elif wet:
+                    un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
+                un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
@@ -323,12 +341,16 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
-            un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
-            if wetn and general:
-                un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
-            elif wetn:
+            if rad is not None and wetn and not general:
                 K = modes(Dn, Rn, mass, inertia, rad, WS)
-                un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
+                un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
+            else:
+                un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
+                if wetn and general:
+                    un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
+                elif wetn:
+                    K = modes(Dn, Rn, mass, inertia, rad, WS)
+                    un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
             Fk, Tk = _with_memory(rad, R, F, T, mem)
             if nonlinear:

@@ -73,7 +73,7 @@ def kick(rad, R, u, L, F, T, h, mass, inertia):
     return u + h * F / mass, L + h * T
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def modes(D, R, mass, inertia, rad, WS):
     """K = W D W, W the inverse square root of the (generalised) mass (WS: its frames at R, radiation.frames)."""
     if rad is not None:
@@ -81,7 +81,7 @@ def modes(D, R, mass, inertia, rad, WS):
     return damping_modes(D, R, mass, inertia)
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def twist_flow(K, R, u, L, h, mass, inertia, rad, WS):
     """(u, L) after h of linear damping alone by one explicit midpoint step (integrators.twist_flow
     when damping is the only twist term), in mass-normalised coordinates (the generalised mass's
@@ -323,15 +323,20 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
         elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
             un, Ln = u, L
-            Fk, Tk = _with_memory(rad, R, F, T, mem)
-            if rad is not None and wet and not general:
-                un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
-            else:
+            if rad is None:  # a literal test on the argument: numba compiles each case apart
                 if wet and general:
                     un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
                 elif wet:
                     un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
-                un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
+                un, Ln = kick(rad, R, un, Ln, F, T, h, mass, inertia)
+            else:
+                Fk, Tk = _with_memory(rad, R, F, T, mem)
+                if wet and not general:
+                    un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
+                else:
+                    if wet:
+                        un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
+                    un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
@@ -340,17 +345,22 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
-            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
-            if rad is not None and wetn and not general:
-                K = modes(Dn, Rn, mass, inertia, rad, WS)
-                un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
-            else:
-                un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
+            if rad is None:
+                un, Ln = kick(rad, Rn, un, Ln, Fc, Tc, h, mass, inertia)
                 if wetn and general:
                     un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
                 elif wetn:
                     K = modes(Dn, Rn, mass, inertia, rad, WS)
                     un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
+            else:
+                Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
+                if wetn and not general:
+                    K = modes(Dn, Rn, mass, inertia, rad, WS)
+                    un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
+                else:
+                    un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
+                    if wetn:
+                        un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
         elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
             Fk, Tk = _with_memory(rad, R, F, T, mem)
             if nonlinear:

@@ -106,32 +106,23 @@ def bench(args: BenchArgs) -> int:
     bar.close()
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
     print(f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs")
-    print()
-    print("| model | samples | integrator | us/step | ns/sample | x real time | numpy us/step | speed-up |")
-    print("|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+    _table(("model", "samples", "integrator", "us/step", "ns/sample", "x real time", "numpy us/step", "speed-up"), rows)
     if ens_rows:
-        print()
-        print(f"| ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500 | body-steps/s |")
-        print("|---|---|")
-        for name, rate in ens_rows:
-            print(f"| {name} | {rate} |")
+        _table((f"ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500", "body-steps/s"), ens_rows)
     if radiation_rows:
-        print()
-        print("| radiation (N = 10) | model | integrator | us/step without | us/step with | with / without |")
-        print("|---|---|---|---|---|---|")
-        for r in radiation_rows:
-            print("| " + " | ".join(r) + " |")
+        _table(("radiation (N = 10)", "model", "integrator", "us/step without", "us/step with", "with / without"), radiation_rows)
     if wave_rows:
         print()
         print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
-        print()
-        print("| sea | model | us/step | vs still water | direct sum us/step | direct / this | numpy us/step |")
-        print("|---|---|---|---|---|---|---|")
-        for r in wave_rows:
-            print("| " + " | ".join(r) + " |")
+        _table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
     return 0
+
+
+def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
+    """A markdown table after a blank line."""
+    print()
+    for r in (header, ("---",) * len(header), *rows):
+        print("| " + " | ".join(r) + " |")
 
 
 def _radiation_rows(base, args: BenchArgs) -> list[tuple[str, ...]]:

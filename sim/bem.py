@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -107,7 +108,10 @@ def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float =
     for folder in (SHIPPED, user_cache()):
         path = folder / f"{key}.npz"
         if path.exists():
-            return Coefficients.load(path)
+            try:
+                return Coefficients.load(path)
+            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):  # damaged: solve again (and rewrite it)
+                continue
     result = solve(wv, wf, rho, g, depth, omega, progress)
     result.save(user_cache() / f"{key}.npz")
     return result

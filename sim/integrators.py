@@ -33,7 +33,7 @@ def with_memory(model: Model, R: np.ndarray, F, T, memory):
 
 def drift_memory(model: Model, s: State, R0: np.ndarray, R1: np.ndarray, u, L, dt: float):
     """(memory, E_rad) after a drift of dt at the twist (u, L): the memory advanced exactly with the
-    body-frame twist averaged over the drift's two orientations, and the energy it took from the body,
+    twist in the fit's axes (riding with the body) averaged over the drift's two orientations, and the energy it took from the body,
     dt nu . mu averaged likewise (mu = -the memory's force)."""
     rad = model.radiation
     if rad is None:
@@ -41,7 +41,7 @@ def drift_memory(model: Model, s: State, R0: np.ndarray, R1: np.ndarray, u, L, d
     body = model.body
     nu0 = np.concatenate([u, angular_velocity(body, R0, L)])
     nu1 = np.concatenate([u, angular_velocity(body, R1, L)])
-    memory = rad.advance(s.memory, 0.5 * (rad.body_velocity(R0, nu0) + rad.body_velocity(R1, nu1)), dt)
+    memory = rad.advance(s.memory, 0.5 * (rad.fit_velocity(R0, nu0) + rad.fit_velocity(R1, nu1)), dt)
     power = -0.5 * (nu0 @ rad.force(R0, s.memory) + nu1 @ rad.force(R1, memory))
     return memory, s.E_rad + dt * power
 

@@ -87,7 +87,7 @@ def _fit_rational(omega: np.ndarray, K: np.ndarray, order: int, iterations: int 
         weight = 1.0 / np.abs(np.polyval(q[::-1], s))
     poles = np.roots(q[::-1])
     if np.any(poles.real >= 0):  # reflect, then refit the numerator for the stable denominator
-        poles = -np.abs(poles.real) + 1j * poles.imag
+        poles = -np.maximum(np.abs(poles.real), 1e-6 * np.abs(poles)) + 1j * poles.imag  # strictly inside
         q = np.real(np.poly(poles))[::-1]
         Q = np.polyval(q[::-1], s)
         M = np.array([s ** (k + 1) / Q for k in range(n_p)]).T
@@ -114,17 +114,21 @@ def _misfit(c: Coefficients, i: int, j: int, Kfit: np.ndarray) -> float:
     return float(np.abs(Kfit - K).max() / np.abs(K).max())
 
 
-def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, significant: float = 0.05) -> RadiationMemory:
-    """Fit every entry whose damping is significant (its peak |B_ij| above `significant` of the
-    largest diagonal peak of its block: translations, rotations) with the lowest order meeting `tol`."""
+def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -> RadiationMemory:
+    """Fit every entry whose damping matters with the lowest order meeting `tol`. A diagonal entry
+    matters when its peak |B_ii| is above 1e-3 of the largest translational one (rotations: times
+    length^2, the body's size, so a sphere's numerical-noise roll damping is left out); a coupling
+    (i, j) when both its diagonals matter and its peak is above 5 % of sqrt(B_ii B_jj). So no coupling
+    is fitted without the damping that keeps the whole passive."""
     K = transfer(c)
     peak = np.abs(c.damping).max(axis=0)
-    scale_t, scale_r = peak[[0, 1, 2], [0, 1, 2]].max(), peak[[3, 4, 5], [3, 4, 5]].max()
+    diag = np.diag(peak)
+    scale = diag[:3].max()
+    keep = diag > 1e-3 * scale * np.array([1.0, 1.0, 1.0, length**2, length**2, length**2])
     entries = []
     for i in range(6):
         for j in range(6):
-            ref = np.sqrt((scale_t if i < 3 else scale_r) * (scale_t if j < 3 else scale_r))
-            if peak[i, j] <= significant * ref:
+            if not (keep[i] and keep[j]) or (i != j and peak[i, j] <= 0.05 * np.sqrt(diag[i] * diag[j])):
                 continue
             best = None
             for order in range(2, max_order + 1):
@@ -153,14 +157,17 @@ class Radiation:
     """A body's added mass and radiation memory in its own frame, for the integrators.
 
     In the Cummins equation (M_RB + A_inf) nu' = f - mu, mu = H x the memory force, x' = F x + G nu:
-    A_inf and the memory are linear about the rest pose and ride with the body (body-frame dofs), so
-    the generalised mass rotates with it. The gyroscopic terms of the added mass (Munk moments) are
-    left out: second order in the motion, like the linearisation itself."""
+    A_inf and the memory are linear about the rest pose and ride with the body, so the generalised
+    mass rotates with it. The memory keeps the axes it was fitted in (the world's at rest, R0 from
+    the body frame), where each state is fed by one twist component and feeds one load component;
+    twists and loads are turned into those axes and back. The gyroscopic terms of the added mass
+    (Munk moments) are left out: second order in the motion, like the linearisation itself."""
 
-    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory):
+    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray):
         self.added_mass_body = 0.5 * (added_mass_body + added_mass_body.T)  # symmetric in theory; the BEM's is to ~1e-4
         self.F, self.G, self.H = memory.F, memory.G, memory.H
         self.memory = memory
+        self.R0 = np.asarray(R0, float)
         self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     @property
@@ -182,15 +189,15 @@ class Radiation:
         return Mg
 
     def force(self, R: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """(6,) the memory's force and torque on the body, world frame: -R mu."""
-        return -self._frame(R) @ (self.H @ x)
+        """(6,) the memory's force and torque on the body, world frame: -mu turned from the fit's axes."""
+        return -self._frame(R @ self.R0.T) @ (self.H @ x)
 
     def rate(self, R: np.ndarray, x: np.ndarray, nu: np.ndarray) -> np.ndarray:
-        """x' = F x + G nu_body."""
-        return self.F @ x + self.G @ (self._frame(R).T @ nu)
+        """x' = F x + G nu_fit."""
+        return self.F @ x + self.G @ self.fit_velocity(R, nu)
 
-    def advance(self, x: np.ndarray, nu_body: np.ndarray, dt: float) -> np.ndarray:
-        """The memory after dt with a constant body-frame velocity, exactly (zero-order hold)."""
+    def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
+        """The memory after dt with a constant twist (in the fit's axes), exactly (zero-order hold)."""
         if dt not in self._steps:
             from scipy.linalg import expm
 
@@ -200,13 +207,14 @@ class Radiation:
             E = expm(aug * dt)
             self._steps = {dt: (E[:n, :n], E[:n, n:])}  # one dt at a time
         Phi, Gamma = self._steps[dt]
-        return Phi @ x + Gamma @ nu_body
+        return Phi @ x + Gamma @ nu_fit
 
-    def body_velocity(self, R: np.ndarray, nu: np.ndarray) -> np.ndarray:
-        return self._frame(R).T @ nu
+    def fit_velocity(self, R: np.ndarray, nu: np.ndarray) -> np.ndarray:
+        """A world twist in the fit's axes (the rest pose's world axes, riding with the body)."""
+        return self._frame(R @ self.R0.T).T @ nu
 
     def kernel_arrays(self, body, dt: float) -> tuple:
-        """(Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h) for the compiled kernels
+        """(Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0) for the compiled kernels
         (kernels/radiation.py). The memory is block diagonal, one block per fitted entry, each block
         fed by one twist component and feeding one load component: Phi and F go as bands (row i holds
         its block's columns start[i], start[i] + 1, ...), Gamma, G and H as one number per state with
@@ -227,7 +235,8 @@ class Radiation:
         band = lambda M: np.where(inside, M[states[:, None], cols], 0.0)  # noqa: E731
         dense = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, band(Phi), band(self.F))
         per_state = (Gamma[states, col], self.G[states, col], self.H[row, states])
-        return (*(np.ascontiguousarray(a, dtype=float) for a in dense), start, col, row, *(np.ascontiguousarray(a, dtype=float) for a in per_state))
+        return (*(np.ascontiguousarray(a, dtype=float) for a in dense), start, col, row, *(np.ascontiguousarray(a, dtype=float) for a in per_state),
+                np.ascontiguousarray(self.R0))  # fmt: skip
 
 
 def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiation:
@@ -235,10 +244,12 @@ def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True) -> Radiat
     shipped files, the cache or Capytaine; then the memory fit), in the body frame."""
     from .bem import radiation_coefficients
     from .equilibrium import rest_height
+    from .errors import ConfigError
 
     z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
     c = radiation_coefficients(body.mesh_vertices @ R0.T + [0.0, 0.0, z], body.mesh_faces, fluid.rho, fluid.g, progress=progress)
     memory = fit_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
-    body_memory = RadiationMemory(memory.F, memory.G @ T0, T0.T @ memory.H, memory.entries, T0.T @ c.added_mass_inf @ T0)
-    return Radiation(T0.T @ c.added_mass_inf @ T0, body_memory)
+    if not memory.entries:
+        raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")
+    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0)

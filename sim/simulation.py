@@ -155,6 +155,7 @@ class Simulation:
         self._rad: tuple = (None, None)  # ((model, dt), its radiation packed for the kernels)
         self.largest_turn = 0.0
         """With radiation: the largest rotation away from the rest orientation so far, degrees."""
+        self._memory_of = None  # the radiation whose memory the state carries
         self.expand_waves = True
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
@@ -311,18 +312,21 @@ class Simulation:
             omega = angular_velocity(body, R, self.state.L_world)
             self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
-        elif old.fluid != scene.fluid or old.waves != scene.waves:
-            self.model = self._model(body)
+        elif old.fluid != scene.fluid or old.waves != scene.waves or (self.model.radiation is not None and old.initial != scene.initial):
+            self.model = self._model(body)  # (radiation is linear about the scene's starting orientation)
             self._check_backend()
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
             self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
             self._check_backend()
 
     def _sync_memory(self) -> None:
-        """The state carries as many radiation memory states as the model has (zero when they appear)."""
-        n = 0 if self.model.radiation is None else self.model.radiation.states
-        if len(self.state.memory) != n:
+        """The state carries the memory of the model's radiation: zeros when a new fit comes in (its
+        states mean something else), none without radiation."""
+        radiation = self.model.radiation
+        if radiation is not self._memory_of:
+            n = 0 if radiation is None else radiation.states
             self.state = dataclasses.replace(self.state, memory=np.zeros(n), E_rad=self.state.E_rad if n else 0.0)
+            self._memory_of = radiation
 
     def _rebuild_body(self, body: Body) -> None:
         """Swap in a new body of the same shape given in the same world orientation (its principal
@@ -352,5 +356,7 @@ class Simulation:
     def reset(self, state: State | None = None) -> None:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""
         self.state = state or initial_state(self.body, self.scene)
+        self.largest_turn = 0.0
+        self._memory_of = None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
         self._sync_memory()
         self._rebase_energy()

@@ -435,7 +435,7 @@ def warm_up() -> float:
     sea = sea_pack(StillWater(), body)
     eye, one = np.eye(6), np.ones((1, 1))
     index, zero = np.zeros(1, dtype=np.int64), np.zeros(1)
-    radiating = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero)  # the types only
+    radiating = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3))  # the types only
     for rad in (NO_RADIATION, radiating):
         for kind in (0, 1):
             advance(np.concatenate([y, np.zeros(2)]) if rad else y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, rad)

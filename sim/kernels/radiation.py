@@ -6,7 +6,8 @@ inverse, the inverse square root and the square root of M_RB + A_inf in the body
 memory's exact step over dt and its system as bands (n, w), row i holding columns start[i] + j (the
 memory is block diagonal, one small block per fitted entry); and per state i the twist component
 col[i] feeding it (through gamma[i] over a step, g[i] in the system) and the load component row[i]
-it feeds (through h[i]).
+it feeds (through h[i]), all in the axes the memory was fitted in: the rest pose's world axes, R0
+(the last entry) from the body frame.
 Without radiation `rad` is None: numba compiles that case apart and prunes every radiation branch
 (`rad is None` tests on an argument are resolved at compile time), so still scenes pay nothing. Vectors in the body frame are R^T times the world ones.
 """
@@ -77,6 +78,22 @@ def body_twist(R, u, L, inertia):
     return nu
 
 
+@njit(**JIT)
+def fit_twist(R, R0, u, L, inertia):
+    """The twist in the memory's axes: R0 times the body-frame one."""
+    nb = body_twist(R, u, L, inertia)
+    nu = np.empty(6)
+    nu[:3] = mv(R0, nb[:3].copy())
+    nu[3:] = mv(R0, nb[3:].copy())
+    return nu
+
+
+@njit(**JIT)
+def fit_to_world(R, R0, mu):
+    """A load in the memory's axes, in the world: R R0^T mu."""
+    return mv(R, mtv(R0, mu[:3].copy())), mv(R, mtv(R0, mu[3:].copy()))
+
+
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def kick(rad, R, u, L, F, T, h, inertia):
     """(u, L) after the impulse h (F, T) through the generalised mass (integrators.kick)."""
@@ -90,16 +107,16 @@ def kick(rad, R, u, L, F, T, h, inertia):
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def memory_load(rad, R, x):
     """The memory's force and torque on the body, world frame: -R (H x)."""
-    mu = memory_output(rad, x)
-    return -mv(R, mu[:3].copy()), -mv(R, mu[3:].copy())
+    Fm, Tm = fit_to_world(R, rad[11], memory_output(rad, x))
+    return -Fm, -Tm
 
 
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def drift_memory(rad, R0, R1, u, L, x, e_rad, dt, inertia):
     """(memory, E_rad) after a drift (integrators.drift_memory): the memory advanced exactly with the
-    body-frame twist averaged over the drift's two orientations; the energy as dt nu . mu averaged."""
-    nu0 = body_twist(R0, u, L, inertia)
-    nu1 = body_twist(R1, u, L, inertia)
+    twist in its axes averaged over the drift's two orientations; the energy as dt nu . mu averaged."""
+    nu0 = fit_twist(R0, rad[11], u, L, inertia)
+    nu1 = fit_twist(R1, rad[11], u, L, inertia)
     xn = band_matvec(rad[3], rad[5], x)
     col, gamma = rad[6], rad[8]
     for i in range(xn.shape[0]):
@@ -167,7 +184,7 @@ def derivative_extra(rad, R, u, L, F, T, x, inertia):
     fb[:3] = mtv(R, F + Fm)
     fb[3:] = mtv(R, T + Tm - spin)
     d = matvec(rad[0], fb)
-    nub = body_twist(R, u, L, inertia)
+    nub = fit_twist(R, rad[11], u, L, inertia)
     mu = memory_output(rad, x)
     e_rate = 0.0
     for i in range(6):

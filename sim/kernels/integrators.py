@@ -340,9 +340,8 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            if rad is not None:
+            if rad is not None:  # the new pose's mass frames, and the memory over the drift
                 WS = frames(rad, Rn)
-            if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             if rad is None:
@@ -371,9 +370,8 @@ def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef,
             xn = x + dt * un
             qn = free_rotation(q, Ln, dt, inertia)
             Rn = quat_to_matrix(qn)
-            if rad is not None:
+            if rad is not None:  # the new pose's mass frames, and the memory over the drift
                 WS = frames(rad, Rn)
-            if rad is not None:
                 memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
             Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
             Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)

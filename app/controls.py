@@ -110,3 +110,5 @@ class Layers:
             self.points = server.gui.add_checkbox("Show points", True, hint="Samples: blue under water, orange above")
             self.water = server.gui.add_checkbox("Show water", True)
             self.forces = server.gui.add_checkbox("Show force and torque", True, hint="Red: net force (1 m = body weight); green: torque")
+            self.markers = server.gui.add_checkbox("Show B, M, waterline", True,
+                                                   hint="Why it floats: centre of buoyancy B, metacentre M (GM > 0: rights itself), waterline")

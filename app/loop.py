@@ -15,13 +15,16 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 import sim
 from sim.config import PARAMS, load_scene
+from sim.hydrostatics import hydrostatics
 from sim.parameters import Param
+from sim.rotation import quat_to_matrix
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
@@ -67,8 +70,17 @@ class Settings:
         return getattr(self, key)
 
 
+class Posed:
+    """What the scene draws needs `frame` and `body`; this adds their calm-water hydrostatics (B, M, GM),
+    computed once and only when asked (the markers and readouts, while shown)."""
+
+    @cached_property
+    def hydrostatics(self):
+        return hydrostatics(self.body, self.frame.x_world, quat_to_matrix(self.frame.q_world_body))
+
+
 @dataclass(frozen=True, eq=False)
-class Snapshot:
+class Snapshot(Posed):
     """One published state of the run: what the viewer draws and what tests read."""
 
     frame: sim.Frame

@@ -80,6 +80,10 @@ def describe(snap: Snapshot) -> str:
         f"E total = **{f.E_total:.6g} J** · mass {snap.body.mass:.4g} kg",
         f"Speed: {state} (asked {s.speed:g}×) · {snap.body.n_samples} samples",
     ]
+    if (h := snap.hydrostatics) is not None:
+        verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
+        lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "
+                     f"displaced {h.volume:.4g} m³")  # fmt: skip
     if snap.behind:
         lines.append(
             f"**⚠ This machine cannot keep up with {s.speed:g}× real time**: lower the speed, the points per edge, or pick a faster integrator."

@@ -16,6 +16,7 @@ import sim
 
 from .controls import Layers
 from .loop import Snapshot
+from .markers import MarkersView
 from .water import WaterView
 
 COLOUR_HZ = 5.0
@@ -27,11 +28,15 @@ DRY = np.array([245, 150, 40], np.uint8)
 class SceneView:
     """Scene nodes of one viewer; `show` runs on the simulation thread only."""
 
-    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, waves: bool = False):
-        self.server, self.layers = server, layers
+    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, waves: bool = False, replay: bool = False):
+        """replay=True: for a recording (app/replay.py): every pose exactly, a lighter wave surface, and
+        the throttles counted in the time passed to `show` (simulated) rather than wall time."""
+        self.server, self.layers, self.replay = server, layers, replay
         scene = server.scene
+        self._sized_for = body.radius
         size = max(8.0, 8.0 * body.radius)
-        self.water = WaterView(server, size)
+        self.water = WaterView(server, size, lighter=replay)
+        self.markers = MarkersView(server, body.radius)
         self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
         self.arrows = scene.add_arrows(
             "/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
@@ -47,9 +52,14 @@ class SceneView:
         self.set_body(body)
 
     def set_body(self, body: sim.Body) -> None:
-        """(Re)send the body's geometry; only when the body itself changes (scene, points per edge)."""
+        """(Re)send the body's geometry; only when the body itself changes (scene, points per edge, a loaded mesh)."""
         self.body = body
         scene = self.server.scene
+        if not 0.5 < body.radius / self._sized_for < 2.0:  # another size of body: water, frame and markers to its scale
+            self._sized_for = body.radius
+            self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay)
+            self.markers = MarkersView(self.server, body.radius)
+            self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
         self.mesh = scene.add_mesh_simple(
             "/body/mesh", body.mesh_vertices, body.mesh_faces, color=(215, 235, 250), flat_shading=True, visible=self.layers.mesh.value
         )
@@ -63,23 +73,29 @@ class SceneView:
         self._wet = None
         self._colour_time = -np.inf
 
-    def show(self, snap: Snapshot) -> None:
-        """Move the body to the snapshot's pose, plus throttled colours and arrows."""
+    def show(self, snap: Snapshot, now: float | None = None) -> None:
+        """Move the body to the snapshot's pose, plus throttled colours, arrows, markers and waves;
+        `now` is the clock the throttles count in (default: wall time)."""
         if snap.body is not self.body:
             self.set_body(snap.body)
-        layers, now = self.layers, time.monotonic()
+        layers = self.layers
+        now = time.monotonic() if now is None else now
         for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.arrows, layers.forces)):
             if node.visible != box.value:
                 node.visible = box.value
         frame = snap.frame
         with self.server.atomic():
+            if self.replay:  # viser skips a pose within 1e-5 of the last one sent: a replay keeps every pose exactly
+                self.frame._impl.position[:] = np.nan
+                self.frame._impl.wxyz[:] = np.nan
             self.frame.position = frame.x_world
             self.frame.wxyz = frame.q_world_body
+            self.markers.show(snap, now, layers.markers.value)
             if layers.points.value and now - self._colour_time >= 1.0 / COLOUR_HZ:
                 self._send_colours(frame.wet_index, now)
             if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
                 self._send_arrows(snap, now)
-            self.water.show(snap.water, frame.t, frame.x_world, layers.water.value)
+            self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
 
     def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
         if self._wet is not None and np.array_equal(self._wet, wet_index):

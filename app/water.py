@@ -12,6 +12,8 @@ import viser
 WAVE_HZ = 10.0
 CELLS = 48
 """Grid cells per side of the wave surface ((CELLS + 1)^2 vertices, ~28 KB per update)."""
+REPLAY_CELLS, REPLAY_HZ = 20, 5.0
+"""A recording's wave surface: 441 vertices, 5 times a simulated second."""
 WAVE_PATCH = 3.0
 """The wave surface spans this many times the calm grid's width."""
 
@@ -27,18 +29,21 @@ def grid_faces(n: int) -> np.ndarray:
 class WaterView:
     """Scene nodes for the water; `show` runs on the simulation thread only."""
 
-    def __init__(self, server: viser.ViserServer, size: float):
+    def __init__(self, server: viser.ViserServer, size: float, lighter: bool = False):
+        """lighter=True: a coarser surface sent less often (recordings: the file stays small)."""
         self.server = server
         self.size = WAVE_PATCH * size  # waves are long: show more of them than of the calm grid
+        self.cells, self.hz = (REPLAY_CELLS, REPLAY_HZ) if lighter else (CELLS, WAVE_HZ)
+        cells = self.cells
         self.grid = server.scene.add_grid(
             "/water", width=size, height=size, plane="xy", cell_size=0.5, section_size=2.0,
             cell_color=(120, 170, 220), section_color=(60, 120, 190), plane_color=(40, 120, 200), plane_opacity=0.35, shadow_opacity=0.2,
         )  # fmt: skip
-        c = (np.arange(CELLS + 1) / CELLS - 0.5) * self.size
+        c = (np.arange(cells + 1) / cells - 0.5) * self.size
         gx, gy = np.meshgrid(c, c, indexing="ij")
         self._xy = np.column_stack([gx.ravel(), gy.ravel()])
         self.surface = server.scene.add_mesh_simple(
-            "/waves", np.column_stack([self._xy, np.zeros(len(self._xy))]).astype(np.float32), grid_faces(CELLS),
+            "/waves", np.column_stack([self._xy, np.zeros(len(self._xy))]).astype(np.float32), grid_faces(cells),
             color=(30, 105, 185), opacity=0.7, flat_shading=True, side="double", cast_shadow=False, visible=False,
         )  # fmt: skip
         self._sent = -np.inf
@@ -47,17 +52,18 @@ class WaterView:
         self.updates = 0
         """How many wave surfaces were sent (tests check the throttle and the still-water silence)."""
 
-    def show(self, water, t: float, centre: np.ndarray, visible: bool) -> None:
+    def show(self, water, t: float, centre: np.ndarray, visible: bool, now: float | None = None) -> None:
         """Flat grid for still water; otherwise the surface around `centre` (x, y) at time t, throttled."""
         still = water.is_still
         if self.grid.visible != (visible and still):
             self.grid.visible = visible and still
         if self.surface.visible != (visible and not still):
             self.surface.visible = visible and not still
-        now = time.monotonic()
-        if still or not visible or now - self._sent < 1.0 / WAVE_HZ:
+        now = time.monotonic() if now is None else now
+        if still or not visible or now - self._sent < 1.0 / self.hz:
             return
-        origin = np.round(np.asarray(centre[:2]) / (self.size / CELLS)) * (self.size / CELLS)  # follow the body in whole cells
+        cell = self.size / self.cells
+        origin = np.round(np.asarray(centre[:2]) / cell) * cell  # follow the body in whole cells
         xy = self._xy + origin
         self.surface.vertices = np.column_stack([xy, water.elevation(xy, t)]).astype(np.float32)
         self._sent, self.sent_time = now, t

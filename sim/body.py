@@ -143,21 +143,60 @@ def make_box(extents, points_per_edge: int, mass: float, name: str = "box") -> B
     return _assemble(r, nrm, area, mass, np.prod(extents), display.vertices, display.faces, name)
 
 
-def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh") -> Body:
+MESH_FORMATS = ("stl", "obj", "ply")
+MAX_TRIANGLES = 200_000
+"""Larger meshes are refused: their samples would not keep real time, nor fit a browser."""
+SIZE_RANGE = (1e-3, 500.0)
+"""Plausible extents of a floating body, m: outside, the file is most likely in another unit."""
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+
+
+def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None = None):
+    """A closed triangle mesh from a path or bytes (STL, OBJ or PLY), scaled from `unit` to metres,
+    checked: readable, one mesh, at most MAX_TRIANGLES, watertight, of a plausible size.
+    ConfigError with one line saying what is wrong otherwise."""
+    import io
+
+    import trimesh
+
+    if unit not in UNITS:
+        raise ConfigError(f"mesh unit must be one of {', '.join(UNITS)}, got {unit!r}")
+    if isinstance(source, (bytes, bytearray)):
+        kind = (file_type or Path(name).suffix.lstrip(".")).lower()
+        data = io.BytesIO(source)
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise ConfigError(f"mesh file not found: {source}")
+        kind, data = path.suffix.lstrip(".").lower(), str(path)
+    if kind not in MESH_FORMATS:
+        raise ConfigError(f"'{name}': mesh files must be {', '.join(f'.{f}' for f in MESH_FORMATS)}, got '.{kind}'")
+    try:
+        mesh = trimesh.load(data, file_type=kind, force="mesh", process=True)
+    except Exception as e:  # noqa: BLE001 -- trimesh raises many types for unreadable files
+        raise ConfigError(f"'{name}' is not a readable {kind.upper()} mesh ({type(e).__name__}: {str(e)[:80]})") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise ConfigError(f"'{name}' holds no triangles: not a mesh")
+    if len(mesh.faces) > MAX_TRIANGLES:
+        raise ConfigError(f"'{name}' has {len(mesh.faces):,} triangles, more than {MAX_TRIANGLES:,}: simplify it first (e.g. in Blender)")
+    if not mesh.is_watertight:
+        raise ConfigError(f"'{name}' is not watertight (it has holes or open edges): a floating body needs a closed surface")
+    mesh.apply_scale(UNITS[unit])
+    size = float(mesh.extents.max())
+    lo, hi = SIZE_RANGE
+    if not lo <= size <= hi:
+        hint = "millimetres? pick the unit mm" if size > hi else "another unit? pick a larger one"
+        raise ConfigError(f"'{name}' is {size:.4g} m across in {unit}, outside {lo:g}-{hi:g} m: is the file in {hint}")
+    return mesh
+
+
+def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m") -> Body:
     """Samples at triangle centroids after subdividing to at least `samples` triangles."""
     import trimesh
 
     if not isinstance(mesh, trimesh.Trimesh):
-        path = Path(mesh)
-        if not path.is_file():
-            raise ConfigError(f"mesh file not found: {mesh}")
-        try:
-            mesh = trimesh.load_mesh(path, process=True)
-        except Exception as e:  # trimesh raises many types for unreadable files
-            raise ConfigError(f"cannot read mesh {mesh}: {e}") from None
-        if not isinstance(mesh, trimesh.Trimesh):
-            raise ConfigError(f"mesh {path} holds no single triangle mesh")
-    if not mesh.is_watertight:
+        mesh = load_mesh(mesh, Path(mesh).name, unit)
+    elif not mesh.is_watertight:
         raise ConfigError(f"mesh '{name}' is not watertight: a floating body needs a closed surface")
     if mesh.volume < 0:
         mesh = mesh.copy()
@@ -191,4 +230,4 @@ def make_body(cfg: BodyConfig, base_dir: str = ".") -> Body:
     path = Path(cfg.mesh)
     if not path.is_absolute() and not path.is_file():
         path = Path(base_dir) / path
-    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem)
+    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit)

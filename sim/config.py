@@ -13,6 +13,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .body import UNITS
 from .errors import ConfigError
 from .forces import TERMS
 from .integrators import INTEGRATORS
@@ -30,6 +31,8 @@ BODY = (
     Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=1000, kind="int",
           name="points per edge", label="Points per edge", gui=(1, 60, 1), live=(1, 100)),  # 60 000 samples at most in the viewer
     Param("body", "mesh", "", "Mesh file (shape mesh), relative to the scene file or the working directory", kind="text", name="mesh file"),
+    Param("body", "mesh_unit", "m", "Unit of the mesh file's coordinates (scaled to metres)", kind="choice", choices=tuple(UNITS),
+          name="mesh unit"),
     Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
           kind="int", name="mesh samples"),
     Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=0.0, lo_open=True,
@@ -209,6 +212,8 @@ def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:
         if section not in SECTION_TYPES or name not in {p.key for p in SECTIONS[section]}:
             raise ConfigError(f"unknown scene parameter '{section}.{name}'")
         sections.setdefault(section, {})[name] = value
+    if sections.get("body", {}).get("mesh") and "shape" not in sections["body"]:
+        sections["body"]["shape"] = "mesh"  # --mesh FILE alone means: this file is the body
     if "density" in sections.get("body", {}):
         sections["body"]["mass"] = None  # an explicit density wins over a preset's mass
     replaced = {sec: dataclasses.replace(getattr(scene, sec), **vals) for sec, vals in sections.items()}

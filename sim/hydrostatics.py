@@ -98,3 +98,34 @@ def waterline(P: np.ndarray, h: np.ndarray | None = None) -> np.ndarray:
     a = p[:, 0] + (p[:, 1] - p[:, 0]) * (v[:, 0] / (v[:, 0] - v[:, 1]))[:, None]
     b = p[:, 2] + (p[:, 0] - p[:, 2]) * (v[:, 2] / (v[:, 2] - v[:, 0]))[:, None]
     return np.stack([a, b], axis=1)
+
+
+def at_rest(body, fluid, R: np.ndarray | None = None) -> tuple[float, float, Hydrostatics | None]:
+    """Where the body floats held at orientation R (default: as its mesh file has it) in calm water: the centre of
+    mass's height, the draft (depth of its lowest point) and the hydrostatics there. ConfigError
+    when it cannot float."""
+    from .equilibrium import rest_height
+    from .rotation import quat_to_matrix
+
+    R = quat_to_matrix(body.q_input_body) if R is None else R
+    z = rest_height(body, fluid, R)
+    lowest = float((body.mesh_vertices @ R.T)[:, 2].min())
+    return z, -(z + lowest), hydrostatics(body, np.array([0.0, 0.0, z]), R)
+
+
+def describe_rest(body, fluid, R: np.ndarray | None = None) -> str:
+    """One line on how a body floats: volume, mass, draft at rest and GM (with what its sign means)."""
+    from .errors import ConfigError
+
+    head = f"volume {body.volume:.4g} m^3, mass {body.mass:.4g} kg"
+    try:
+        z, draft, h = at_rest(body, fluid, R)
+    except ConfigError:
+        return f"{head}: heavier than the water it displaces, it sinks"
+    if h is None:
+        return f"{head}, floats at draft {draft:.4g} m"
+    if abs(h.gm[0]) < 1e-3 * body.radius:
+        verdict = "neutral: a heel neither grows nor rights itself"
+    else:
+        verdict = "stable as given" if h.stable else "unstable as given: it rolls over to another pose"
+    return f"{head}, floats at draft {draft:.4g} m with GM {h.gm[0]:+.3g} m ({verdict})"

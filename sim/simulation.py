@@ -132,7 +132,7 @@ def default_backend() -> str:
     return choice
 
 
-GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "samples")
+GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", "samples")
 """Body keys whose change rebuilds the body (the others only change its mass)."""
 
 

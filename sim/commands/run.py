@@ -12,6 +12,7 @@ import numpy as np
 import tyro
 
 from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
+from ..hydrostatics import describe_rest
 from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from . import declared_flags, overrides
 from .progress import progress_bar
@@ -72,7 +73,9 @@ def describe_terms(sim: Simulation) -> str:
     return "+".join(parts)
 
 
-def run(args: RunArgs) -> int:
+def run(args: RunArgs, watch=None) -> int:
+    """`watch(sim)` (optional, with an int attribute `every`) also sees the run every `watch.every` steps
+    and at the start: how the viewer's recorder takes its frames without sim knowing of it."""
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
     scene = scene_from_args(args)
@@ -95,10 +98,12 @@ def run(args: RunArgs) -> int:
     if out:
         out.write(",".join(CSV_COLUMNS) + "\n")
     write(first)
+    if watch is not None:
+        watch(sim)
     started = time.perf_counter()
     try:  # numpy's overflow warnings would only repeat what the divergence message says better
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            error = _advance(sim, n_steps, args.every, bar, write)
+            error = _advance(sim, n_steps, args.every, bar, write, watch)
     finally:
         bar.close()
         if out:
@@ -113,6 +118,7 @@ def run(args: RunArgs) -> int:
     drift = last.E_total - first.E_total
     print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples, mass {sim.body.mass:.6g} kg, "
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}")  # fmt: skip
+    print(f"at rest: {describe_rest(sim.body, sim.params)}")
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "
           f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)" + (f", E_rad = {last.E_rad:.6g} J radiated" if sim.model.radiation else ""))  # fmt: skip
@@ -122,16 +128,21 @@ def run(args: RunArgs) -> int:
     return 3 if error else 0
 
 
-def _advance(sim: Simulation, n_steps: int, every: int, bar, write) -> str | None:
-    """Step to n_steps, writing a frame every `every` steps; the divergence message if the run blows up."""
+def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None) -> str | None:
+    """Step to n_steps, writing a frame every `every` steps (and calling `watch` every `watch.every`);
+    the divergence message if the run blows up."""
     done = 0
+    chunk = every if watch is None else math.gcd(every, watch.every)
     try:
         while done < n_steps:
-            k = min(every, n_steps - done)
+            k = min(chunk - done % chunk, n_steps - done)
             sim.step(k)
             done += k
             bar.update(k)
-            write(sim.frame())
+            if done % every == 0 or done == n_steps:
+                write(sim.frame())
+            if watch is not None and (done % watch.every == 0 or done == n_steps):
+                watch(sim)
     except SimulationDiverged as e:
         return str(e)
     return None

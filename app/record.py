@@ -1,0 +1,94 @@
+"""`floatsim run` with the viewer's outputs: `--record run.html` (a replay that opens offline) and
+`--video run.mp4 [--fps 30] [--video-size 640x360]`. Registered as the `run` plugin of `floatsim`, it
+extends sim's headless run (which knows nothing of viser) with a recorder watching it."""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from sim.commands.progress import progress_bar
+from sim.commands.run import RunArgs, scene_from_args
+from sim.commands.run import run as headless_run
+from sim.errors import ConfigError
+
+from .take import Take, shot_of
+
+
+@dataclass
+class RecordArgs(RunArgs):
+    """Run a scene headless and write its trajectory to CSV; optionally a replay page and a video. Flags override the scene."""
+
+    record: str | None = None
+    """Write a self-contained HTML replay of the run (opens offline: play, pause, seek), e.g. run.html."""
+    video: str | None = None
+    """Write an MP4 video of the run, rendered by the viewer's own renderer in headless chromium, e.g. run.mp4."""
+    fps: float = 30.0
+    """Frames per second of the replay and the video."""
+    video_size: Literal["640x360", "960x540", "1280x720"] = "640x360"
+    """Video frame size, WIDTHxHEIGHT."""
+
+
+class Recorder:
+    """Takes a shot of the run every `every` steps (the `watch` of sim's run)."""
+
+    def __init__(self, every: int):
+        self.every = every
+        self.take = Take()
+
+    def __call__(self, simulation) -> None:
+        self.take.add(shot_of(simulation))
+
+
+def _check_output(path: str | None, suffix: str, flag: str) -> None:
+    if path is None:
+        return
+    p = Path(path)
+    if p.suffix.lower() != suffix:
+        raise ConfigError(f"--{flag} must name a {suffix} file, got {path!r}")
+    if not p.parent.resolve().is_dir():
+        raise ConfigError(f"--{flag}: folder {str(p.parent)!r} does not exist")
+
+
+def run(args: RecordArgs) -> int:
+    if not args.record and not args.video:
+        return headless_run(args)
+    _check_output(args.record, ".html", "record")
+    _check_output(args.video, ".mp4", "video")
+    if not 1.0 <= args.fps <= 120.0:
+        raise ConfigError(f"--fps must be in 1..120, got {args.fps:g}")
+    if args.video:
+        from .video import check_video_tools
+
+        check_video_tools()  # before the run, not after it
+    dt = float(scene_from_args(args).step.dt)
+    recorder = Recorder(max(1, round(1.0 / (args.fps * dt))))
+    status = headless_run(args, watch=recorder)
+    take = recorder.take
+    if args.record:
+        from .replay import replay_html
+
+        html = replay_html(take)
+        Path(args.record).write_text(html)
+        print(f"replay: {len(take)} frames over {take.duration:.4g} s -> {args.record} ({len(html) / 1e6:.2f} MB; opens offline in a browser)")
+    if args.video:
+        from .video import frame_count, render_video
+
+        bar = progress_bar(frame_count(take, args.fps), flag=args.progress, unit="frame")
+        try:
+            n = render_video(take, args.video, args.fps, args.video_size, progress=lambda done, total: bar.update(1))
+        except Exception as e:  # noqa: BLE001 -- the run and its other outputs are kept; say why the video is not
+            print(f"floatsim: video failed: {type(e).__name__}: {e}", file=sys.stderr)
+            return 4
+        finally:
+            bar.close()
+        print(f"video: {n} frames at {args.fps:g} fps, {args.video_size} -> {args.video}")
+    return status
+
+
+if __name__ == "__main__":
+    from sim.commands import dispatch
+
+    sys.exit(dispatch({"run": "app.record:run"}))

@@ -16,15 +16,17 @@ import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import sim
 from sim.config import PARAMS, load_scene
-from sim.hydrostatics import hydrostatics
+from sim.hydrostatics import at_rest, describe_rest, hydrostatics
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
+from sim.simulation import initial_state
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
@@ -415,6 +417,10 @@ class SimLoop:
         if param.key == "dt":
             self._restart_clock()
 
+    def _cmd_notice(self, value) -> None:
+        """A note from another thread (a refused upload, a link not understood) shown like the loop's own."""
+        self._raise_notice(str(value)[:400])
+
     def _cmd_speed(self, value) -> None:
         used, note = SPEED.clamp(value, self._speed)
         if note:
@@ -455,10 +461,44 @@ class SimLoop:
         old = self.settings
         self.sim = sim.Simulation(load_scene(value))
         self._scene_name = value
+        self._tell_changes(old)
+        self._diverged = False
+        self._epoch += 1
+        self._cost_unknown()
+
+    def _cmd_mesh(self, value) -> None:
+        """A checked mesh file (app/upload.py) becomes the body, with the running parameters; it starts
+        a quarter of its height above where it floats, so the user sees it settle."""
+        path, unit = value
+        old = self.settings
+        change = {"body__shape": "mesh", "body__mesh": path, "body__mesh_unit": unit}
+        note = ""
+        if self.sim.scene.fluid.radiation != "none":  # a new body would need a boundary-element solve: not on this thread
+            change["fluid__radiation"] = "none"
+            note = " Radiation is off for it (solve its coefficients with `floatsim decay --mesh FILE --radiation bem`)."
+        try:
+            self.sim.update(**change)
+        except sim.ConfigError as e:
+            self._raise_notice(f"Mesh not loaded: {e}. The running body is unchanged.")
+            return
+        body = self.sim.body
+        R = initial_state(body, self.sim.scene).R_world_body
+        height = float(np.ptp((body.mesh_vertices @ R.T)[:, 2]))
+        try:
+            z = at_rest(body, self.sim.params, R)[0] + 0.25 * height
+        except sim.ConfigError:  # it sinks: drop it from just under the surface, and say so
+            z = -0.5 * height
+            note += " It is heavier than the water it displaces: it sinks."
+        self.sim.update(initial__position=(0.0, 0.0, z))
+        self.sim.reset()
+        self._tell_changes(old)
+        self._raise_notice(f"Loaded {Path(path).name.rsplit('-', 1)[0]}: {describe_rest(body, self.sim.params)}." + note)
+        self._diverged = False
+        self._epoch += 1
+        self._cost_unknown()
+
+    def _tell_changes(self, old: Settings) -> None:
         new = self.settings
         for key in CONTROLLED:
             if old.value(key) != new.value(key):
                 self._tell(key, new.value(key))
-        self._diverged = False
-        self._epoch += 1
-        self._cost_unknown()

@@ -6,16 +6,22 @@ import signal
 import socket
 import sys
 import threading
+import time
 
 import viser
 
 from sim.config import ConfigError, available_scenes, load_scene
+from sim.hydrostatics import describe_rest
 
+from .about import About
 from .args import ViewArgs
 from .controls import Controls, Layers
 from .loop import SimLoop, Snapshot
 from .readouts import Readouts
+from .recorder import RecordPanel
 from .scene import SceneView
+from .share import copy_button_html, link_query, mesh_left_out, parse_link, probe_address
+from .upload import BodyFile
 
 
 class ViewerApp:
@@ -29,13 +35,45 @@ class ViewerApp:
         self.url = f"http://{shown}:{self.port}"
         server.gui.configure_theme(control_width="large", show_share_button=False)
         snap = loop.latest()
+        self.about = About(server)
         self.controls = Controls(server, loop.post, snap.settings, loop.scene_options)
         self.layers = Layers(server)
+        self.body_file = BodyFile(server, loop.post, lambda text, client=None: loop.post("notice", text))
+        self.recorder = RecordPanel(server, self._notify)
+        with server.gui.add_folder("Share a link"):
+            self.link = server.gui.add_html(copy_button_html(link_query(snap.settings)))
+            self.link_text = server.gui.add_markdown("")
         self.readouts = Readouts(server)
         self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.is_still)
         self._notice_id = snap.notice_id
+        self._query, self._link_time = None, -1e9
+        self._described = None
+        self.connections = 0
+        """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
+        server.on_client_connect(self._connected)
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()
+
+    def _connected(self, client: viser.ClientHandle) -> None:
+        """A new page: the first browser restarts the run; every page's address may carry a setup."""
+        self.connections += 1
+        if len(self.server.get_clients()) <= 1:
+            self.loop.post("reset")
+        probe_address(client, self._apply_link)
+
+    def _apply_link(self, client: viser.ClientHandle, query: str) -> None:
+        commands, problems = parse_link(query, self.loop.scene_options)
+        for name, value in commands:
+            self.loop.post(name, value)
+        if commands:
+            self.loop.post("reset")  # the setup from its start
+        if problems:
+            self.loop.post("notice", "Link: " + "; ".join(problems) + " (ignored).")
+
+    def _notify(self, text: str, client=None, error: bool = False) -> None:
+        targets = [client] if client is not None else list(self.server.get_clients().values())
+        for c in targets:
+            c.add_notification("floatsim", text, color="red" if error else "blue", auto_close_seconds=8.0)
 
     def latest(self) -> Snapshot:
         """The last published snapshot: frame, settings (density, damping, ...), body, notice. Thread-safe."""
@@ -52,9 +90,11 @@ class ViewerApp:
     def _publish(self, snap: Snapshot) -> None:
         """Runs on the simulation thread, about 30 times a second. One atomic block: the clients apply the
         frame at once, and viser's event loop is woken once per frame rather than once per message."""
+        self.recorder.capture(snap)
         with self.server.atomic():
             self.scene.show(snap)
             self.readouts.update(snap)
+            self._update_link(snap)
             fresh = snap.notice_id != self._notice_id and snap.notice
             if fresh or (not snap.notice and self.controls.notice.visible):
                 self.controls.show_notice(snap.notice)
@@ -63,6 +103,24 @@ class ViewerApp:
             if fresh:
                 for client in self.server.get_clients().values():
                     client.add_notification("floatsim", snap.notice, color="red" if snap.diverged else "yellow", auto_close_seconds=8.0)
+
+
+    def _update_link(self, snap: Snapshot) -> None:
+        """The Copy link button's setup (twice a second at most) and the body's description (on a new body)."""
+        now = time.monotonic()
+        if now - self._link_time < 0.5:
+            return
+        self._link_time = now
+        query = link_query(snap.settings)
+        if query != self._query:
+            self._query = query
+            self.link.content = copy_button_html(query)
+            note = " (your mesh stays on this server: it is not in the link)" if mesh_left_out(snap.settings) else ""
+            self.link_text.content = f"`{query}`{note}"
+        if snap.body is not self._described:
+            self._described = snap.body
+            body, fluid = snap.body, snap.params
+            threading.Thread(target=lambda: self.body_file.describe(f"**{body.name}**: {describe_rest(body, fluid)}."), daemon=True).start()
 
 
 def check_address(host: str, port: int) -> None:

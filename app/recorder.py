@@ -1,0 +1,135 @@
+"""Record and share from the viewer: Record / Stop keeps the published snapshots as a take; stopping
+writes the replay page (app/replay.py) and the run's CSV into `floatsim-recordings/` and hands both to
+the browser that asked; "Export video" renders the last take to MP4 (app/video.py) with a progress bar.
+
+`capture` runs on the simulation thread and only appends; everything slow runs on the callback's thread
+or a worker thread, never on the simulation's."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import viser
+
+from .take import MAX_SHOTS, Take
+
+
+class RecordPanel:
+    def __init__(self, server: viser.ViserServer, notify: Callable[[str, object, bool], None], folder: Path | None = None):
+        gui = server.gui
+        self.server, self._notify = server, notify
+        self.folder = folder or Path.cwd() / "floatsim-recordings"
+        self._lock = threading.Lock()
+        self._take: Take | None = None  # being recorded
+        self.last: Take | None = None  # the last finished take
+        self.files: dict[str, Path] = {}  # kind -> file of the last take
+        self._exporting = False
+        with gui.add_folder("Record and share"):
+            self.record = gui.add_button("Record", icon=viser.Icon.PLAYER_RECORD, color="red",
+                                         hint=f"Record the run (up to {MAX_SHOTS // 30 // 60} min); Stop writes a replay page and a CSV")  # fmt: skip
+            self.status = gui.add_markdown("Nothing recorded yet.")
+            self.replay = gui.add_button("Download replay (HTML)", icon=viser.Icon.DOWNLOAD, disabled=True,
+                                         hint="One self-contained page: opens offline, play, pause and seek")  # fmt: skip
+            self.csv = gui.add_button("Download CSV", icon=viser.Icon.TABLE, disabled=True, hint="The recorded run, one row per frame")
+            self.video = gui.add_button("Export video (MP4)", icon=viser.Icon.MOVIE, disabled=True,
+                                        hint="Render the recording to MP4 (headless chromium on the server)")  # fmt: skip
+            self.progress = gui.add_progress_bar(0.0, visible=False)
+        self.record.on_click(lambda event: self.toggle(event.client))
+        self.replay.on_click(lambda event: self._send(event.client, "html"))
+        self.csv.on_click(lambda event: self._send(event.client, "csv"))
+        self.video.on_click(lambda event: self.export_video(event.client))
+
+    @property
+    def recording(self) -> bool:
+        return self._take is not None
+
+    def capture(self, snap) -> None:
+        """Simulation thread: keep the snapshot while recording; a full take stops itself (on a worker)."""
+        take = self._take
+        if take is not None and not take.add(snap):
+            threading.Thread(target=self.stop, name="floatsim-record-stop", daemon=True).start()
+
+    def toggle(self, client=None) -> None:
+        if self.recording:
+            self.stop(client)
+        else:
+            self.start()
+
+    def start(self) -> None:
+        with self._lock:
+            self._take = Take()
+        self.record.label, self.record.icon = "Stop recording", viser.Icon.PLAYER_STOP
+        self.status.content = "**● Recording…** press *Stop recording* to keep it."
+
+    def stop(self, client=None) -> dict[str, Path]:
+        """Finish the take: write replay and CSV, offer them to `client`. Returns the files written."""
+        with self._lock:
+            take, self._take = self._take, None
+        self.record.label, self.record.icon = "Record", viser.Icon.PLAYER_RECORD
+        if take is None or not len(take):
+            self.status.content = "Nothing recorded (the run was paused?)."
+            return {}
+        from .replay import replay_html
+
+        self.status.content = f"Writing the replay of {take.duration:.1f} s…"
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            files = {"html": self.folder / f"floatsim-{stamp}.html", "csv": self.folder / f"floatsim-{stamp}.csv"}
+            files["html"].write_text(replay_html(take))
+            files["csv"].write_text(take.csv())
+        except OSError as e:
+            self.status.content = f"**Could not write the recording**: {e.strerror} ({self.folder})."
+            return {}
+        self.last, self.files = take, files
+        for button in (self.replay, self.csv, self.video):
+            button.disabled = False
+        size = files["html"].stat().st_size / 1e6
+        self.status.content = f"Recorded {take.duration:.1f} s ({len(take)} frames): `{files['html']}` ({size:.2f} MB) and its CSV."
+        if client is not None:
+            self._send(client, "html")
+            self._send(client, "csv")
+        return files
+
+    def _send(self, client, kind: str) -> None:
+        path = self.files.get(kind)
+        if client is None or path is None:
+            return
+        try:
+            client.send_file_download(path.name, path.read_bytes(), save_immediately=True)
+        except OSError as e:
+            self._notify(f"Cannot read {path}: {e.strerror}", client, True)
+
+    def export_video(self, client=None, fps: float = 30.0, size: str = "640x360") -> Path | None:
+        """Render the last take to MP4 beside its replay; offer it to `client`. One export at a time."""
+        from sim.errors import ConfigError
+
+        from .video import check_video_tools, render_video
+
+        with self._lock:
+            if self._exporting or self.last is None:
+                return None
+            self._exporting = True
+        path = self.files["html"].with_suffix(".mp4")
+        self.video.disabled = True
+        self.progress.value, self.progress.visible = 0.0, True
+        try:
+            check_video_tools()
+            self.status.content = "Rendering the video…"
+            render_video(self.last, path, fps, size, progress=lambda done, total: setattr(self.progress, "value", 100.0 * done / total))
+        except (ConfigError, RuntimeError, OSError, TimeoutError) as e:
+            self._notify(f"Video not exported: {e}", client, True)
+            self.status.content = f"Video not exported: {e}"
+            return None
+        finally:
+            self.progress.visible = False
+            self.video.disabled = False
+            with self._lock:
+                self._exporting = False
+        self.files["mp4"] = path
+        self.status.content = f"Video: `{path}` ({path.stat().st_size / 1e6:.2f} MB)."
+        self._send(client, "mp4")
+        return path

@@ -1,0 +1,133 @@
+"""Share a setup as a link: `?scene=drop&density=500` opens the viewer on that preset with those
+parameters, and "Copy link" writes the running ones.
+
+viser does not pass the page's address to the server, so each new page runs a few lines of script
+(viser's RunJavascriptMessage, the channel it uses itself for plotly) that put `location.search` into a
+probe text input of that page only; the server reads it from there, applies it and removes the probe.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from urllib.parse import parse_qsl, urlencode
+
+import viser
+from viser import _messages
+
+from sim.config import load_scene
+
+from .loop import CONTROLLED, SPEED, Settings
+
+PROBE = "floatsim-address"
+VISER_PARAMS = {"fixedDpr", "darkMode", "showStats", "websocket", "logCamera", "playbackPath", "synchronizedVideoOverlay",
+                "initialCameraPosition", "initialCameraLookAt", "initialCameraUp", "forceOrbitOriginTool"}
+"""The page address's parameters that viser's client reads itself: not part of a setup."""
+
+_PROBE_JS = """(function(){
+  var t0 = Date.now();
+  var timer = setInterval(function(){
+    var label = Array.from(document.querySelectorAll('label')).find(function(l){ return l.textContent.trim() === %(probe)s; });
+    if (!label) { if (Date.now() - t0 > 30000) clearInterval(timer); return; }
+    clearInterval(timer);
+    var row = label.closest('p').parentElement.parentElement;  // label column's row: the input is its sibling
+    var input = row.querySelector('input');
+    row.style.display = 'none';
+    var set = Object.getOwnPropertyDescriptor(HTMLInputElement.prototype, 'value').set;
+    set.call(input, location.search || '?');
+    input.dispatchEvent(new Event('input', {bubbles: true}));
+  }, 100);
+})();"""
+
+
+def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[str, object]], list[str]]:
+    """The loop commands a link's query asks for (scene first) and what in it was not understood."""
+    commands, problems = [], []
+    pairs = parse_qsl(query.lstrip("?"), keep_blank_values=True)
+    for key, text in sorted(pairs, key=lambda kv: kv[0] != "scene"):
+        if key in VISER_PARAMS:
+            continue
+        if key == "scene":
+            if text in scene_options:
+                commands.append(("scene", text))
+            else:
+                problems.append(f"scene {text[:30]!r} is not a preset")
+            continue
+        param = SPEED if key == "speed" else CONTROLLED.get(key)
+        if param is None:
+            problems.append(f"unknown parameter {key[:30]!r}")
+            continue
+        try:
+            if param.kind == "choice":
+                value = text
+            elif param.kind == "vector":
+                value = tuple(float(v) for v in text.split(","))
+            else:
+                value = float(text)
+        except ValueError:
+            problems.append(f"{key} = {text[:30]!r} is not a number")
+            continue
+        commands.append((key, value))
+    return commands, problems
+
+
+@functools.lru_cache(maxsize=32)
+def _preset(name: str):
+    try:
+        return load_scene(name)
+    except Exception:  # noqa: BLE001 -- a scene file that went away: the link gives every value
+        return None
+
+
+def link_query(settings: Settings) -> str:
+    """The query that reproduces the running setup: the preset and every controlled parameter that
+    differs from it (a loaded mesh lives on this server only: it is not part of the link)."""
+    pairs = [("scene", settings.scene)]
+    preset = _preset(settings.scene)
+    for key, param in CONTROLLED.items():
+        value = settings.value(key)
+        if key == "density":
+            value = settings.config.body.density if settings.config.body.mass is None else settings.density
+        if preset is not None and value == preset.value(f"{param.section}.{key}"):
+            continue
+        if param.kind == "vector":
+            value = ",".join(f"{v:g}" for v in value)
+        elif isinstance(value, float):
+            value = f"{value:.6g}"
+        pairs.append((key, value))
+    if settings.speed != 1.0:
+        pairs.append(("speed", f"{settings.speed:g}"))
+    return "?" + urlencode(pairs, safe=",")
+
+
+def mesh_left_out(settings: Settings) -> bool:
+    """Whether the running body is a mesh the link cannot carry (loaded here, not the preset's)."""
+    preset = _preset(settings.scene)
+    return settings.config.body.shape == "mesh" and (preset is None or preset.body.mesh != settings.config.body.mesh)
+
+
+def copy_button_html(query: str) -> str:
+    """A button that copies this page's address with `query` (a prompt to copy by hand where the
+    clipboard is not allowed, as on plain http from another machine)."""
+    js = (f"var u=location.origin+location.pathname+{json.dumps(query)};var b=this;"
+          "(navigator.clipboard?navigator.clipboard.writeText(u):Promise.reject()).then("
+          "function(){b.textContent='Link copied';setTimeout(function(){b.textContent='Copy link'},2000)},"
+          "function(){window.prompt('Copy this link',u)})")  # fmt: skip
+    style = ("width:100%;padding:0.35em;border-radius:4px;border:1px solid #ced4da;background:#f8f9fa;cursor:pointer;"
+             "font:inherit;font-size:0.85em")  # fmt: skip
+    return f'<button type="button" style="{style}" onclick="{js.replace(chr(34), "&quot;")}">Copy link</button>'
+
+
+def probe_address(client: viser.ClientHandle, on_address) -> None:
+    """Ask this page for its address; `on_address(client, query)` gets it ('?' when there is none)."""
+    probe = client.gui.add_text(PROBE, "", order=1e9)
+
+    def read(event) -> None:
+        query = probe.value
+        if not query:
+            return
+        probe.remove()
+        on_address(client, query)
+
+    probe.on_update(read)
+    client._websock_connection.queue_message(_messages.RunJavascriptMessage(source=_PROBE_JS % {"probe": json.dumps(PROBE)}))

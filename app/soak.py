@@ -14,6 +14,7 @@ import math
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +36,8 @@ class SoakArgs:
     """Simulation speed (x real time)."""
     browser: bool = True
     """Connect a headless chromium client (needs /usr/bin/chromium and playwright)."""
+    record: bool = False
+    """Record the whole run as the Record button does (then writes the replay to a temporary folder): compare the CPU line with and without."""
 
 
 def rss_mib(pid: str = "self") -> float:
@@ -78,11 +81,14 @@ def main(args: SoakArgs) -> int:
             child.kill()
             app.stop()
             return 1
+    if args.record:
+        app.recorder.folder = Path(tempfile.mkdtemp(prefix="floatsim-soak-"))
+        app.recorder.start()
     buffer = app.server._websock_server._broadcast_buffer  # viser internals: only to watch for unbounded growth
     print(f"soak: {app.url}, scene {args.scene}, {args.minutes:g} min, browser {'on' if child else 'off'}")
     print(f"{'wall s':>7} {'RSS MiB':>8} {'RTF':>6} {'behind':>6} {'sim t':>8} {'steps':>8} {'clients':>7} {'buffered':>8}")
     rows = []
-    started = time.monotonic()
+    started, cpu_started = time.monotonic(), time.process_time()
     try:
         while True:
             wall = time.monotonic() - started
@@ -105,6 +111,8 @@ def main(args: SoakArgs) -> int:
     except KeyboardInterrupt:
         pass
     finally:
+        cpu = (time.process_time() - cpu_started) / max(time.monotonic() - started, 1e-9)
+        files = app.recorder.stop() if args.record else {}
         app.stop()
         if child is not None:
             child.kill()
@@ -120,6 +128,10 @@ def main(args: SoakArgs) -> int:
     print(f"| real-time factor median / min | {statistics.median(rates):.3f} / {min(rates):.3f} (asked {args.speed:g}) |")
     print(f"| overall sim time / wall time | {t / wall if wall > 0 else math.nan:.3f} |")
     print(f"| samples flagged behind | {sum(r[3] for r in rows)} of {len(rows)} |")
+    print(f"| server CPU (all threads) | {cpu:.3f} s per wall s |")
+    if args.record:
+        html = files.get("html")
+        print(f"| recording | {'on: ' + f'{html.stat().st_size / 1e6:.2f} MB replay' if html else 'on, nothing written'} |")
     return 0
 
 

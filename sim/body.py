@@ -174,7 +174,7 @@ def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None
     try:
         mesh = trimesh.load(data, file_type=kind, force="mesh", process=True)
     except Exception as e:  # noqa: BLE001 -- trimesh raises many types for unreadable files
-        raise ConfigError(f"'{name}' is not a readable {kind.upper()} mesh ({type(e).__name__}: {str(e)[:80]})") from None
+        raise ConfigError(f"'{name}' is not a mesh: not readable as {kind.upper()} ({type(e).__name__}: {str(e)[:80]})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ConfigError(f"'{name}' holds no triangles: not a mesh")
     if len(mesh.faces) > MAX_TRIANGLES:

@@ -1,0 +1,139 @@
+"""Issue 12 in a real browser (Debian chromium through Playwright): a setup link applied, a mesh
+uploaded through the page's file input (and a broken one refused with the old body still running), and
+a recording that replays offline, with no server, at the poses of its CSV."""
+
+from __future__ import annotations
+
+import io
+import time
+
+import numpy as np
+import pytest
+import trimesh
+from test_browser import _require
+from test_share import pose_at, recording_messages
+from viewer import wait_for
+
+
+@pytest.fixture
+def page():
+    from app.browser import launch, missing
+
+    why = missing()
+    _require(why is None, why or "")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = launch(p)
+        try:
+            page = browser.new_page(viewport={"width": 800, "height": 600}, accept_downloads=True)
+            page.set_default_timeout(60_000)
+            yield page
+        finally:
+            browser.close()
+
+
+@pytest.fixture
+def app(tmp_path, monkeypatch):
+    from app.args import ViewArgs
+    from app.main import start
+
+    monkeypatch.chdir(tmp_path)  # recordings go to ./floatsim-recordings
+    monkeypatch.setattr("app.upload.UPLOADS", tmp_path / "uploads")
+    viewer = start(ViewArgs(scene="damped", port=0), strict=True, publish_hz=20.0)
+    yield viewer
+    viewer.stop()
+
+
+def picture(png: bytes) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=float)
+
+
+def test_a_link_sets_the_scene_and_its_parameters_and_restarts_it(app, page):
+    time.sleep(1.0)  # the run goes on before anyone watches
+    page.goto(app.url + "/?scene=drop&density=500&damping=40&wobble=3&fixedDpr=0.5")
+    page.wait_for_selector("canvas")
+    snap = wait_for(app, lambda s: s.settings.scene == "drop" and s.density == 500.0 and s.damping == 40.0, what="the link's setup")
+    assert snap.frame.t < 5.0 and app.connections == 1  # restarted for the newcomer
+    wait_for(app, lambda s: "unknown parameter 'wobble'" in s.notice, what="the note on the unknown parameter")
+    # and Copy link writes them back: the clipboard holds this page's address with the running setup
+    page.context.grant_permissions(["clipboard-read", "clipboard-write"], origin=app.url)
+    wait_for(app, lambda s: "density=500" in app.link_text.content, what="the link to follow the setup")
+    time.sleep(1.0)
+    page.get_by_role("button", name="Copy link").click()
+    page.get_by_role("button", name="Link copied").wait_for()
+    copied = page.evaluate("navigator.clipboard.readText()")
+    assert copied.startswith(app.url + "/?scene=drop") and "density=500" in copied and "damping=40" in copied
+
+
+def test_upload_a_mesh_through_the_page_and_refuse_a_broken_one(app, page, tmp_path):
+    page.goto(app.url + "/?fixedDpr=0.5")
+    page.get_by_text("Your body", exact=True).last.click()  # open the folder (the first match is the About text)
+    page.get_by_text("Load mesh (STL, OBJ, PLY)").wait_for()
+    good = tmp_path / "crate.stl"
+    trimesh.creation.box(extents=(0.8, 0.6, 0.5)).export(good)
+    with page.expect_file_chooser() as chooser:
+        page.get_by_text("Load mesh (STL, OBJ, PLY)").click()
+    chooser.value.set_files(str(good))
+    snap = wait_for(app, lambda s: s.body.name.startswith("crate"), what="the uploaded body")
+    assert snap.body.volume == pytest.approx(0.24, rel=1e-6)  # STL stores float32
+    assert snap.body.mass == pytest.approx(900.0 * snap.body.volume, rel=1e-12)  # the running density is kept
+    wait_for(app, lambda s: "crate" in app.body_file.info.content and "draft" in app.body_file.info.content, what="the body's description")
+    broken = tmp_path / "broken.stl"
+    box = trimesh.creation.box(extents=(0.8, 0.6, 0.5))
+    trimesh.Trimesh(box.vertices, box.faces[:-1]).export(broken)
+    with page.expect_file_chooser() as chooser:
+        page.get_by_text("Load mesh (STL, OBJ, PLY)").click()
+    chooser.value.set_files(str(broken))
+    snap = wait_for(app, lambda s: "not watertight" in s.notice, what="the refusal")
+    t = snap.frame.t
+    snap = wait_for(app, lambda s: s.frame.t > t + 0.5, what="the old body to keep running")
+    assert snap.body.name.startswith("crate")
+    page.get_by_text("not watertight", exact=False).first.wait_for()  # the reason is in the panel
+
+
+def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
+    page.goto(app.url + "/?fixedDpr=0.5")
+    page.get_by_role("button", name="Record").wait_for()
+    wait_for(app, lambda s: app.connections == 1, what="the browser")
+    page.get_by_role("button", name="Record").click()
+    wait_for(app, lambda s: app.recorder.recording, what="recording to start")
+    time.sleep(3.0)
+    with page.expect_download() as first:
+        page.get_by_role("button", name="Stop recording").click()
+    html_path = tmp_path / "replay.html"
+    first.value.save_as(html_path)
+    assert first.value.suggested_filename.endswith(".html")
+    csv_path = app.recorder.files["csv"]
+    app.stop()  # no server from here on
+
+    rows = np.loadtxt(csv_path, delimiter=",", skiprows=1)
+    assert len(rows) > 20
+    _, messages = recording_messages(html_path.read_text())
+    k = len(rows) // 2
+    seek = rows[k, 0] - rows[0, 0]
+    position, wxyz = pose_at(messages, seek)
+    np.testing.assert_allclose(position, rows[k, 1:4], atol=1e-6)
+    np.testing.assert_allclose(wxyz, rows[k, 4:8], atol=1e-6)
+
+    page.goto(html_path.as_uri() + "?fixedDpr=0.5")
+    page.wait_for_selector("canvas")
+    time.sleep(4.0)
+    slider = page.locator("[role=slider]").first  # the player's timeline
+    play = slider.locator("xpath=ancestor::div[.//button][1]//button").first  # its play/pause, left of it
+    play.click()  # pause
+    slider.focus()
+    slider.press("Home")
+    time.sleep(1.5)
+    canvas = page.locator("canvas").first
+    start = picture(canvas.screenshot())
+    assert start.std() > 10.0  # not blank
+    box = page.locator("input[inputmode=decimal]").first
+    box.fill(f"{seek:.3f}")
+    box.press("Enter")
+    time.sleep(1.5)
+    assert float(slider.get_attribute("aria-valuenow")) == pytest.approx(seek, abs=0.05)
+    later = picture(canvas.screenshot())
+    assert later.std() > 10.0 and np.abs(later - start).mean() > 0.3  # the body moved

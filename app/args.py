@@ -13,3 +13,7 @@ class ViewArgs:
     """Interface to bind (0.0.0.0 to share on the network)."""
     port: int = 8080
     """Port to serve on (a busy port moves to the next free one; the banner says which)."""
+    mesh: str | None = None
+    """Your own closed mesh (STL, OBJ, PLY) as the body, with the scene's other settings."""
+    mesh_unit: str = "m"
+    """Unit of the mesh file's coordinates: m, cm, mm, in or ft."""

@@ -7,6 +7,7 @@ import socket
 import sys
 import threading
 import time
+from pathlib import Path
 
 import viser
 
@@ -162,11 +163,17 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     strict=True runs the physics under np.errstate(all="raise") (tests): a NaN pauses the run with a note.
     """
     scene = load_scene(args.scene)
+    if args.mesh is not None:
+        from sim.body import load_mesh
+
+        load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
     check_address(args.host, args.port)
     warm_kernels()
     presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options)
+    if args.mesh is not None:
+        loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     server = viser.ViserServer(host=args.host, port=args.port, label="floatsim", verbose=False)
     try:
         return ViewerApp(server, loop, args.host)

@@ -185,7 +185,7 @@ def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None
     size = float(mesh.extents.max())
     lo, hi = SIZE_RANGE
     if not lo <= size <= hi:
-        hint = "millimetres? pick the unit mm" if size > hi else "another unit? pick a larger one"
+        hint = "millimetres? give the unit mm" if size > hi else "another unit? give a larger one"
         raise ConfigError(f"'{name}' is {size:.4g} m across in {unit}, outside {lo:g}-{hi:g} m: is the file in {hint}")
     return mesh
 

@@ -137,3 +137,21 @@ def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
     assert float(slider.get_attribute("aria-valuenow")) == pytest.approx(seek, abs=0.05)
     later = picture(canvas.screenshot())
     assert later.std() > 10.0 and np.abs(later - start).mean() > 0.3  # the body moved
+
+
+def test_export_video_of_the_last_recording(app):
+    from app.browser import missing
+
+    _require(missing() is None, missing() or "")
+    import av
+
+    app.recorder.start()
+    t0 = app.sync().frame.t
+    wait_for(app, lambda s: s.frame.t > t0 + 1.0, what="a second of run")
+    files = app.recorder.stop()
+    assert files["html"].is_file() and files["csv"].is_file()
+    path = app.recorder.export_video(fps=10)
+    with av.open(str(path)) as video:
+        frames = list(video.decode(video=0))
+    assert len(frames) == int(app.recorder.last.duration * 10 + 1e-9) + 1 and (frames[0].width, frames[0].height) == (640, 360)
+    assert not app.recorder.progress.visible and not app.recorder.video.disabled

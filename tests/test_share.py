@@ -184,3 +184,23 @@ def test_links_carry_the_preset_and_what_differs_from_it():
     commands, problems = parse_link(query + "&fixedDpr=0.5&bogus=1&dt=abc&scene=nowhere", ("drop",))
     assert commands[0] == ("scene", "drop") and ("density", 500.0) in commands
     assert problems == ["scene 'nowhere' is not a preset", "unknown parameter 'bogus'", "dt = 'abc' is not a number"]
+
+
+def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):
+    from app.args import ViewArgs
+    from app.main import start
+
+    path = tmp_path / "crate.ply"
+    trimesh.creation.box(extents=(800.0, 600.0, 500.0)).export(path)
+    app = start(ViewArgs(scene="damped", port=0, mesh=str(path), mesh_unit="mm"))
+    try:
+        snap = app.sync()
+        assert snap.body.volume == pytest.approx(0.24, rel=1e-9) and snap.settings.config.body.mesh_unit == "mm"
+        # it starts a quarter of its height (0.5 m, upright as in the file) above its rest height
+        from sim.hydrostatics import at_rest
+
+        z_rest = at_rest(snap.body, snap.params, quat_to_matrix(snap.body.q_input_body))[0]
+        assert "draft 0.45" in snap.notice and snap.frame.t < 1.0
+        assert app.loop.sim.scene.initial.position[2] == pytest.approx(z_rest + 0.125, abs=1e-9)
+    finally:
+        app.stop()

@@ -8,37 +8,11 @@ WebGL runs in software here, so the page is small (800x600, fixedDpr=0.5) and ti
 from __future__ import annotations
 
 import io
-import os
 import time
 
 import numpy as np
 import pytest
 from viewer import wait_for
-
-
-def _require(ok: bool, reason: str) -> None:
-    if not ok:
-        if os.environ.get("CI"):
-            pytest.fail(f"{reason} (CI is set: the browser test must run)")
-        pytest.skip(reason)
-
-
-@pytest.fixture
-def browser_page():
-    from app.browser import launch, missing
-
-    why = missing()
-    _require(why is None, why or "")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch(p)
-        try:
-            page = browser.new_page(viewport={"width": 800, "height": 600})
-            page.set_default_timeout(60_000)
-            yield page
-        finally:
-            browser.close()
 
 
 @pytest.fixture

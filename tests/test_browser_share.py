@@ -10,27 +10,14 @@ import time
 import numpy as np
 import pytest
 import trimesh
-from test_browser import _require
+from conftest import _require
 from test_share import pose_at, recording_messages
 from viewer import wait_for
 
 
 @pytest.fixture
-def page():
-    from app.browser import launch, missing
-
-    why = missing()
-    _require(why is None, why or "")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch(p)
-        try:
-            page = browser.new_page(viewport={"width": 800, "height": 600}, accept_downloads=True)
-            page.set_default_timeout(60_000)
-            yield page
-        finally:
-            browser.close()
+def page(browser_page):
+    return browser_page  # conftest's: Debian chromium, 800x600, generous timeouts (downloads accepted)
 
 
 @pytest.fixture
@@ -69,7 +56,11 @@ def test_a_link_sets_the_scene_and_its_parameters_and_restarts_it(app, page):
 
 
 def test_upload_a_mesh_through_the_page_and_refuse_a_broken_one(app, page, tmp_path):
+    time.sleep(2.0)
+    before = app.sync()
     page.goto(app.url + "/?fixedDpr=0.5")
+    # the first browser restarts the run: a newcomer sees the drop from its start
+    wait_for(app, lambda s: s.epoch > before.epoch and s.frame.t < before.frame.t, what="the run to restart for the first browser")
     page.get_by_text("Your body", exact=True).last.click()  # open the folder (the first match is the About text)
     page.get_by_text("Load mesh (STL, OBJ, PLY)").wait_for()
     good = tmp_path / "crate.stl"

@@ -122,10 +122,11 @@ def test_markers_sit_at_the_exact_centre_of_buoyancy_and_metacentre():
 
 
 def test_exported_video_has_the_requested_frames_and_size(tmp_path):
+    from conftest import _require
+
     from app.browser import missing
 
-    if why := missing():
-        pytest.skip(why)
+    _require(missing() is None, missing() or "")
     import av
 
     from app.video import render_video

@@ -77,8 +77,17 @@ def run(args: RecordArgs) -> int:
         from .video import frame_count, render_video
 
         bar = progress_bar(frame_count(take, args.fps), flag=args.progress, unit="frame")
+        written = [0]
+
+        def advanced(done: int, total: int) -> None:
+            written[0] = done
+            bar.update(1)
+
         try:
-            n = render_video(take, args.video, args.fps, args.video_size, progress=lambda done, total: bar.update(1))
+            n = render_video(take, args.video, args.fps, args.video_size, progress=advanced)
+        except KeyboardInterrupt:
+            print(f"floatsim: video interrupted: the first {written[0]} frames are in {args.video}", file=sys.stderr)
+            return 130
         except Exception as e:  # noqa: BLE001 -- the run and its other outputs are kept; say why the video is not
             print(f"floatsim: video failed: {type(e).__name__}: {e}", file=sys.stderr)
             return 4

@@ -68,16 +68,18 @@ def render_video(take: Take, path: str | Path, fps: float = 30.0, size: str = "6
             with av.open(str(path), "w") as container:
                 stream = container.add_stream("libx264", rate=round(fps) if float(fps).is_integer() else fps)
                 stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-                for i in range(total):
-                    t = i / fps
-                    view.show(take.at(t), now=t)
-                    image = client.get_render(height, width, transport_format="jpeg", timeout=60.0)
-                    for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="rgb24")):
+                try:
+                    for i in range(total):
+                        t = i / fps
+                        view.show(take.at(t), now=t)
+                        image = client.get_render(height, width, transport_format="jpeg", timeout=60.0)
+                        for packet in stream.encode(av.VideoFrame.from_ndarray(image, format="rgb24")):
+                            container.mux(packet)
+                        if progress is not None:
+                            progress(i + 1, total)
+                finally:  # interrupted too: the frames so far make a playable, shorter video
+                    for packet in stream.encode():
                         container.mux(packet)
-                    if progress is not None:
-                        progress(i + 1, total)
-                for packet in stream.encode():
-                    container.mux(packet)
         finally:
             browser.close()
     return total

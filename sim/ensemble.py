@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from .body import make_body
@@ -29,7 +31,8 @@ class Ensemble:
                                   "force coefficients and initial state")  # fmt: skip
         from .simulation import Simulation, default_backend
 
-        shape = make_body(base.body, base.base_dir)
+        # unit mass: each body's inertia is then this times its own mass, whatever the other bodies (bit for bit)
+        shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir)
         self.sims = []
         for s in scenes:
             self.sims.append(Simulation(s, body=with_mass(shape, body_mass(s, shape.volume)), backend=backend))
@@ -37,6 +40,8 @@ class Ensemble:
         self.dt = float(base.step.dt)
         self.backend = backend or default_backend()
         self.diverged: list[str | None] = [None] * len(scenes)
+        self.stopped = [False] * len(scenes)
+        """Bodies taken out of the run on purpose (a sweep's case at rest); they keep their last state."""
 
     @property
     def states(self) -> list[State]:
@@ -47,7 +52,7 @@ class Ensemble:
 
     def step(self, n: int = 1) -> None:
         """Advance every body still running by n steps."""
-        live = [i for i, why in enumerate(self.diverged) if why is None]
+        live = [i for i, why in enumerate(self.diverged) if why is None and not self.stopped[i]]
         if not live:
             return
         first = self.sims[live[0]]

@@ -129,3 +129,32 @@ def describe_rest(body, fluid, R: np.ndarray | None = None) -> str:
     else:
         verdict = "stable as given" if h.stable else "unstable as given: it rolls over to another pose"
     return f"{head}, floats at draft {draft:.4g} m with GM {h.gm[0]:+.3g} m ({verdict})"
+
+
+def floating_potential(body, fluid, R: np.ndarray) -> float:
+    """The potential energy of the body held at orientation R and floating freely in height, J, up to a
+    constant: with the displaced mass equal to the body's, U = M g (z_G - z_B) (gravity's M g z_G plus
+    the water's -rho g V z_B). Its minima over orientations are the stable floating orientations."""
+    from .equilibrium import rest_height
+
+    z = rest_height(body, fluid, R)
+    h = hydrostatics(body, np.array([0.0, 0.0, z]), R)
+    return body.mass * fluid.g * (z - h.buoyancy_centre[2])
+
+
+def lowest_orientation(body, fluid, starts: list[np.ndarray], xatol: float = 1e-6) -> tuple[np.ndarray, float]:
+    """The orientation of least `floating_potential` found by Nelder-Mead from each start (rotation
+    matrices), and its potential: the static answer to "how does it float", independent of any dynamics."""
+    from scipy.optimize import minimize
+    from scipy.spatial.transform import Rotation
+
+    best = (None, np.inf)
+    for R0 in starts:
+        def u(v, R0=R0):
+            return floating_potential(body, fluid, Rotation.from_rotvec(v).as_matrix() @ R0)
+
+        res = minimize(u, np.zeros(3), method="Nelder-Mead", options={"xatol": xatol, "fatol": 1e-12 * body.mass * fluid.g, "initial_simplex":
+                                                                     0.3 * np.vstack([np.zeros(3), np.eye(3)]), "maxiter": 2000})  # fmt: skip
+        if res.fun < best[1]:
+            best = (Rotation.from_rotvec(res.x).as_matrix() @ R0, float(res.fun))
+    return best

@@ -1,10 +1,11 @@
-"""`python -m studies report|figures|decay ...`: write the generated documents (reports/ by default)."""
+"""`python -m studies report|figures|decay|stability ...`: write the generated documents (reports/ by default)."""
 
 import sys
 
 from .probes import dispatch
 
-COMMANDS = {"report": "studies.accuracy:report", "figures": "studies.seed_figures:figures", "decay": "studies.decay:decay"}
+COMMANDS = {"report": "studies.accuracy:report", "figures": "studies.seed_figures:figures", "decay": "studies.decay:decay",
+            "stability": "studies.stability:stability"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,6 +1,5 @@
 """Ensembles: each body advances exactly as it would alone; sweeps land on the analytic equilibria."""
 
-import csv
 
 import numpy as np
 import pytest
@@ -59,24 +58,26 @@ def test_ensemble_refuses_bodies_of_different_shapes():
 
 def test_density_sweep_settles_each_cube_at_its_archimedes_draft(tmp_path):
     """Upright cube of side 1 floats with its centre at z = 1/2 - rho_body / rho_water."""
-    out, hist = tmp_path / "sweep.csv", tmp_path / "hist.csv"
+    import pandas as pd
+
     densities = [300.0, 600.0, 900.0]
-    code = main(["sweep", "--param", "density", "--values", *map(str, densities), "--scene", "rest", "--t-end", "20",
-                 "--out", str(out), "--history", str(hist), "--every", "200"])  # fmt: skip
+    code = main(["sweep", "--param", "density=" + ",".join(map(str, densities)), "--scene", "rest", "--t-end", "20", "--out", str(tmp_path),
+                 "--history-every", "200"])  # fmt: skip
     assert code == 0
-    rows = list(csv.DictReader(open(out)))
-    assert [float(r["value"]) for r in rows] == densities and all(r["status"] == "ok" for r in rows)
-    for r, rho in zip(rows, densities):
+    rows = pd.read_parquet(tmp_path).sort_values("case")
+    assert list(rows.density) == densities and set(rows.status) == {"end"}
+    history = pd.read_parquet(tmp_path / "_history")
+    for case, rho in enumerate(densities):
         # rest scene starts at z = -0.4 with no damping: it oscillates about its equilibrium,
-        # so check the time-mean of the history instead of the final point
-        z = np.array([float(h["z"]) for h in csv.DictReader(open(hist)) if float(h["value"]) == rho])
+        # so check the range of the history instead of the final point
+        z = history[history.case == case].z.to_numpy()
         assert len(z) == 21
         assert z.min() <= 0.5 - rho / 1000 <= z.max()
-        assert float(r["t"]) == pytest.approx(20.0)
-    assert float(rows[2]["z"]) == pytest.approx(-0.4, abs=1e-9)  # the 900 one was at rest already
+    assert rows.t.to_numpy() == pytest.approx(20.0)
+    assert rows.z.iloc[2] == pytest.approx(-0.4, abs=1e-9)  # the 900 one was at rest already
 
 
-def test_sweep_bad_input_is_one_line(capsys):
-    assert main(["sweep", "--values", "900", "-5", "--scene", "rest"]) == 2
+def test_sweep_bad_input_is_one_line(capsys, tmp_path):
+    assert main(["sweep", "--param", "density=900,-5", "--scene", "rest", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "density must be > 0" in err

@@ -1,89 +1,172 @@
-"""`floatsim sweep`: one scene run for many values of a parameter at once (an Ensemble), to CSV."""
+"""`floatsim sweep`: a grid of cases (any parameters, each a list or a range, and random initial
+orientations), run in chunks on one core, every core or a Dask cluster, each chunk's results written
+as a Parquet file as it completes; `--resume` finishes only what is missing."""
 
 from __future__ import annotations
 
+import json
+import os
 import sys
+import time
+from collections import Counter
 from dataclasses import dataclass
-from typing import Literal
+from pathlib import Path
+from typing import Annotated, Literal
 
-from ..config import PARAMS, ConfigError, load_scene, with_overrides
-from ..ensemble import Ensemble
-from ..simulation import CSV_COLUMNS
+import tyro
+
+from ..backends import WorkerLost, run
+from ..errors import ConfigError
+from ..grid import START, VARIABLE, Sweep, case_scene, chunks, load_sweep_file, parse_param
 from .progress import progress_bar
 
-SWEPT = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid", "waves") and p.kind in ("float", "optional") and p.key not in ("mass", "size")}
-"""Parameters a sweep can vary (every declared number of the body, the water and the waves, term coefficients included), plus z0."""
+MANIFEST = "_manifest.json"
+"""Names starting with '_' are skipped by pyarrow/pandas when reading the folder as one table."""
 
 
 @dataclass
 class SweepArgs:
-    """Run many bodies of one shape together, one per value of a parameter; one CSV row per body."""
+    """Run a grid of cases and write one row of results per case (Parquet, one file per chunk, in --out)."""
 
-    param: Literal[tuple(SWEPT) + ("z0",)] = "density"  # type: ignore[valid-type]
-    """Which parameter varies: a declared body or water parameter (density, damping, drag_coefficient, ...) or z0 (initial height, m)."""
-    values: tuple[float, ...] = (500.0, 700.0, 900.0)
-    """The values to run, one body each."""
-    scene: str = "damped"
-    """Preset name or path to a scene .toml (everything else comes from it)."""
+    param: Annotated[tuple[str, ...], tyro.conf.UseAppendAction] = ()
+    """NAME=VALUES, repeatable: a range FROM:TO:COUNT (ends included) or a list V1,V2,... The product of all is run.
+    NAME: a body, water, wave or step parameter (density, damping, drag_coefficient, hs, integrator, ...), z0, tilt or orientation_seed."""
+    file: str | None = None
+    """A TOML sweep file (scene, params, set, settle, ...); flags given here override it."""
+    scene: str | None = None
+    """Preset name or scene .toml (default: damped)."""
+    set: Annotated[tuple[str, ...], tyro.conf.UseAppendAction] = ()
+    """SECTION.KEY=VALUE, repeatable: a fixed change to the scene for every case (e.g. fluid.forces=panels)."""
     t_end: float | None = None
-    """Simulated duration, s (default: the scene's)."""
+    """Simulated duration of each case, s (default: the scene's)."""
     dt: float | None = None
     """Time step, s."""
     integrator: str | None = None
-    """Integrator name (fixed-step ones run compiled)."""
-    out: str = "sweep.csv"
-    """CSV of final states: param, value, status, then the run columns."""
-    history: str | None = None
-    """Also write every body's time history here (long format: body, value, then the run columns)."""
-    every: int = 100
-    """History: one row per body every K steps."""
+    """Integrator (fixed-step ones run compiled)."""
+    settle: bool = False
+    """Stop each case once it is at rest, and record when (default: run to the end, or the file's `settle`)."""
+    out: str = "sweep"
+    """Folder of results: chunk-NNNNN.parquet (read the folder with pandas.read_parquet), _manifest.json, _history/."""
+    backend: Literal["serial", "local", "dask"] = "serial"
+    """serial: this process; local: one process per core; dask: a Dask LocalCluster, or --scheduler's workers."""
+    workers: int | None = None
+    """Worker processes for local and a dask LocalCluster (default: every core)."""
+    scheduler: str | None = None
+    """Address of a running Dask scheduler (tcp://host:8786); implies --backend dask."""
+    timeout: float = 10.0
+    """Seconds to wait for the scheduler to answer."""
+    chunk: int | None = None
+    """Cases per chunk (default 64; cases that cannot share an ensemble never share a chunk)."""
+    resume: bool = False
+    """Finish a sweep in --out: run only the chunks without a results file."""
+    history_every: int | None = None
+    """Also keep each case's pose every K steps (in --out/_history/)."""
     progress: bool | None = None
     """Progress bar (default: only on a terminal, never under CI)."""
 
 
-def sweep(args: SweepArgs) -> int:
-    if not args.values:
-        raise ConfigError("--values needs at least one value")
-    if args.every < 1:
-        raise ConfigError(f"--every must be >= 1, got {args.every}")
-    base = with_overrides(load_scene(args.scene), step__t_end=args.t_end, step__dt=args.dt, step__integrator=args.integrator)
-    key = f"{SWEPT[args.param].section}__{args.param}" if args.param in SWEPT else None
-    scenes = []
-    for v in args.values:
-        if key:
-            scenes.append(with_overrides(base, **{key: float(v)}))
-        else:
-            x, y, _ = base.initial.position
-            scenes.append(with_overrides(base, initial__position=(x, y, float(v))))
-    ensemble = Ensemble(scenes)
-    n_steps = round(base.step.t_end / ensemble.dt)
-    history = open(args.history, "w") if args.history else None
-    bar = progress_bar(n_steps, flag=args.progress)
+def parse_set(item: str) -> tuple[str, object]:
+    if "=" not in item or "." not in item.split("=", 1)[0]:
+        raise ConfigError(f"--set {item!r}: write SECTION.KEY=VALUE, e.g. fluid.forces=panels")
+    key, text = item.split("=", 1)
+    section, name = key.strip().split(".", 1)
     try:
-        if history:
-            history.write("body,value," + ",".join(CSV_COLUMNS) + "\n")
-        done = 0
-        while True:
-            if history and done % args.every == 0:
-                for i, (v, f) in enumerate(zip(args.values, ensemble.frames())):
-                    history.write(f"{i},{v:.12g}," + ",".join(f"{c:.12g}" for c in f.row()) + "\n")
-            if done >= n_steps:
-                break
-            k = min(args.every, n_steps - done)
-            ensemble.step(k)
-            done += k
-            bar.update(k)
+        value: object = json.loads(text)
+    except json.JSONDecodeError:
+        value = text
+    return f"{section}__{name}", value
+
+
+def build(args: SweepArgs) -> Sweep:
+    """The sweep a command line (and its file) describes, validated: every case's scene is checked."""
+    data = load_sweep_file(args.file) if args.file else {}
+    params = dict(data.get("params", []))
+    for item in args.param:
+        name, values = parse_param(item)
+        params[name] = values
+    if not params:
+        raise ConfigError("nothing to sweep: give --param NAME=VALUES (e.g. --param density=100:900:41) or --file")
+    overrides = {f"{k.split('.')[0]}__{k.split('.')[1]}": v for k, v in data.get("set", {}).items()}
+    overrides.update(dict(parse_set(s) for s in args.set))
+    for key, flag in (("t_end", args.t_end), ("dt", args.dt), ("integrator", args.integrator)):
+        value = flag if flag is not None else data.get(key)
+        if value is not None:
+            overrides[f"step__{key}"] = value
+    chunk = args.chunk if args.chunk is not None else int(data.get("chunk", 64))
+    if chunk < 1:
+        raise ConfigError(f"--chunk must be >= 1, got {chunk}")
+    every = args.history_every if args.history_every is not None else int(data.get("history_every", 0))
+    if every < 0:
+        raise ConfigError(f"--history-every must be >= 0, got {every}")
+    settle = args.settle or bool(data.get("settle", False))
+    scene = args.scene or data.get("scene", "damped")
+    sweep = Sweep(scene, tuple(params.items()), tuple(sorted(overrides.items())), settle, chunk, every)
+    base = sweep.base()
+    for case in sweep.cases():  # any bad value fails here, with its one line, before anything runs
+        case_scene(base, case)
+    return sweep
+
+
+def sweep(args: SweepArgs) -> int:
+    spec = build(args)
+    backend = "dask" if args.scheduler else args.backend
+    base = spec.base()
+    cases = spec.cases()
+    scenes = [case_scene(base, c) for c in cases]
+    plan = chunks(spec, scenes)
+    out = Path(args.out)
+    manifest = out / MANIFEST
+    key = spec.key()
+    if manifest.exists() and any(out.glob("chunk-*.parquet")):
+        old = json.loads(manifest.read_text())
+        if not args.resume:
+            raise ConfigError(f"{out} already holds a sweep's results: add --resume to finish it, or choose another --out")
+        if old.get("key") != key:
+            raise ConfigError(f"{out} holds a different sweep (another grid, scene or settings): --resume needs the same one")
+    out.mkdir(parents=True, exist_ok=True)
+    manifest.write_text(json.dumps({"key": key, "scene": spec.scene, "params": [[n, list(v)] for n, v in spec.params],
+                                    "set": [[k, v] for k, v in spec.overrides], "settle": spec.settle, "chunk": spec.chunk,
+                                    "cases": len(cases), "chunks": plan, "history_every": spec.history_every}, indent=1, default=str))  # fmt: skip
+    todo = [(cid, idx) for cid, idx in enumerate(plan) if not (out / f"chunk-{cid:05d}.parquet").exists()]
+    skipped = len(plan) - len(todo)
+    print(f"sweep {key}: {len(cases)} cases of '{base.name}' in {len(plan)} chunks"
+          + (f" ({skipped} already done, {len(todo)} to run)" if skipped else "") + f", backend {backend}", flush=True)  # fmt: skip
+    bar = progress_bar(sum(len(idx) for _, idx in todo), unit="case", flag=args.progress)
+    statuses: Counter = Counter()
+    started = time.perf_counter()
+    ran = 0
+
+    def done(cid: int, rows: dict, history: dict | None) -> None:
+        nonlocal ran
+        write(out / f"chunk-{cid:05d}.parquet", rows)
+        if history is not None:
+            write(out / "_history" / f"chunk-{cid:05d}.parquet", history)
+        statuses.update(rows["status"])
+        ran += 1
+        bar.update(len(rows["case"]))
+
+    try:
+        run(spec, todo, done, backend, args.workers, args.scheduler, args.timeout)
+    except WorkerLost as e:
+        print(f"floatsim: {e}: {ran} chunks of {len(todo)} written to {out}; rerun with --resume to finish", file=sys.stderr)
+        return 4
     finally:
         bar.close()
-        if history:
-            history.close()
-    with open(args.out, "w") as out:
-        out.write("param,value,status," + ",".join(CSV_COLUMNS) + "\n")
-        for v, f, why in zip(args.values, ensemble.frames(), ensemble.diverged):
-            status = "diverged" if why else "ok"
-            out.write(f"{args.param},{v:.12g},{status}," + ",".join(f"{c:.12g}" for c in f.row()) + "\n")
-    for v, why in zip(args.values, ensemble.diverged):
-        if why:
-            print(f"floatsim: {args.param} = {v:g}: {why}", file=sys.stderr)
-    print(f"{len(args.values)} bodies, {n_steps} steps each -> {args.out}" + (f" (history -> {args.history})" if history else ""))
-    return 3 if any(ensemble.diverged) else 0
+    wall = time.perf_counter() - started
+    summary = ", ".join(f"{n} {s}" for s, n in sorted(statuses.items()))
+    print(f"ran {ran} chunks ({sum(statuses.values())} cases: {summary}) in {wall:.3g} s -> {out}/ (pandas.read_parquet('{out}'))")
+    return 3 if statuses.get("diverged") else 0
+
+
+def write(path: Path, columns: dict) -> None:
+    """A Parquet file, whole or not at all (written aside, then renamed): a killed run leaves no half file."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_suffix(".partial")
+    pq.write_table(pa.table(columns), partial)
+    os.replace(partial, path)
+
+
+__all__ = ["SweepArgs", "sweep", "START", "VARIABLE"]

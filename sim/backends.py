@@ -1,0 +1,101 @@
+"""Where a sweep's chunks run: `serial` (this process), `local` (one process per core of this machine)
+or `dask` (dask.distributed: a LocalCluster of worker processes, or a running scheduler's workers).
+
+Each chunk is one task (a compiled ensemble of up to `chunk` cases): a task per case would cost
+more in scheduling than in physics. Workers load the compiled kernels once and run single-threaded
+BLAS. Results come back to this process, which writes each chunk's file as it arrives (`done`).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+
+from .errors import ConfigError
+from .grid import Sweep
+
+BACKENDS = ("serial", "local", "dask")
+SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
+
+
+class WorkerLost(RuntimeError):
+    """A worker process died; the chunks finished before are kept."""
+
+
+def _warm() -> None:
+    from .simulation import default_backend
+
+    if default_backend() == "numba":
+        from .kernels import warm_up
+
+        warm_up()
+
+
+def _task(sweep: Sweep, indices: list[int]):
+    from .sweeping import run_chunk
+
+    _warm()  # once per process in effect: the kernels come from the disk cache, then stay loaded
+    return run_chunk(sweep, indices)
+
+
+def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int, dict, dict | None], None], backend: str = "serial",
+        workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> None:  # fmt: skip
+    """Run the chunks `todo` ((id, case indices) pairs) on `backend`, calling `done(id, rows, history)`
+    in this process as each finishes."""
+    todo = list(todo)
+    if backend not in BACKENDS:
+        raise ConfigError(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"--workers must be >= 1, got {workers}")
+    if backend == "serial":
+        for cid, indices in todo:
+            done(cid, *_task(sweep, indices))
+        return
+    os.environ.update(SINGLE_THREAD)  # inherited by the worker processes started below
+    n = workers or os.cpu_count() or 1
+    if backend == "local":
+        _run_local(sweep, todo, done, n)
+    else:
+        _run_dask(sweep, todo, done, n, scheduler, timeout)
+
+
+def _run_local(sweep, todo, done, n) -> None:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm) as pool:
+        futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
+        try:
+            for future in as_completed(futures):
+                done(futures[future], *future.result())
+        except BrokenProcessPool:
+            for f in futures:
+                f.cancel()
+            raise WorkerLost("a worker process died") from None
+
+
+def _run_dask(sweep, todo, done, n, scheduler, timeout) -> None:
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise ConfigError("the dask backend needs dask.distributed: pip install -e '.[dask]'") from None
+    cluster = None
+    try:
+        if scheduler:
+            try:
+                client = Client(scheduler, timeout=f"{timeout}s")
+            except (OSError, TimeoutError) as e:
+                raise ConfigError(f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__})") from None
+        else:
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+        with client:
+            client.run(_warm)
+            futures = [client.submit(_task, sweep, indices, key=f"floatsim-chunk-{sweep.key()}-{cid}", retries=2) for cid, indices in todo]
+            ids = {f.key: cid for f, (cid, _) in zip(futures, todo)}
+            for future in as_completed(futures):
+                done(ids[future.key], *future.result())
+    finally:
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,118 @@
+"""One chunk of a sweep (sim/grid.py): its cases advanced together in one ensemble to the end or,
+with `settle`, each until it is at rest; then a row of results per case, as plain columns.
+
+At rest means: at two checks one simulated second apart, |u| and |omega| x radius below 1e-3 sqrt(g L)
+and the net force and torque below 1e-3 of the weight (and weight x radius). A case's numbers depend
+on itself alone (each body steps on its own in the compiled ensemble), so chunks can run anywhere.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .ensemble import Ensemble
+from .grid import Sweep, case_scene
+from .rotation import quat_to_matrix
+
+SAMPLE = 0.1
+"""Seconds between the samples of z a case's period is measured from."""
+CHECK = 1.0
+"""Seconds between rest checks."""
+REST = 1e-3
+SUMMARY = ("status", "t", "time_to_rest", "x", "y", "z", "qw", "qx", "qy", "qz", "speed", "spin", "E_total", "tilt_deg", "draft", "period")
+HISTORY = ("case", "t", "x", "y", "z", "qw", "qx", "qy", "qz")
+
+
+def at_rest(sim) -> bool:
+    f, body = sim.frame(), sim.body
+    g = sim.params.g or 9.81
+    scale = math.sqrt(g * 2 * body.radius)
+    weight = body.mass * g
+    return bool(np.linalg.norm(f.u_world) < REST * scale and np.linalg.norm(f.omega_world) * body.radius < REST * scale
+                and np.linalg.norm(f.force_world) < REST * weight and np.linalg.norm(f.torque_world) < REST * weight * body.radius)  # fmt: skip
+
+
+def nearest_face_tilt(body, q: np.ndarray) -> float:
+    """Angle from vertical of the body's face normal nearest to it (0: a face lies flat on top), degrees."""
+    up = (body.face_normals @ quat_to_matrix(q).T)[:, 2]
+    return math.degrees(math.acos(min(1.0, float(up.max()))))
+
+
+def period(t: np.ndarray, z: np.ndarray) -> float:
+    """Mean time between upward crossings of z's final value (nan with fewer than two)."""
+    y = z - z[-1]
+    i = np.flatnonzero((y[:-1] < 0) & (y[1:] >= 0))
+    if len(i) < 2:
+        return math.nan
+    crossings = t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i])
+    return float(np.mean(np.diff(crossings)))
+
+
+def run_chunk(sweep: Sweep, indices: list[int]) -> tuple[dict, dict | None]:
+    """Results (one row per case) and, if asked, histories of the cases `indices`, as column dicts."""
+    base = sweep.base()
+    cases = sweep.cases()
+    scenes = [case_scene(base, cases[i]) for i in indices]
+    ensemble = Ensemble(scenes)
+    dt = ensemble.dt
+    n_steps = round(base.step.t_end / dt)
+    sample = max(1, round(SAMPLE / dt))
+    block = math.gcd(sample, sweep.history_every) if sweep.history_every else sample
+    check = max(1, round(CHECK / dt))
+    n = len(indices)
+    samples_t, samples_z = [0.0], [[s.state.x_world[2] for s in ensemble.sims]]
+    rest_time = [math.nan] * n
+    candidate = [math.nan] * n  # time of the first of two checks at rest
+    history = {k: [] for k in HISTORY} if sweep.history_every else None
+
+    def keep_history(done: int) -> None:
+        for j, s in enumerate(ensemble.sims):
+            if ensemble.stopped[j] and done > 0:
+                continue
+            st = s.state
+            for k, v in zip(HISTORY, (indices[j], st.t, *st.x_world, *st.q_world_body)):
+                history[k].append(v)
+
+    if history is not None:
+        keep_history(0)
+    done = 0
+    while done < n_steps and not all(ensemble.stopped[j] or ensemble.diverged[j] for j in range(n)):
+        k = min(block - done % block, n_steps - done)
+        ensemble.step(k)
+        done += k
+        if done % sample == 0 or done == n_steps:
+            samples_t.append(done * dt)
+            samples_z.append([s.state.x_world[2] for s in ensemble.sims])
+        if history is not None and done % sweep.history_every == 0:
+            keep_history(done)
+        if sweep.settle and done % check == 0:
+            for j, s in enumerate(ensemble.sims):
+                if ensemble.stopped[j] or ensemble.diverged[j]:
+                    continue
+                if at_rest(s):
+                    if math.isnan(candidate[j]):
+                        candidate[j] = s.state.t
+                    else:
+                        rest_time[j] = candidate[j]
+                        ensemble.stopped[j] = True
+                else:
+                    candidate[j] = math.nan
+    t_samples, z_samples = np.array(samples_t), np.array(samples_z)
+    rows: dict = {"case": list(indices)}
+    for name, _ in sweep.params:
+        rows[name] = [cases[i][name] for i in indices]
+    for key in SUMMARY:
+        rows[key] = []
+    for j, s in enumerate(ensemble.sims):
+        f = s.frame()
+        status = "diverged" if ensemble.diverged[j] else ("rest" if ensemble.stopped[j] else "end")
+        upto = t_samples <= f.t + 1e-9
+        vertices = s.body.mesh_vertices @ quat_to_matrix(f.q_world_body).T + f.x_world
+        values = (status, f.t, rest_time[j], *f.x_world, *f.q_world_body, float(np.linalg.norm(f.u_world)), float(np.linalg.norm(f.omega_world)),
+                  f.E_total, nearest_face_tilt(s.body, f.q_world_body), -float(vertices[:, 2].min()),
+                  period(t_samples[upto], z_samples[upto, j]))  # fmt: skip
+        for key, v in zip(SUMMARY, values):
+            rows[key].append(v)
+    return rows, history

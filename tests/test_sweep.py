@@ -1,0 +1,138 @@
+"""Sweeps: grids of cases in chunks, identical numbers on every backend and chunking, results that
+survive an interruption or a dying worker, clear errors; and the floating cube's stable orientation
+found two independent ways (dynamics to rest, and the least potential over orientations)."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sim.commands import main
+from sim.grid import Sweep, case_scene, chunks, parse_param
+
+GRID = ["--param", "density=300:900:4", "--param", "orientation_seed=0:2:3", "--settle", "--t-end", "40", "--scene", "damped"]
+
+
+def results(folder: Path) -> pd.DataFrame:
+    return pd.read_parquet(folder).sort_values("case").reset_index(drop=True)
+
+
+def test_grid_is_the_product_of_lists_and_ranges():
+    sweep = Sweep("damped", (parse_param("density=100:900:5"), parse_param("tilt=0,10"), parse_param("integrator=rk4,implicit")))
+    cases = sweep.cases()
+    assert len(cases) == 20 and cases[0] == {"density": 100.0, "tilt": 0.0, "integrator": "rk4"} and cases[-1]["density"] == 900.0
+    scenes = [case_scene(sweep.base(), c) for c in cases]
+    assert scenes[2].initial.orientation == pytest.approx((math.cos(math.radians(5)), math.sin(math.radians(5)), 0, 0))
+    plan = chunks(Sweep(**{**sweep.__dict__, "chunk": 3}), scenes)
+    assert sorted(i for c in plan for i in c) == list(range(20)) and max(map(len, plan)) == 3
+    for c in plan:  # rk4 and implicit cases never share an ensemble
+        assert len({scenes[i].step.integrator for i in c}) == 1
+
+
+def test_every_backend_and_chunking_gives_the_same_numbers_bit_for_bit(tmp_path):
+    assert main(["sweep", *GRID, "--out", str(tmp_path / "serial"), "--chunk", "5"]) == 0
+    serial = results(tmp_path / "serial")
+    assert len(serial) == 12 and set(serial.status) == {"rest"}
+    # the cube comes to rest face up at r = 0.9 and corner up (54.7 degrees) at r = 0.3 to 0.7, from any start
+    assert serial[serial.density == 900].tilt_deg.max() < 0.5
+    assert np.allclose(serial[serial.density < 800].tilt_deg, math.degrees(math.acos(3**-0.5)), atol=0.5)
+    assert main(["sweep", *GRID, "--out", str(tmp_path / "small"), "--chunk", "2"]) == 0
+    assert main(["sweep", *GRID, "--out", str(tmp_path / "local"), "--chunk", "5", "--backend", "local", "--workers", "2"]) == 0
+    assert main(["sweep", *GRID, "--out", str(tmp_path / "dask"), "--chunk", "5", "--backend", "dask", "--workers", "2"]) == 0
+    for other in ("small", "local", "dask"):
+        pd.testing.assert_frame_equal(results(tmp_path / other), serial, check_exact=True)
+
+
+def test_resume_runs_only_the_missing_chunks(tmp_path, capsys):
+    out = tmp_path / "s"
+    assert main(["sweep", *GRID, "--out", str(out), "--chunk", "2"]) == 0
+    full = results(out)
+    for cid in (1, 4):  # an interruption lost these two
+        (out / f"chunk-{cid:05d}.parquet").unlink()
+    capsys.readouterr()
+    assert main(["sweep", *GRID, "--out", str(out), "--chunk", "2", "--resume"]) == 0
+    said = capsys.readouterr().out
+    assert "(4 already done, 2 to run)" in said and "ran 2 chunks (4 cases" in said
+    pd.testing.assert_frame_equal(results(out), full, check_exact=True)
+    assert main(["sweep", *GRID, "--out", str(out), "--chunk", "2"]) == 2  # no --resume: refuses to mix
+
+
+def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
+    out = tmp_path / "k"
+    args = [sys.executable, "-m", "sim", "sweep", "--param", "density=300:900:8", "--param", "orientation_seed=0:3:4", "--t-end", "300",
+            "--scene", "damped", "--chunk", "2", "--backend", "local", "--workers", "2", "--out", str(out)]  # fmt: skip
+    run = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(out.glob("chunk-*.parquet")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    children = [int(p) for p in Path(f"/proc/{run.pid}/task/{run.pid}/children").read_text().split()]
+    workers = [p for p in children if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]  # not the resource tracker
+    assert workers, "no worker processes"
+    os.kill(workers[0], signal.SIGKILL)
+    _, err = run.communicate(timeout=120)
+    written = len(list(out.glob("chunk-*.parquet")))
+    assert run.returncode == 4 and "rerun with --resume" in err and 1 <= written < 16
+    done = subprocess.run([*args, "--resume"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and f"({written} already done, {16 - written} to run)" in done.stdout
+    assert len(results(out)) == 32
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--param", "wobble=1:2:3"], "--param wobble: unknown parameter"),
+        (["--param", "density=1:2:0"], "the range is empty"),
+        (["--param", "density=abc"], "values must be numbers"),
+        (["--param", "density=-5,300"], "density must be > 0"),
+        (["--scene", "damped"], "nothing to sweep"),
+        (["--param", "density=300", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:9"),
+    ],
+)
+def test_bad_sweep_input_is_one_line(argv, message, capsys, tmp_path):
+    assert main(["sweep", *argv, "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+
+
+def test_histories_on_request(tmp_path):
+    out = tmp_path / "h"
+    assert main(["sweep", "--param", "density=500,900", "--t-end", "2", "--history-every", "20", "--scene", "drop", "--out", str(out)]) == 0
+    history = pd.read_parquet(out / "_history")
+    assert len(history) == 2 * 21 and set(history.case) == {0, 1}
+    assert history[history.case == 1].z.iloc[0] == pytest.approx(0.0)
+    assert len(results(out)) == 2  # the folder read whole skips _history and _manifest.json
+
+
+def test_least_potential_orientation_of_the_cube():
+    """The static route alone: face up where it is the classic answer (r = 0.1, 0.9: GM > 0 and lowest),
+    corner up (54.7 degrees) in the middle (Erdos, Schibler & Herndon, Am. J. Phys. 60, 335 (1992))."""
+    from studies.stability import static_tilts
+
+    static, energies = static_tilts(np.array([0.1, 0.4, 0.6, 0.9]))
+    np.testing.assert_allclose(static, [0.0, 54.7356, 54.7356, 0.0], atol=0.05)
+    # face up, U = M g (z_G - z_B) = M g (s/2 - d/2) with draft d = r s: the minimiser reaches it exactly
+    assert energies[0] == pytest.approx(100.0 * 9.81 * (0.5 - 0.05), rel=1e-9)
+
+
+def test_simulation_and_energy_minimisation_agree_on_how_a_cube_floats(tmp_path):
+    """Outside narrow bands around the transitions, the lowest rest state the dynamics reach from random
+    starts is the static least-potential orientation."""
+    from sim.commands.sweep import sweep
+    from studies.stability import StabilityArgs, classify, lowest_found, static_tilts, sweep_args
+
+    args = StabilityArgs(ratios=5, seeds=4, t_end=90.0, backend="serial", out=str(tmp_path / "st"))
+    assert sweep(sweep_args(args, str(tmp_path / "st-sweep"))) == 0
+    found = lowest_found(classify(pd.read_parquet(tmp_path / "st-sweep")))
+    ratios = np.linspace(20.0, 980.0, 5) / 1000.0
+    static, _ = static_tilts(ratios)
+    for r, s in zip(ratios, static):
+        assert abs(found[float(r)] - s) < 1.0, (r, found[float(r)], s)

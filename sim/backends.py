@@ -22,41 +22,66 @@ class WorkerLost(RuntimeError):
     """A worker process died; the chunks finished before are kept."""
 
 
+_warmed = False
+
+
 def _warm() -> None:
+    """Load the compiled kernels, once per process."""
+    global _warmed
     from .simulation import default_backend
 
-    if default_backend() == "numba":
+    if not _warmed and default_backend() == "numba":
+        _warmed = True
         from .kernels import warm_up
 
         warm_up()
 
 
 def _task(sweep: Sweep, indices: list[int]):
+    """One chunk on a worker: (rows, history, seconds of compute)."""
+    import time
+
     from .sweeping import run_chunk
 
     _warm()  # once per process in effect: the kernels come from the disk cache, then stay loaded
-    return run_chunk(sweep, indices)
+    started = time.perf_counter()
+    rows, history = run_chunk(sweep, indices)
+    return rows, history, time.perf_counter() - started
 
 
 def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int, dict, dict | None], None], backend: str = "serial",
-        workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> None:  # fmt: skip
+        workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> dict:  # fmt: skip
     """Run the chunks `todo` ((id, case indices) pairs) on `backend`, calling `done(id, rows, history)`
-    in this process as each finishes."""
+    in this process as each finishes. Returns {'busy': seconds the chunks computed for, summed over
+    workers, 'startup': seconds until the first chunk began (workers starting, kernels loading)}."""
+    import time
+
     todo = list(todo)
+    stats = {"busy": 0.0, "startup": 0.0}
+    started = time.perf_counter()
+
+    def finished(cid: int, result) -> None:
+        rows, history, seconds = result
+        if stats["busy"] == 0.0:
+            stats["startup"] = max(0.0, time.perf_counter() - started - seconds)
+        stats["busy"] += seconds
+        done(cid, rows, history)
+
     if backend not in BACKENDS:
         raise ConfigError(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     if backend == "serial":
         for cid, indices in todo:
-            done(cid, *_task(sweep, indices))
-        return
+            finished(cid, _task(sweep, indices))
+        return stats
     os.environ.update(SINGLE_THREAD)  # inherited by the worker processes started below
     n = workers or os.cpu_count() or 1
     if backend == "local":
-        _run_local(sweep, todo, done, n)
+        _run_local(sweep, todo, finished, n)
     else:
-        _run_dask(sweep, todo, done, n, scheduler, timeout)
+        _run_dask(sweep, todo, finished, n, scheduler, timeout)
+    return stats
 
 
 def _run_local(sweep, todo, done, n) -> None:
@@ -64,11 +89,15 @@ def _run_local(sweep, todo, done, n) -> None:
     from concurrent.futures import ProcessPoolExecutor, as_completed
     from concurrent.futures.process import BrokenProcessPool
 
-    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm) as pool:
+    # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    if method == "fork":
+        _warm()
+    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_warm) as pool:
         futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
         try:
             for future in as_completed(futures):
-                done(futures[future], *future.result())
+                done(futures[future], future.result())
         except BrokenProcessPool:
             for f in futures:
                 f.cancel()
@@ -95,7 +124,7 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout) -> None:
             futures = [client.submit(_task, sweep, indices, key=f"floatsim-chunk-{sweep.key()}-{cid}", retries=2) for cid, indices in todo]
             ids = {f.key: cid for f, (cid, _) in zip(futures, todo)}
             for future in as_completed(futures):
-                done(ids[future.key], *future.result())
+                done(ids[future.key], future.result())
     finally:
         if cluster is not None:
             cluster.close()

@@ -106,6 +106,15 @@ class Sweep:
         names = [n for n, _ in self.params]
         return [dict(zip(names, combo)) for combo in itertools.product(*(v for _, v in self.params))]
 
+    def case(self, i: int) -> dict:
+        """Case i of the product (the last parameter varies fastest), without forming the others."""
+        sizes = [len(v) for _, v in self.params]
+        index = np.unravel_index(i, sizes) if sizes else ()
+        return {name: values[int(k)] for (name, values), k in zip(self.params, index)}
+
+    def __len__(self) -> int:
+        return math.prod(len(v) for _, v in self.params)
+
     def key(self) -> str:
         """A digest of what the numbers depend on (the scene file's contents included)."""
         base = self.base()

@@ -53,7 +53,7 @@ def period(t: np.ndarray, z: np.ndarray) -> float:
 def run_chunk(sweep: Sweep, indices: list[int]) -> tuple[dict, dict | None]:
     """Results (one row per case) and, if asked, histories of the cases `indices`, as column dicts."""
     base = sweep.base()
-    cases = sweep.cases()
+    cases = {i: sweep.case(i) for i in indices}
     scenes = [case_scene(base, cases[i]) for i in indices]
     ensemble = Ensemble(scenes)
     dt = ensemble.dt
@@ -80,7 +80,7 @@ def run_chunk(sweep: Sweep, indices: list[int]) -> tuple[dict, dict | None]:
     done = 0
     while done < n_steps and not all(ensemble.stopped[j] or ensemble.diverged[j] for j in range(n)):
         k = min(block - done % block, n_steps - done)
-        ensemble.step(k)
+        ensemble.step(k, check_energy=(done + k) % check == 0 or done + k == n_steps)  # the blow-up check once a second
         done += k
         if done % sample == 0 or done == n_steps:
             samples_t.append(done * dt)

@@ -75,7 +75,7 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
     while not list(out.glob("chunk-*.parquet")) and time.monotonic() < deadline:
         time.sleep(0.05)
     children = [int(p) for p in Path(f"/proc/{run.pid}/task/{run.pid}/children").read_text().split()]
-    workers = [p for p in children if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]  # not the resource tracker
+    workers = [p for p in children if b"resource_tracker" not in Path(f"/proc/{p}/cmdline").read_bytes()]
     assert workers, "no worker processes"
     os.kill(workers[0], signal.SIGKILL)
     _, err = run.communicate(timeout=120)
@@ -136,3 +136,12 @@ def test_simulation_and_energy_minimisation_agree_on_how_a_cube_floats(tmp_path)
     static, _ = static_tilts(ratios)
     for r, s in zip(ratios, static):
         assert abs(found[float(r)] - s) < 1.0, (r, found[float(r)], s)
+
+
+def test_the_documented_sweep_file_is_the_stability_sweep():
+    from sim.commands.sweep import SweepArgs, build
+    from studies.stability import StabilityArgs, sweep_args
+
+    from_file = build(SweepArgs(file=str(Path(__file__).resolve().parent.parent / "assets" / "sweeps" / "cube-stability.toml")))
+    assert len(from_file) == 49 * 8 and from_file.settle
+    assert from_file.key() == build(sweep_args(StabilityArgs(), "unused")).key()

@@ -33,6 +33,8 @@ class BenchArgs:
     """Bodies in the ensemble row (0 to skip)."""
     radiation: bool = True
     """Also time each fixed-step integrator with radiation (added mass and memory, the cube's shipped coefficients) against without."""
+    sweep_cases: int = 10_000
+    """Cases in the sweep rows (0 to skip): the default cube over 100 densities x 100 orientations, 2 s each, on each backend."""
     waves: bool = True
     """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea with and without drag) on
     both models, against the direct sum over components and the numpy reference."""
@@ -104,6 +106,7 @@ def bench(args: BenchArgs) -> int:
     radiation_rows = _radiation_rows(base, args) if args.radiation else []
     wave_rows = _wave_rows(base, args, bar) if args.waves else []
     bar.close()
+    sweep_rows = _sweep_rows(args.sweep_cases) if args.sweep_cases else []
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
     print(f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs")
     _table(("model", "samples", "integrator", "us/step", "ns/sample", "x real time", "numpy us/step", "speed-up"), rows)
@@ -111,11 +114,42 @@ def bench(args: BenchArgs) -> int:
         _table((f"ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500", "body-steps/s"), ens_rows)
     if radiation_rows:
         _table(("radiation (N = 10)", "model", "integrator", "us/step without", "us/step with", "with / without"), radiation_rows)
+    if sweep_rows:
+        print()
+        print(f"sweep of {args.sweep_cases} cases (damped cube, N = 10, implicit, dt 0.005 s, 2 s each, chunks of 64; no files); "
+              "startup: until the first chunk starts (workers, kernels); overhead: the rest of the wall time not spent computing chunks, "
+              "over all workers (scheduling, results, waiting for the last chunk)")  # fmt: skip
+        _table(("backend", "workers", "wall s", "startup s", "body-steps/s", "per core", "vs serial", "overhead", "simulated h per core-h"),
+               sweep_rows)
     if wave_rows:
         print()
         print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
         _table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
     return 0
+
+
+def _sweep_rows(cases: int) -> list[tuple[str, ...]]:
+    """One sweep on each backend: throughput, its ratio to one core, and the share of wall time lost to scheduling."""
+    from ..backends import run
+    from ..grid import Sweep, case_scene, chunks, parse_param
+
+    side = max(1, round(cases**0.5))
+    spec = Sweep("damped", (parse_param(f"density=300:1500:{side}"), parse_param(f"orientation_seed=0:{max(0, cases // side - 1)}:{cases // side}")),
+                 (("step__t_end", 2.0),), chunk=64)  # fmt: skip
+    base = spec.base()
+    plan = list(enumerate(chunks(spec, [case_scene(base, c) for c in spec.cases()])))
+    n = len(spec.cases())
+    steps = n * round(2.0 / base.step.dt)
+    rows, serial = [], None
+    for backend, workers in (("serial", 1), ("local", os.cpu_count() or 1), ("dask", os.cpu_count() or 1)):
+        started = time.perf_counter()
+        stats = run(spec, plan, lambda *_: None, backend, workers)
+        wall = time.perf_counter() - started
+        serial = serial or wall
+        running = wall - stats["startup"]
+        rows.append((backend, str(workers), f"{wall:.2f}", f"{stats['startup']:.2f}", f"{steps / wall:,.0f}", f"{steps / wall / workers:,.0f}",
+                     f"{serial / wall:.2f}x", f"{max(0.0, 1 - stats['busy'] / (workers * running)):.1%}", f"{n * 2.0 / (wall * workers):,.0f}"))  # fmt: skip
+    return rows
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:

@@ -135,14 +135,19 @@ def load_scene(name_or_path: str) -> SceneConfig:
         path = SCENES_DIR / f"{name_or_path}.toml"
         if not path.is_file():
             raise ConfigError(f"unknown scene '{name_or_path}'; presets: {', '.join(available_scenes())}, or a path to a .toml file")
-    elif not path.is_file():
-        raise ConfigError(f"scene file not found: {name_or_path}")
-    try:
-        data = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{path}: not valid TOML: {e}") from None
+    data = read_toml(path, "scene")
     data.setdefault("name", path.stem)
     return validate(dataclasses.replace(_from_dict(data, str(path)), base_dir=str(path.parent)))
+
+
+def read_toml(path: Path, what: str) -> dict:
+    """A TOML file's document; a missing or malformed file is one ConfigError line."""
+    if not path.is_file():
+        raise ConfigError(f"{what} file not found: {path}")
+    try:
+        return tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise ConfigError(f"{path}: not valid TOML: {e}") from None
 
 
 def _from_dict(data: dict, where: str) -> SceneConfig:

@@ -19,13 +19,12 @@ import hashlib
 import itertools
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .config import PARAMS, SceneConfig, load_scene, with_overrides
+from .config import PARAMS, SceneConfig, load_scene, read_toml, with_overrides
 from .errors import ConfigError
 
 START = {"z0": "initial height of the centre of mass, m", "tilt": "initial heel about the world x axis, degrees",
@@ -165,12 +164,7 @@ def load_sweep_file(path: str) -> dict:
     """A TOML sweep file: `scene`, `params` (a table of NAME = "VALUES" or lists), `set` (a table of
     'section.key' = value), `settle`, `chunk`, `history_every`, and the run's `t_end`, `dt`, `integrator`."""
     p = Path(path)
-    if not p.is_file():
-        raise ConfigError(f"sweep file not found: {path}")
-    try:
-        data = tomllib.loads(p.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise ConfigError(f"{path}: not valid TOML: {e}") from None
+    data = read_toml(p, "sweep")
     known = {"scene", "params", "set", "settle", "chunk", "history_every", "t_end", "dt", "integrator", "description"}
     for k in data:
         if k not in known:

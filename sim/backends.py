@@ -53,11 +53,12 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
         workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> dict:  # fmt: skip
     """Run the chunks `todo` ((id, case indices) pairs) on `backend`, calling `done(id, rows, history)`
     in this process as each finishes. Returns {'busy': seconds the chunks computed for, summed over
-    workers, 'startup': seconds until the first chunk began (workers starting, kernels loading)}."""
+    workers, 'startup': seconds until the first chunk began (workers starting, kernels loading),
+    'finished': when each chunk's result arrived, seconds from the start}."""
     import time
 
     todo = list(todo)
-    stats = {"busy": 0.0, "startup": 0.0}
+    stats = {"busy": 0.0, "startup": 0.0, "finished": []}
     started = time.perf_counter()
 
     def finished(cid: int, result) -> None:
@@ -65,6 +66,7 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
         if stats["busy"] == 0.0:
             stats["startup"] = max(0.0, time.perf_counter() - started - seconds)
         stats["busy"] += seconds
+        stats["finished"].append(time.perf_counter() - started)
         done(cid, rows, history)
 
     if backend not in BACKENDS:

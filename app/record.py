@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Literal
 
 from sim.commands.progress import progress_bar
-from sim.commands.run import RunArgs, scene_from_args
+from sim.commands.run import RunArgs, check_output, scene_from_args
 from sim.commands.run import run as headless_run
 from sim.errors import ConfigError
 
@@ -42,21 +42,11 @@ class Recorder:
         self.take.add(shot_of(simulation))
 
 
-def _check_output(path: str | None, suffix: str, flag: str) -> None:
-    if path is None:
-        return
-    p = Path(path)
-    if p.suffix.lower() != suffix:
-        raise ConfigError(f"--{flag} must name a {suffix} file, got {path!r}")
-    if not p.parent.resolve().is_dir():
-        raise ConfigError(f"--{flag}: folder {str(p.parent)!r} does not exist")
-
-
 def run(args: RecordArgs) -> int:
     if not args.record and not args.video:
         return headless_run(args)
-    _check_output(args.record, ".html", "record")
-    _check_output(args.video, ".mp4", "video")
+    check_output(args.record, "record", ".html")
+    check_output(args.video, "video", ".mp4")
     if not 1.0 <= args.fps <= 120.0:
         raise ConfigError(f"--fps must be in 1..120, got {args.fps:g}")
     if args.video:

@@ -8,6 +8,7 @@ BLAS. Results come back to this process, which writes each chunk's file as it ar
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Callable, Iterable
 
@@ -37,7 +38,7 @@ def _warm() -> None:
         warm_up()
 
 
-def _task(sweep: Sweep, indices: list[int]):
+def _task(sweep: Sweep, indices: list[int], stop=None):
     """One chunk on a worker: (rows, history, seconds of compute)."""
     import time
 
@@ -45,16 +46,18 @@ def _task(sweep: Sweep, indices: list[int]):
 
     _warm()  # once per process in effect: the kernels come from the disk cache, then stay loaded
     started = time.perf_counter()
-    rows, history = run_chunk(sweep, indices)
+    rows, history = run_chunk(sweep, indices, stop)
     return rows, history, time.perf_counter() - started
 
 
 def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int, dict, dict | None], None], backend: str = "serial",
-        workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0) -> dict:  # fmt: skip
+        workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0, stop=None) -> dict:  # fmt: skip
     """Run the chunks `todo` ((id, case indices) pairs) on `backend`, calling `done(id, rows, history)`
     in this process as each finishes. Returns {'busy': seconds the chunks computed for, summed over
     workers, 'startup': seconds until the first chunk began (workers starting, kernels loading),
-    'finished': when each chunk's result arrived, seconds from the start}."""
+    'finished': when each chunk's result arrived, seconds from the start}. `stop` (interrupt.StopOnCtrlC):
+    once asked, the run ends within a fraction of a second by raising interrupt.Interrupted (chunks done
+    so far have been handed to `done`)."""
     import time
 
     todo = list(todo)
@@ -75,40 +78,61 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     if backend == "serial":
         for cid, indices in todo:
-            finished(cid, _task(sweep, indices))
+            finished(cid, _task(sweep, indices, stop))
         return stats
     os.environ.update(SINGLE_THREAD)  # inherited by the worker processes started below
     n = workers or os.cpu_count() or 1
     if backend == "local":
-        _run_local(sweep, todo, finished, n)
+        _run_local(sweep, todo, finished, n, stop)
     else:
-        _run_dask(sweep, todo, finished, n, scheduler, timeout)
+        _run_dask(sweep, todo, finished, n, scheduler, timeout, stop)
     return stats
 
 
-def _run_local(sweep, todo, done, n) -> None:
+def _ignore_ctrl_c() -> None:
+    """Workers leave Ctrl-C to the parent, which stops them."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _warm()
+
+
+def _check(stop) -> None:
+    if stop is not None and stop.asked:
+        from .commands.interrupt import Interrupted
+
+        raise Interrupted
+
+
+def _run_local(sweep, todo, done, n, stop=None) -> None:
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
     from concurrent.futures.process import BrokenProcessPool
 
     # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     if method == "fork":
         _warm()
-    with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_warm) as pool:
-        futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
-        try:
-            for future in as_completed(futures):
-                done(futures[future], future.result())
-        except BrokenProcessPool:
-            for f in futures:
-                f.cancel()
-            raise WorkerLost("a worker process died") from None
-
-
-def _run_dask(sweep, todo, done, n, scheduler, timeout) -> None:
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_ignore_ctrl_c)
     try:
-        from distributed import Client, LocalCluster, as_completed
+        futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
+        pending = set(futures)
+        while pending:
+            _check(stop)
+            finished, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            for future in finished:
+                done(futures[future], future.result())
+    except BrokenProcessPool:
+        raise WorkerLost("a worker process died") from None
+    finally:  # on any way out, no worker outlives the command
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
+    try:
+        from distributed import Client, LocalCluster, wait
     except ImportError:
         raise ConfigError("the dask backend needs dask.distributed: pip install -e '.[dask]'") from None
     cluster = None
@@ -119,14 +143,21 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout) -> None:
             except (OSError, TimeoutError) as e:
                 raise ConfigError(f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__})") from None
         else:
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         with client:
             client.run(_warm)
             futures = [client.submit(_task, sweep, indices, key=f"floatsim-chunk-{sweep.key()}-{cid}", retries=2) for cid, indices in todo]
             ids = {f.key: cid for f, (cid, _) in zip(futures, todo)}
-            for future in as_completed(futures):
-                done(ids[future.key], future.result())
+            pending = set(futures)
+            while pending:
+                _check(stop)
+                try:
+                    finished, pending = wait(pending, timeout=0.2, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    continue
+                for future in finished:
+                    done(ids[future.key], future.result())
     finally:
         if cluster is not None:
             cluster.close()

@@ -50,8 +50,9 @@ def period(t: np.ndarray, z: np.ndarray) -> float:
     return float(np.mean(np.diff(crossings)))
 
 
-def run_chunk(sweep: Sweep, indices: list[int]) -> tuple[dict, dict | None]:
-    """Results (one row per case) and, if asked, histories of the cases `indices`, as column dicts."""
+def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict | None]:
+    """Results (one row per case) and, if asked, histories of the cases `indices`, as column dicts.
+    `stop` (interrupt.StopOnCtrlC) is checked every block: once asked, Interrupted is raised."""
     base = sweep.base()
     cases = {i: sweep.case(i) for i in indices}
     scenes = [case_scene(base, cases[i]) for i in indices]
@@ -82,6 +83,8 @@ def run_chunk(sweep: Sweep, indices: list[int]) -> tuple[dict, dict | None]:
         k = min(block - done % block, n_steps - done)
         ensemble.step(k, check_energy=(done + k) % check == 0 or done + k == n_steps)  # the blow-up check once a second
         done += k
+        if stop is not None:
+            stop.check()
         if done % sample == 0 or done == n_steps:
             samples_t.append(done * dt)
             samples_z.append([s.state.x_world[2] for s in ensemble.sims])

@@ -6,7 +6,9 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import os
+import signal
 import sys
+import threading
 import typing
 from collections.abc import Iterable
 from typing import Annotated
@@ -73,14 +75,20 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
     loaded = {name: _load(target) for name, target in commands.items()}
     args = tyro.extras.subcommand_cli_from_dict({name: cls for name, (cls, _) in loaded.items()}, args=argv, prog=prog)
     handler = next(fn for cls, fn in loaded.values() if isinstance(args, cls))
+    if threading.current_thread() is threading.main_thread():  # a shell starts background jobs with Ctrl-C ignored: take it back
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         return handler(args)
     except ConfigError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
+    except (KeyboardInterrupt, SystemError) as e:
+        from .interrupt import EXIT, interrupted_by_ctrl_c
+
+        if not interrupted_by_ctrl_c(e):
+            raise
+        print(f"{prog}: interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT
     except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, like any Unix tool
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141

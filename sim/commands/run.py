@@ -6,6 +6,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Annotated
 
 import numpy as np
@@ -15,6 +16,7 @@ from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_override
 from ..hydrostatics import describe_rest
 from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from . import declared_flags, overrides
+from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .progress import progress_bar
 
 
@@ -73,11 +75,33 @@ def describe_terms(sim: Simulation) -> str:
     return "+".join(parts)
 
 
+def check_output(path: str | None, flag: str = "out", suffix: str | None = None) -> None:
+    """Refuse, before any work, an output file that cannot be written: one line naming why. An existing
+    file is overwritten (as the README says)."""
+    if path is None:
+        return
+    p = Path(path)
+    if suffix and p.suffix.lower() != suffix:
+        raise ConfigError(f"--{flag} must name a {suffix} file, got {path!r}")
+    if p.is_dir():
+        raise ConfigError(f"--{flag} {path}: is a folder, give a file name")
+    if p.exists() and not p.is_file():
+        raise ConfigError(f"--{flag} {path}: not a regular file")
+    if not p.parent.resolve().is_dir():
+        raise ConfigError(f"--{flag} {path}: folder {str(p.parent)!r} does not exist")
+    try:
+        with open(p, "a"):
+            pass
+    except OSError as e:
+        raise ConfigError(f"--{flag} {path}: cannot write there ({e.strerror})") from None
+
+
 def run(args: RunArgs, watch=None) -> int:
     """`watch(sim)` (optional, with an int attribute `every`) also sees the run every `watch.every` steps
     and at the start: how the viewer's recorder takes its frames without sim knowing of it."""
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
+    check_output(args.out)
     scene = scene_from_args(args)
     sim = Simulation(scene)
     for warning in sim.warnings():
@@ -92,7 +116,7 @@ def run(args: RunArgs, watch=None) -> int:
     def write(frame):
         nonlocal rows
         if out:
-            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")
+            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")  # one call per whole line
             rows += 1
 
     if out:
@@ -102,12 +126,22 @@ def run(args: RunArgs, watch=None) -> int:
         watch(sim)
     started = time.perf_counter()
     try:  # numpy's overflow warnings would only repeat what the divergence message says better
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            error = _advance(sim, n_steps, args.every, bar, write, watch)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
+            error = _advance(sim, n_steps, args.every, bar, write, watch, stop)
+    except OSError as e:  # the disk filled up or went away mid-run
+        print(f"floatsim: cannot write {args.out}: {e.strerror} (kept {rows} whole rows)", file=sys.stderr)
+        return 2
     finally:
         bar.close()
         if out:
-            out.close()
+            try:
+                out.close()
+            except OSError:
+                pass
+    if error == INTERRUPTED:
+        kept = f"kept {rows} rows in {args.out}" if out else "nothing written"
+        print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {scene.step.t_end:g} s: {kept}", file=sys.stderr)
+        return EXIT
     if error:
         print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
     for note in sim.validity_notes():
@@ -128,19 +162,31 @@ def run(args: RunArgs, watch=None) -> int:
     return 3 if error else 0
 
 
-def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None) -> str | None:
+INTERRUPTED = "interrupted"
+
+
+def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, stop=None) -> str | None:
     """Step to n_steps, writing a frame every `every` steps (and calling `watch` every `watch.every`);
-    the divergence message if the run blows up."""
+    the divergence message if the run blows up, INTERRUPTED after Ctrl-C (checked every CHECK_SECONDS
+    of stepping at most)."""
     done = 0
     chunk = every if watch is None else math.gcd(every, watch.every)
+    per_step = None  # seconds, measured
     try:
         while done < n_steps:
+            if stop is not None and stop.asked:
+                return INTERRUPTED
             k = min(chunk - done % chunk, n_steps - done)
+            k = min(k, 100 if per_step is None else max(1, int(CHECK_SECONDS / per_step)))  # the first chunk measures
+            began = time.perf_counter()
             sim.step(k)
+            per_step = max((time.perf_counter() - began) / k, 1e-9)
             done += k
             bar.update(k)
             if done % every == 0 or done == n_steps:
                 write(sim.frame())
+            if stop is not None and stop.asked:
+                return INTERRUPTED
             if watch is not None and (done % watch.every == 0 or done == n_steps):
                 watch(sim)
     except SimulationDiverged as e:

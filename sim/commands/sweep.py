@@ -18,6 +18,7 @@ import tyro
 from ..backends import WorkerLost, run
 from ..errors import ConfigError
 from ..grid import START, VARIABLE, Sweep, case_scene, chunks, load_sweep_file, parse_param
+from .interrupt import EXIT, Interrupted, StopOnCtrlC
 from .progress import progress_bar
 
 MANIFEST = "_manifest.json"
@@ -146,10 +147,15 @@ def sweep(args: SweepArgs) -> int:
         bar.update(len(rows["case"]))
 
     try:
-        run(spec, todo, done, backend, args.workers, args.scheduler, args.timeout)
+        with StopOnCtrlC() as stop:
+            run(spec, todo, done, backend, args.workers, args.scheduler, args.timeout, stop)
     except WorkerLost as e:
         print(f"floatsim: {e}: {ran} chunks of {len(todo)} written to {out}; rerun with --resume to finish", file=sys.stderr)
         return 4
+    except Interrupted:
+        print(f"floatsim: interrupted (Ctrl-C): {ran} chunks of {len(todo)} written to {out} ({sum(statuses.values())} cases); "
+              "rerun with --resume to finish", file=sys.stderr)  # fmt: skip
+        return EXIT
     finally:
         bar.close()
     wall = time.perf_counter() - started

@@ -17,6 +17,7 @@ from .body import UNITS
 from .errors import ConfigError
 from .forces import TERMS
 from .integrators import INTEGRATORS
+from .limits import check_samples
 from .parameters import Param
 from .surface import FORCE_MODELS
 
@@ -181,6 +182,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError("body shape 'mesh' needs a mesh file")
     if b.mass is None and b.density is None:
         raise ConfigError("give the body a density or a mass")
+    samples, flag = (b.samples, "--samples ([body] samples)") if b.shape == "mesh" else (6 * b.points_per_edge**2, "--points-per-edge")
+    check_samples(samples, flag)  # before any array is made
     _check_steepness(checked["waves"], checked["fluid"].g)
     norm = math.sqrt(sum(c * c for c in i.orientation))
     if abs(norm - 1.0) > 1e-6:

@@ -17,6 +17,7 @@ from sim.commands import declared_flags, overrides
 from sim.commands.progress import progress_bar
 from sim.config import PARAMS, ConfigError, load_scene, with_overrides
 from sim.decay import analyse, release, signal
+from sim.limits import check_memory
 from sim.simulation import Simulation
 
 
@@ -51,6 +52,7 @@ def decay(args: DecayArgs) -> int:
     sim = Simulation(scene)
     dof, z_rest = release(sim, args.drop, args.tilt)
     n = int(round(args.duration / sim.dt))
+    check_memory(f"a record of {n + 1:,} steps", 16 * (n + 1), "--duration")
     t, y = np.empty(n + 1), np.empty(n + 1)
     t[0], y[0] = 0.0, signal(sim, dof, z_rest)
     chunk = max(1, n // 200)

@@ -14,6 +14,7 @@ import tyro
 
 from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
 from ..hydrostatics import describe_rest
+from ..limits import step_time
 from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
 from . import declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
@@ -108,6 +109,9 @@ def run(args: RunArgs, watch=None) -> int:
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     announce_compile(sim)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
+    if (seconds := step_time(sim.body.n_samples, n_steps)) > 600:
+        print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.body.n_samples:,} samples x {n_steps:,} steps); "
+              "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     out = open(args.out, "w") if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)
     first = sim.frame()

@@ -18,6 +18,7 @@ import tyro
 from ..backends import WorkerLost, run
 from ..errors import ConfigError
 from ..grid import START, VARIABLE, Sweep, case_scene, chunks, load_sweep_file, parse_param
+from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from .interrupt import EXIT, Interrupted, StopOnCtrlC
 from .progress import progress_bar
 
@@ -102,10 +103,30 @@ def build(args: SweepArgs) -> Sweep:
     settle = args.settle or bool(data.get("settle", False))
     scene = args.scene or data.get("scene", "damped")
     sweep = Sweep(scene, tuple(params.items()), tuple(sorted(overrides.items())), settle, chunk, every)
+    check_size(sweep)
     base = sweep.base()
     for case in sweep.cases():  # any bad value fails here, with its one line, before anything runs
         case_scene(base, case)
     return sweep
+
+
+def check_size(sweep: Sweep) -> None:
+    """The sweep's cases, its histories and one chunk in memory, against the stated limits."""
+    n = len(sweep)
+    if n > MAX_CASES:
+        raise ConfigError(f"{n:,} cases is over the limit of {MAX_CASES:,}: use fewer values in --param, or split the sweep")
+    base = sweep.base()
+    steps = round(base.step.t_end / base.step.dt)
+    samples = 6 * base.body.points_per_edge**2 if base.body.shape != "mesh" else base.body.samples
+    check_memory(f"a chunk of {min(n, sweep.chunk)} cases of {samples:,} samples", min(n, sweep.chunk) * samples * BYTES_PER_SAMPLE, "--chunk")
+    if sweep.history_every:
+        rows = steps // sweep.history_every + 1
+        total = n * rows * 9 * 8
+        if total > MAX_HISTORY_BYTES:
+            raise ConfigError(f"histories of {n:,} cases x {rows:,} rows need about {size(total)}, over the limit of {size(MAX_HISTORY_BYTES)}: "
+                              "raise --history-every")  # fmt: skip
+        check_memory(f"the histories of a chunk ({min(n, sweep.chunk)} cases x {rows:,} rows)", min(n, sweep.chunk) * rows * 9 * 8 * 4,
+                     "--history-every or --chunk")  # fmt: skip
 
 
 def sweep(args: SweepArgs) -> int:

@@ -17,12 +17,15 @@ from sim.hydrostatics import describe_rest
 from .about import About
 from .args import ViewArgs
 from .controls import Controls, Layers
+from .guard import big_blocks_go_back, quiet_repeated_tracebacks, release_memory
 from .loop import SimLoop, Snapshot
 from .readouts import Readouts
 from .recorder import RecordPanel
 from .scene import SceneView
 from .share import copy_button_html, link_query, mesh_left_out, parse_link, probe_address
 from .upload import BodyFile
+
+TRIM_SECONDS = 5.0
 
 
 class ViewerApp:
@@ -52,8 +55,15 @@ class ViewerApp:
         self.connections = 0
         """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
         server.on_client_connect(self._connected)
+        self._stopped = threading.Event()
+        threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()
+
+    def _trim(self) -> None:
+        """Every few seconds, hand back to the system what refused oversized messages took (app/guard.py; ~5 ms)."""
+        while not self._stopped.wait(TRIM_SECONDS):
+            release_memory()
 
     def _connected(self, client: viser.ClientHandle) -> None:
         """A new page: the first browser restarts the run; every page's address may carry a setup."""
@@ -85,6 +95,7 @@ class ViewerApp:
         return self.loop.sync(timeout)
 
     def stop(self) -> None:
+        self._stopped.set()
         self.loop.stop()
         self.server.stop()
 
@@ -171,6 +182,8 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     warm_kernels()
     presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
+    quiet_repeated_tracebacks()
+    big_blocks_go_back()
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description

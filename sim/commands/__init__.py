@@ -87,7 +87,8 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
 
         if not interrupted_by_ctrl_c(e):
             raise
-        print(f"{prog}: interrupted (Ctrl-C)", file=sys.stderr)
+        name = next((n for n, (cls, _) in loaded.items() if isinstance(args, cls)), "")
+        print(f"{prog}: {name} interrupted (Ctrl-C) before writing its results", file=sys.stderr)
         return EXIT
     except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, like any Unix tool
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -1,0 +1,76 @@
+"""What a hostile or broken client cannot do to the viewer: flood the terminal, or leave the server
+holding the memory its oversized messages took.
+
+- viser drops a connection whose message does not decode (the handler fails, websockets logs the
+  traceback): `OncePerKind` lets one traceback per kind through, then a one-line count.
+- Decoding a 20 MB frame allocates 20 MB that the C allocator keeps after it is freed (measured: +90
+  MiB after a burst, for good). `big_blocks_go_back` makes large blocks mmap'd (freed straight back),
+  and `release_memory` hands back what smaller ones leave (glibc's malloc_trim, about 5 ms); the viewer
+  sets the first at start and calls the second every few seconds from a thread of its own.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import logging
+import sys
+import threading
+
+LOGGERS = ("websockets.server", "websockets", "viser", "asyncio")
+
+
+class OncePerKind(logging.Filter):
+    """Pass the first record of each (logger, message, exception type); count the rest, noting every 100th."""
+
+    def __init__(self):
+        super().__init__()
+        self.seen: dict[tuple, int] = {}
+        self._lock = threading.Lock()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        kind = type(record.exc_info[1]).__name__ if record.exc_info and record.exc_info[1] is not None else ""
+        key = (record.name, str(record.msg), kind)
+        with self._lock:
+            n = self.seen[key] = self.seen.get(key, 0) + 1
+        if n == 1:
+            if record.exc_info:  # the text only: a kept traceback would keep the frames, and the bad message in them
+                record.exc_text = logging.Formatter().formatException(record.exc_info)
+                record.exc_info = None
+            return True
+        if n % 100 == 0:
+            print(f"floatsim viewer: {record.getMessage()} ({kind or record.levelname}) x{n} so far (tracebacks shown once)", file=sys.stderr)
+        return False
+
+
+_filter = OncePerKind()
+
+
+def quiet_repeated_tracebacks() -> OncePerKind:
+    for name in LOGGERS:
+        logger = logging.getLogger(name)
+        if _filter not in logger.filters:
+            logger.addFilter(_filter)
+    return _filter
+
+
+M_MMAP_THRESHOLD = -3
+
+
+def big_blocks_go_back() -> bool:
+    """Make glibc serve every block over 1 MiB by mmap, returned to the system when freed. By default the
+    threshold rises after the first large free, and later large messages then stay in the heap."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        return bool(libc.mallopt(M_MMAP_THRESHOLD, 1 << 20))
+    except (OSError, AttributeError):
+        return False
+
+
+def release_memory() -> bool:
+    """Return freed heap memory to the system where the C library can (glibc); False elsewhere."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        return bool(libc.malloc_trim(0))
+    except (OSError, AttributeError):
+        return False

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
+from sim.commands.interrupt import EXIT
 from sim.commands.progress import progress_bar
 from sim.commands.run import RunArgs, check_output, scene_from_args
 from sim.commands.run import run as headless_run
@@ -37,9 +38,11 @@ class Recorder:
     def __init__(self, every: int):
         self.every = every
         self.take = Take()
+        self.full = False
 
     def __call__(self, simulation) -> None:
-        self.take.add(shot_of(simulation))
+        if not self.full and not self.take.add(shot_of(simulation)):
+            self.full = True
 
 
 def run(args: RecordArgs) -> int:
@@ -56,7 +59,11 @@ def run(args: RecordArgs) -> int:
     dt = float(scene_from_args(args).step.dt)
     recorder = Recorder(max(1, round(1.0 / (args.fps * dt))))
     status = headless_run(args, watch=recorder)
+    if status == EXIT:  # Ctrl-C: the CSV so far is kept; no replay or video of a run the user stopped
+        return status
     take = recorder.take
+    if recorder.full:
+        print(f"floatsim: note: the replay and video stop at {take.duration:.4g} s ({len(take)} frames, the most a take keeps)", file=sys.stderr)
     if args.record:
         from .replay import replay_html
 

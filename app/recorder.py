@@ -50,7 +50,10 @@ class RecordPanel:
         """Simulation thread: keep the snapshot while recording; a full take stops itself (on a worker)."""
         take = self._take
         if take is not None and not take.add(snap):
-            threading.Thread(target=self.stop, name="floatsim-record-stop", daemon=True).start()
+            with self._lock:  # the first full shot stops it, once
+                full, self._take = self._take, None
+            if full is not None:
+                threading.Thread(target=self._finish, args=(full, None), name="floatsim-record-stop", daemon=True).start()
 
     def toggle(self, client=None) -> None:
         if self.recording:
@@ -68,6 +71,9 @@ class RecordPanel:
         """Finish the take: write replay and CSV, offer them to `client`. Returns the files written."""
         with self._lock:
             take, self._take = self._take, None
+        return self._finish(take, client)
+
+    def _finish(self, take, client) -> dict[str, Path]:
         self.record.label, self.record.icon = "Record", viser.Icon.PLAYER_RECORD
         if take is None or not len(take):
             self.status.content = "Nothing recorded (the run was paused?)."
@@ -105,7 +111,6 @@ class RecordPanel:
 
     def export_video(self, client=None, fps: float = 30.0, size: str = "640x360") -> Path | None:
         """Render the last take to MP4 beside its replay; offer it to `client`. One export at a time."""
-        from sim.errors import ConfigError
 
         from .video import check_video_tools, render_video
 
@@ -113,14 +118,15 @@ class RecordPanel:
             if self._exporting or self.last is None:
                 return None
             self._exporting = True
-        path = self.files["html"].with_suffix(".mp4")
+        files, take = self.files, self.last  # a take recorded meanwhile keeps its own files
+        path = files["html"].with_suffix(".mp4")
         self.video.disabled = True
         self.progress.value, self.progress.visible = 0.0, True
         try:
             check_video_tools()
             self.status.content = "Rendering the video…"
-            render_video(self.last, path, fps, size, progress=lambda done, total: setattr(self.progress, "value", 100.0 * done / total))
-        except (ConfigError, RuntimeError, OSError, TimeoutError) as e:
+            render_video(take, path, fps, size, progress=lambda done, total: setattr(self.progress, "value", 100.0 * done / total))
+        except Exception as e:  # noqa: BLE001 -- ConfigError, the browser's, the encoder's: said in the panel, never a traceback
             self._notify(f"Video not exported: {e}", client, True)
             self.status.content = f"Video not exported: {e}"
             return None
@@ -129,7 +135,8 @@ class RecordPanel:
             self.video.disabled = False
             with self._lock:
                 self._exporting = False
-        self.files["mp4"] = path
+        files["mp4"] = path
         self.status.content = f"Video: `{path}` ({path.stat().st_size / 1e6:.2f} MB)."
-        self._send(client, "mp4")
+        if client is not None and files is self.files:
+            self._send(client, "mp4")
         return path

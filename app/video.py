@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from fractions import Fraction
 from pathlib import Path
 
 from sim.errors import ConfigError
@@ -66,7 +67,7 @@ def render_video(take: Take, path: str | Path, fps: float = 30.0, size: str = "6
             client = next(iter(server.get_clients().values()))
             time.sleep(1.0)  # the first scene arrives
             with av.open(str(path), "w") as container:
-                stream = container.add_stream("libx264", rate=round(fps) if float(fps).is_integer() else fps)
+                stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))  # 29.97 as 30000/1001
                 stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
                 try:
                     for i in range(total):

@@ -140,8 +140,8 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
         if scheduler:
             try:
                 client = Client(scheduler, timeout=f"{timeout}s")
-            except (OSError, TimeoutError) as e:
-                raise ConfigError(f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__})") from None
+            except (OSError, TimeoutError, ValueError) as e:
+                raise ConfigError(f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})") from None
         else:
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)

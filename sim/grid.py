@@ -26,6 +26,7 @@ import numpy as np
 
 from .config import PARAMS, SceneConfig, load_scene, read_toml, with_overrides
 from .errors import ConfigError
+from .limits import MAX_CASES
 
 START = {"z0": "initial height of the centre of mass, m", "tilt": "initial heel about the world x axis, degrees",
          "orientation_seed": "random initial orientation (uniform over rotations), by seed"}  # fmt: skip
@@ -54,6 +55,8 @@ def parse_values(name: str, text: str) -> tuple:
             raise ConfigError(f"--param {name}={text}: a range is FROM:TO:COUNT with numbers") from None
         if n < 1:
             raise ConfigError(f"--param {name}={text}: the range is empty (COUNT must be >= 1)")
+        if n > MAX_CASES:
+            raise ConfigError(f"--param {name}={text}: {n:,} values is over the limit of {MAX_CASES:,} cases")
         values = tuple(np.linspace(lo, hi, n).tolist()) if n > 1 else (lo,)
     else:
         items = [v.strip() for v in text.split(",") if v.strip()]
@@ -69,6 +72,8 @@ def parse_values(name: str, text: str) -> tuple:
         if any(v != int(v) for v in values):
             raise ConfigError(f"--param {name}: values must be whole numbers")
         values = tuple(int(v) for v in values)
+    if name == "orientation_seed" and any(not 0 <= v < 2**32 for v in values):
+        raise ConfigError(f"--param {name}: seeds must be in 0..{2**32 - 1}")
     return values
 
 

@@ -60,8 +60,10 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
     dt = ensemble.dt
     n_steps = round(base.step.t_end / dt)
     sample = max(1, round(SAMPLE / dt))
-    block = math.gcd(sample, sweep.history_every) if sweep.history_every else sample
     check = max(1, round(CHECK / dt))
+    block = math.gcd(sample, check)  # every sample, rest check and history row falls on a block's end
+    if sweep.history_every:
+        block = math.gcd(block, sweep.history_every)
     n = len(indices)
     samples_t, samples_z = [0.0], [[s.state.x_world[2] for s in ensemble.sims]]
     rest_time = [math.nan] * n

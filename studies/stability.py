@@ -152,6 +152,10 @@ def stability(args: StabilityArgs) -> int:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     folder = str(out) + "-sweep"
+    if not args.resume and Path(folder).is_dir():  # a fresh run: results of an older one (older code, too) are not mixed in
+        import shutil
+
+        shutil.rmtree(folder)
     started = time.perf_counter()
     code = run_sweep(sweep_args(args, folder))
     if code not in (0, 3):

@@ -95,12 +95,46 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
         (["--param", "density=-5,300"], "density must be > 0"),
         (["--scene", "damped"], "nothing to sweep"),
         (["--param", "density=300", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:9"),
+        (["--param", "density=300", "--scheduler", "foo", "--timeout", "1"], "cannot reach the Dask scheduler at foo"),
+        (["--param", "orientation_seed=-1,2"], "seeds must be in 0..4294967295"),
+        (["--param", "density=100:900:10000000000"], "over the limit of 200,000 cases"),
     ],
 )
 def test_bad_sweep_input_is_one_line(argv, message, capsys, tmp_path):
     assert main(["sweep", *argv, "--out", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
+
+
+def test_sweep_file_and_output_mistakes_are_one_line(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    assert main(["sweep", "--param", "density=300", "--out", str(tmp_path / "file")]) == 2
+    assert "is a file, give a folder" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text('chunk = "big"\n[params]\ndensity = "300"\n')
+    assert main(["sweep", "--file", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert "chunk must be a whole number" in capsys.readouterr().err
+    nested = tmp_path / "nested.toml"  # [set] written as TOML tables, not quoted keys
+    nested.write_text('scene = "rest"\n[params]\ndensity = "300,500"\n[set]\nfluid.damping = 300.0\n[set.step]\ndt = 0.01\n')
+    assert main(["sweep", "--file", str(nested), "--t-end", "0.5", "--out", str(tmp_path / "n")]) == 0
+    assert dict(json_manifest(tmp_path / "n")["set"]) == {"fluid__damping": 300.0, "step__dt": 0.01, "step__t_end": 0.5}
+
+
+def json_manifest(folder: Path) -> dict:
+    import json
+
+    return json.loads((folder / "_manifest.json").read_text())
+
+
+@pytest.mark.parametrize("dt", [0.004, 0.003, 0.007])
+def test_settling_is_checked_every_second_whatever_the_step(dt, tmp_path):
+    """The rest checks fall on whole seconds even when 1 s is not a whole number of 0.1 s samples of steps."""
+    out = tmp_path / "s"
+    assert main(["sweep", "--param", "density=500", "--scene", "rest", "--settle", "--t-end", "10", "--set", "fluid.damping=300", "--dt", str(dt),
+                 "--out", str(out)]) == 0  # fmt: skip
+    row = results(out).iloc[0]
+    checks = row.time_to_rest / (round(1.0 / dt) * dt)  # a whole number of checks, one every round(1 / dt) steps
+    assert row.status == "rest" and row.time_to_rest < 9.0 and abs(checks - round(checks)) < 1e-6
 
 
 def test_histories_on_request(tmp_path):

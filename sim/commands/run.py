@@ -90,9 +90,12 @@ def check_output(path: str | None, flag: str = "out", suffix: str | None = None)
         raise ConfigError(f"--{flag} {path}: not a regular file")
     if not p.parent.resolve().is_dir():
         raise ConfigError(f"--{flag} {path}: folder {str(p.parent)!r} does not exist")
+    existed = p.exists()
     try:
         with open(p, "a"):
             pass
+        if not existed:
+            p.unlink()  # only a probe: a run refused later leaves no empty file behind
     except OSError as e:
         raise ConfigError(f"--{flag} {path}: cannot write there ({e.strerror})") from None
 

@@ -79,6 +79,26 @@ def parse_set(item: str) -> tuple[str, object]:
     return f"{section}__{name}", value
 
 
+def whole(value, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ConfigError(f"sweep file: {name} must be a whole number, got {value!r}")
+    return value
+
+
+def set_table(table: dict) -> list[tuple[str, object]]:
+    """A sweep file's [set] table, as 'section.key' = value or as [set.section] key = value."""
+    items = []
+    for section, value in table.items():
+        if isinstance(value, dict):
+            items += [(f"{section}__{key}", v) for key, v in value.items()]
+        elif "." in section:
+            head, key = section.split(".", 1)
+            items.append((f"{head}__{key}", value))
+        else:
+            raise ConfigError(f"sweep file [set]: write SECTION.KEY = VALUE, got {section!r}")
+    return items
+
+
 def build(args: SweepArgs) -> Sweep:
     """The sweep a command line (and its file) describes, validated: every case's scene is checked."""
     data = load_sweep_file(args.file) if args.file else {}
@@ -88,16 +108,16 @@ def build(args: SweepArgs) -> Sweep:
         params[name] = values
     if not params:
         raise ConfigError("nothing to sweep: give --param NAME=VALUES (e.g. --param density=100:900:41) or --file")
-    overrides = {f"{k.split('.')[0]}__{k.split('.')[1]}": v for k, v in data.get("set", {}).items()}
+    overrides = dict(set_table(data.get("set", {})))
     overrides.update(dict(parse_set(s) for s in args.set))
     for key, flag in (("t_end", args.t_end), ("dt", args.dt), ("integrator", args.integrator)):
         value = flag if flag is not None else data.get(key)
         if value is not None:
             overrides[f"step__{key}"] = value
-    chunk = args.chunk if args.chunk is not None else int(data.get("chunk", 64))
+    chunk = args.chunk if args.chunk is not None else whole(data.get("chunk", 64), "chunk")
     if chunk < 1:
         raise ConfigError(f"--chunk must be >= 1, got {chunk}")
-    every = args.history_every if args.history_every is not None else int(data.get("history_every", 0))
+    every = args.history_every if args.history_every is not None else whole(data.get("history_every", 0), "history_every")
     if every < 0:
         raise ConfigError(f"--history-every must be >= 0, got {every}")
     settle = args.settle or bool(data.get("settle", False))
@@ -139,16 +159,24 @@ def sweep(args: SweepArgs) -> int:
     out = Path(args.out)
     manifest = out / MANIFEST
     key = spec.key()
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: is a file, give a folder")
     if manifest.exists() and any(out.glob("chunk-*.parquet")):
-        old = json.loads(manifest.read_text())
+        try:
+            old = json.loads(manifest.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError, OSError):
+            old = {}
         if not args.resume:
             raise ConfigError(f"{out} already holds a sweep's results: add --resume to finish it, or choose another --out")
         if old.get("key") != key:
             raise ConfigError(f"{out} holds a different sweep (another grid, scene or settings): --resume needs the same one")
-    out.mkdir(parents=True, exist_ok=True)
-    manifest.write_text(json.dumps({"key": key, "scene": spec.scene, "params": [[n, list(v)] for n, v in spec.params],
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_text(manifest, json.dumps({"key": key, "scene": spec.scene, "params": [[n, list(v)] for n, v in spec.params],
                                     "set": [[k, v] for k, v in spec.overrides], "settle": spec.settle, "chunk": spec.chunk,
                                     "cases": len(cases), "chunks": plan, "history_every": spec.history_every}, indent=1, default=str))  # fmt: skip
+    except OSError as e:
+        raise ConfigError(f"--out {out}: cannot write there ({e.strerror})") from None
     todo = [(cid, idx) for cid, idx in enumerate(plan) if not (out / f"chunk-{cid:05d}.parquet").exists()]
     skipped = len(plan) - len(todo)
     print(f"sweep {key}: {len(cases)} cases of '{base.name}' in {len(plan)} chunks"
@@ -183,6 +211,13 @@ def sweep(args: SweepArgs) -> int:
     summary = ", ".join(f"{n} {s}" for s, n in sorted(statuses.items()))
     print(f"ran {ran} chunks ({sum(statuses.values())} cases: {summary}) in {wall:.3g} s -> {out}/ (pandas.read_parquet('{out}'))")
     return 3 if statuses.get("diverged") else 0
+
+
+def write_text(path: Path, text: str) -> None:
+    """A text file, whole or not at all."""
+    partial = path.with_suffix(".partial")
+    partial.write_text(text)
+    os.replace(partial, path)
 
 
 def write(path: Path, columns: dict) -> None:

@@ -77,7 +77,7 @@ def describe(snap: Snapshot) -> str:
     lines = [
         f"t = **{f.t:.2f} s** · z = **{f.x_world[2]:+.3f} m**",
         f"|F| = **{np.linalg.norm(f.force_world):.4g} N** · |L| = **{np.linalg.norm(f.L_world):.4g} kg·m²/s**",
-        f"E total = **{f.E_total:.6g} J** · mass {snap.body.mass:.4g} kg",
+        f"E total = **{f.E_total:.6g} J** · mass {snap.body.mass:.4g} kg · inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
         f"Speed: {state} (asked {s.speed:g}×) · {snap.body.n_samples} samples",
     ]
     if (h := snap.hydrostatics) is not None:

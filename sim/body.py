@@ -29,7 +29,8 @@ class Body:
     mass: float
     """Total mass M, kg (spread over the samples in proportion to their area)."""
     inertia: np.ndarray
-    """(3,) principal moments of inertia of the samples, kg m^2 (the body-frame tensor is diag(inertia))."""
+    """(3,) principal moments of inertia, kg m^2 (the body-frame tensor is diag(inertia)): of the samples,
+    or with `exact_inertia` of the mesh's triangles as a uniform shell."""
     volume: float
     """Enclosed volume, m^3."""
     radius: float
@@ -41,6 +42,8 @@ class Body:
     q_input_body: np.ndarray
     """(4,) rotation from the principal frame to the frame the shape was given in (w, x, y, z)."""
     name: str = "body"
+    exact_inertia: bool = False
+    """Whether `inertia` is the mesh shell's exact one (the panels model) rather than the samples' (the report's)."""
 
     @property
     def sample_mass(self) -> np.ndarray:
@@ -103,14 +106,31 @@ def _mass_from(cfg: BodyConfig, volume: float) -> float:
     return float(cfg.mass) if cfg.mass is not None else float(cfg.density) * volume
 
 
-def _assemble(r, nrm, area, mass, volume, verts, faces, name) -> Body:
-    """Shift to the centre of mass and rotate to principal axes; compute inertia."""
+def shell_inertia(verts: np.ndarray, faces: np.ndarray, mass: float) -> np.ndarray:
+    """(3, 3) inertia tensor about the origin of the mesh's triangles as a shell of uniform surface
+    density and total mass `mass`, exact: over a triangle, the integral of r r^T dA is
+    A/12 (sum of v_i v_i^T + s s^T), s = v_0 + v_1 + v_2."""
+    T = verts[faces]
+    A = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    s = T.sum(axis=1)
+    S = (np.einsum("k,kvi,kvj->ij", A, T, T) + np.einsum("k,ki,kj->ij", A, s, s)) / 12.0
+    S *= mass / A.sum()
+    return np.trace(S) * np.eye(3) - S
+
+
+def _assemble(r, nrm, area, mass, volume, verts, faces, name, exact: bool = False) -> Body:
+    """Shift to the centre of mass and rotate to principal axes; compute inertia (the samples', or
+    with `exact` the mesh shell's; both share the centre of mass: the area centroid, which the
+    samples' midpoint rule gets exactly)."""
     w = area / area.sum()
     com = w @ r
     r = r - com
     verts = verts - com
     m = mass * w
-    inertia = np.einsum("k,k->", m, np.einsum("ki,ki->k", r, r)) * np.eye(3) - (r * m[:, None]).T @ r
+    if exact:
+        inertia = shell_inertia(verts, faces, mass)
+    else:
+        inertia = np.einsum("k,k->", m, np.einsum("ki,ki->k", r, r)) * np.eye(3) - (r * m[:, None]).T @ r
     off = np.abs(inertia - np.diag(np.diag(inertia))).max()
     if off <= 1e-12 * np.abs(inertia).max():
         moments, axes = np.diag(inertia).copy(), np.eye(3)
@@ -132,15 +152,16 @@ def _assemble(r, nrm, area, mass, volume, verts, faces, name) -> Body:
         mesh_faces=faces,
         q_input_body=matrix_to_quat(axes),
         name=name,
+        exact_inertia=exact,
     )
 
 
-def make_box(extents, points_per_edge: int, mass: float, name: str = "box") -> Body:
+def make_box(extents, points_per_edge: int, mass: float, name: str = "box", exact: bool = False) -> Body:
     import trimesh
 
     r, nrm, area = box_samples(extents, points_per_edge)
     display = trimesh.creation.box(extents=extents)
-    return _assemble(r, nrm, area, mass, np.prod(extents), display.vertices, display.faces, name)
+    return _assemble(r, nrm, area, mass, np.prod(extents), display.vertices, display.faces, name, exact)
 
 
 MESH_FORMATS = ("stl", "obj", "ply")
@@ -190,7 +211,8 @@ def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None
     return mesh
 
 
-def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m") -> Body:
+def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m",
+                   exact: bool = False) -> Body:  # fmt: skip
     """Samples at triangle centroids after subdividing to at least `samples` triangles."""
     import trimesh
 
@@ -216,18 +238,18 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
     normals = cross[keep] / (2 * area[keep, None])
     volume = float(mesh.volume)
     total = float(mass) if mass is not None else float(density) * volume
-    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], total, volume, verts, faces, name)
+    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], total, volume, verts, faces, name, exact)
 
 
-def make_body(cfg: BodyConfig, base_dir: str = ".") -> Body:
-    """The body a scene's config describes."""
+def make_body(cfg: BodyConfig, base_dir: str = ".", exact_inertia: bool = False) -> Body:
+    """The body a scene's config describes; `exact_inertia`: the mesh shell's (for the panels model)."""
     if cfg.shape == "cube":
         s = float(cfg.size)
-        return make_box((s, s, s), int(cfg.points_per_edge), _mass_from(cfg, s**3), "cube")
+        return make_box((s, s, s), int(cfg.points_per_edge), _mass_from(cfg, s**3), "cube", exact_inertia)
     if cfg.shape == "box":
         ext = tuple(float(e) for e in cfg.extents)
-        return make_box(ext, int(cfg.points_per_edge), _mass_from(cfg, float(np.prod(ext))), "box")
+        return make_box(ext, int(cfg.points_per_edge), _mass_from(cfg, float(np.prod(ext))), "box", exact_inertia)
     path = Path(cfg.mesh)
     if not path.is_absolute() and not path.is_file():
         path = Path(base_dir) / path
-    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit)
+    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit, exact_inertia)

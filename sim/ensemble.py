@@ -29,10 +29,10 @@ class Ensemble:
             if any(s.value(key) != base.value(key) for key in SHARED):
                 raise ConfigError("ensemble bodies must share shape, water, force model, integrator and dt; they may differ in density, "
                                   "force coefficients and initial state")  # fmt: skip
-        from .simulation import Simulation, default_backend
+        from .simulation import Simulation, default_backend, exact_inertia
 
         # unit mass: each body's inertia is then this times its own mass, whatever the other bodies (bit for bit)
-        shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir)
+        shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir, exact_inertia(base))
         self.sims = []
         for s in scenes:
             self.sims.append(Simulation(s, body=with_mass(shape, body_mass(s, shape.volume)), backend=backend))

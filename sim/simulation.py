@@ -121,6 +121,12 @@ def body_mass(scene: SceneConfig, volume: float) -> float:
     return float(b.mass) if b.mass is not None else float(b.density) * volume
 
 
+def exact_inertia(scene: SceneConfig) -> bool:
+    """The panels model integrates the mesh exactly: its body takes the mesh shell's exact inertia too.
+    The points model keeps the samples' (the source report's model)."""
+    return scene.fluid.forces == "panels"
+
+
 def default_backend() -> str:
     """'numba' (compiled, the default) unless FLOATSIM_BACKEND=numpy or numba is missing."""
     choice = os.environ.get("FLOATSIM_BACKEND", "numba")
@@ -159,7 +165,7 @@ class Simulation:
         self.expand_waves = True
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
-        body = body or make_body(scene.body, scene.base_dir)
+        body = body or make_body(scene.body, scene.base_dir, exact_inertia(scene))
         self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.state = initial_state(body, scene)
@@ -305,8 +311,8 @@ class Simulation:
 
     def _apply(self, old: SceneConfig, scene: SceneConfig) -> None:
         body = self.body
-        if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY):
-            self._rebuild_body(make_body(scene.body, scene.base_dir))
+        if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY) or exact_inertia(old) != exact_inertia(scene):
+            self._rebuild_body(make_body(scene.body, scene.base_dir, exact_inertia(scene)))
         elif body_mass(scene, body.volume) != body.mass:
             R = self.state.R_world_body
             omega = angular_velocity(body, R, self.state.L_world)

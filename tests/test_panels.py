@@ -129,3 +129,28 @@ def test_sampled_model_converges_to_the_panel_model():
         errors.append(np.linalg.norm(np.r_[f.force_world - exact.force_world, f.torque_world - exact.torque_world]))
     assert all(b < a for a, b in zip(errors, errors[1:]))
     assert errors[-1] < 2e-3 * 1000 * 9.81
+
+
+def test_panels_use_the_exact_shell_inertia_and_no_longer_depend_on_n():
+    """The panel model's body has the mesh shell's exact inertia ((5/18) M s^2 for the cube, whatever N),
+    so its trajectories are the same for every N; the points model keeps the samples' (the report's)."""
+    from sim.body import make_box, shell_inertia
+
+    for n in (1, 4, 10):
+        cube = make_box((1.3, 1.3, 1.3), n, 900.0, exact=True)
+        np.testing.assert_allclose(cube.inertia, 5 / 18 * 900.0 * 1.3**2, rtol=1e-14)
+        assert make_box((1.0, 1.0, 1.0), n, 900.0).inertia[0] == pytest.approx(5 / 18 * 900.0 * (1 - 2 / (5 * n * n)), rel=1e-12)
+    # a thin square plate seen as a shell: two faces of area a^2 dominate, I about its normal -> M a^2 / 6
+    plate = make_box((1.0, 1.0, 1e-6), 2, 1.0, exact=True)
+    assert plate.inertia.max() == pytest.approx(1 / 6, rel=1e-5)
+    assert np.allclose(shell_inertia(plate.mesh_vertices, plate.mesh_faces, 1.0), np.diag(plate.inertia), atol=1e-12)
+    ends = []
+    for n in (3, 10):
+        sim = Simulation(with_overrides(load_scene("spin"), fluid__forces="panels", body__points_per_edge=n))
+        sim.step(1000)
+        ends.append(np.concatenate([sim.state.x_world, sim.state.L_world, sim.state.q_world_body]))
+    np.testing.assert_array_equal(ends[0], ends[1])
+    sim = Simulation(load_scene("spin"))
+    assert not sim.body.exact_inertia
+    sim.update(fluid__forces="panels")  # a live switch rebuilds the body with the exact inertia
+    assert sim.body.exact_inertia and sim.body.inertia[0] == pytest.approx(250.0, rel=1e-14)

@@ -158,7 +158,8 @@ def run(args: RunArgs, watch=None) -> int:
     steps = round(last.t / sim.dt)
     drift = last.E_total - first.E_total
     print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples, mass {sim.body.mass:.6g} kg, "
-          f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}")  # fmt: skip
+          f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
+          f"inertia {'exact (mesh shell)' if sim.body.exact_inertia else 'of the samples'}")  # fmt: skip
     print(f"at rest: {describe_rest(sim.body, sim.params)}")
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "

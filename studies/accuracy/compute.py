@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim import INTEGRATORS, Simulation, SimulationDiverged, State, load_scene, with_overrides
+from sim import INTEGRATORS, Simulation, SimulationDiverged, State, load_scene, make_body, with_overrides
 
 from .. import probes
 
@@ -158,15 +158,16 @@ class Run:
     diverged: str | None = None
 
 
-def trajectory(scene, horizon: float, every: float, repeats: int = 1) -> Run:
+def trajectory(scene, horizon: float, every: float, repeats: int = 1, sampled_inertia: bool = False) -> Run:
     """Run `scene` to `horizon`, recording the corners every `every` seconds; time only the stepping.
-    Adaptive integrators get `every` as their output interval."""
+    Adaptive integrators get `every` as their output interval. sampled_inertia: the body takes the
+    samples' inertia even on panels (which otherwise take the mesh shell's exact one)."""
     adaptive = INTEGRATORS[scene.step.integrator].adaptive
     if adaptive:
         scene = with_overrides(scene, step__dt=every)
     costs, history = [], []
     for r in range(max(1, repeats)):
-        sim = Simulation(scene)
+        sim = Simulation(scene, body=make_body(scene.body, scene.base_dir, exact_inertia=False) if sampled_inertia else None)
         k = 1 if adaptive else round(every / sim.dt)
         wall, hist = 0.0, []
         try:
@@ -339,9 +340,9 @@ class ModelError:
     period_linear: float
     period_points: list[float]
     traj_error: list[float]
-    """Points(N) against panels(N): the force quadrature alone (same sampled inertia)."""
+    """Points(N) against panels(N) given the samples' inertia too: the force quadrature alone."""
     inertia_error: list[float]
-    """Panels(N) against panels(n_inertia): the sampled inertia's share."""
+    """Panels with the samples' inertia (N) against panels with the exact shell inertia: the sampled inertia's share."""
     inertia_rel: list[float]
     traj_floor: float
     """rk4 at traj_dt against DOP853, panels: the integrator's share in these trajectory errors."""
@@ -376,11 +377,11 @@ def model_error(cfg: Settings, repeats: int, tick) -> ModelError:
     panels = with_overrides(damped, fluid__forces="panels")
     ref = trajectory(_dop853(panels, cfg.ref_rtol), T, every)
     panels10 = trajectory(panels, T, every, repeats)
-    exact_inertia = trajectory(with_overrides(panels, body__points_per_edge=cfg.n_inertia), T, every)
+    exact_inertia = panels10  # panels take the mesh shell's exact inertia, whatever N
     I_exact = 5 / 18 * probes.body(Simulation(damped)).mass * damped.body.size**2  # thin-walled cube (PHYSICS.md)
     traj, inertia, inertia_rel, costs = [], [], [], []
     for n in cfg.ns:
-        pan = trajectory(with_overrides(damped, fluid__forces="panels", body__points_per_edge=n), T, every)
+        pan = trajectory(with_overrides(damped, fluid__forces="panels", body__points_per_edge=n), T, every, sampled_inertia=True)
         pts = trajectory(with_overrides(damped, fluid__forces="points", body__points_per_edge=n), T, every, repeats)
         traj.append(pose_error(pts.corners, pan.corners))
         inertia.append(pose_error(pan.corners, exact_inertia.corners))

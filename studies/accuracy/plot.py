@@ -74,7 +74,7 @@ def _model_column(me: ModelError, top, bottom, title: str, keys: list[str], errs
     ns, cost = np.array(me.ns), np.array(me.cost_points)
     series = [(key, np.array(errs[key], float), marker, f"C{i}", "-") for i, (key, marker) in enumerate(zip(keys, "os"))]
     if keys == ["trajectory (m)"]:
-        series.append((f"sampled inertia: panels(N) vs panels(N={me.n_inertia})", np.array(me.inertia_error), "x", "gray", "--"))
+        series.append(("sampled inertia: panels with it vs with the exact one", np.array(me.inertia_error), "x", "gray", "--"))
     for j, (key, e, marker, color, ls) in enumerate(series):
         ok = np.isfinite(e) & (e > 0)
         rate = me.rates.get(key, me.rates["inertia (trajectory, m)"])

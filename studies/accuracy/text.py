@@ -112,11 +112,11 @@ def _model_error(data: ReportData) -> list[str]:
              f"with the water-plane area at rest gives {me.period_linear:.6f} s (difference {abs(me.period_panels / me.period_linear - 1):.1e}, "
              "the amplitude's nonlinearity).")  # fmt: skip
     L.append(f"* **Trajectory**: the `damped` scene over {cfg.horizon:g} s, rk4 dt = {cfg.traj_dt:g} s, points(N) against panels with the "
-             f"same N, so both have the same sampled inertia and only the force quadrature differs. The integrator's share "
-             f"(panels rk4 vs DOP853) is {me.traj_floor:.1e} m. Separately, the inertia tensor itself is computed from the samples "
-             f"for both models (relative to the thin shell's (5/18) M s^2: {me.inertia_rel[0]:+.2e} at N = {me.ns[0]}, {me.inertia_rel[-1]:+.2e} at N = {me.ns[-1]}, "
-             f"i.e. about {me.inertia_rel[-1] * me.ns[-1] ** 2:.2f}/N^2); its effect on the trajectory (panels(N) against panels(N = {cfg.n_inertia})) "
-             "is the grey line.")  # fmt: skip
+             f"same N given the samples' inertia too, so only the force quadrature differs. The integrator's share "
+             f"(panels rk4 vs DOP853) is {me.traj_floor:.1e} m. Separately, the points model's inertia tensor is the samples' "
+             f"(relative to the thin shell's (5/18) M s^2: {me.inertia_rel[0]:+.2e} at N = {me.ns[0]}, {me.inertia_rel[-1]:+.2e} at N = {me.ns[-1]}, "
+             f"i.e. about {me.inertia_rel[-1] * me.ns[-1] ** 2:.2f}/N^2); its effect on the trajectory (panels with the samples' inertia against panels with the shell's exact one, "
+             "which the panels model uses) is the grey line.")  # fmt: skip
     L.append("")
     errs = numbers.model_errors(me)
     header = ["N", "cost (s/s)", *errs.keys(), "inertia effect (m)"]
@@ -248,7 +248,7 @@ def _model_discussion(me: ModelError) -> str:
     regular = [f"{k} N^-{p:.2f}" for k, (p, scatter) in fits.items() if scatter <= 0.25]
     erratic = [f"{k} (fitted N^-{p:.2f}, scatter {scatter:.2f} decades)" for k, (p, scatter) in fits.items() if scatter > 0.25]
     text = (f"At N = {me.ns[-1]} the trajectory error is {numbers.trajectory_over_inertia(me):.2g}x the effect of the sampled inertia, which falls as "
-            f"N^-{r['inertia (trajectory, m)']:.2f} and which the panel model shares (both take the inertia from the samples). ")
+            f"N^-{r['inertia (trajectory, m)']:.2f} and which the panels model no longer has (it takes the shell's exact inertia). ")
     if regular:
         text += "Regular convergence (scatter about the fit at most 0.25 decades): " + ", ".join(regular) + " (midpoint quadrature: N^-2). "
     if erratic:

@@ -17,7 +17,7 @@ import tyro
 
 from ..backends import WorkerLost, run
 from ..errors import ConfigError
-from ..grid import START, VARIABLE, Sweep, case_scene, chunks, load_sweep_file, parse_param
+from ..grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from .interrupt import EXIT, Interrupted, StopOnCtrlC
 from .progress import progress_bar
@@ -230,5 +230,3 @@ def write(path: Path, columns: dict) -> None:
     pq.write_table(pa.table(columns), partial)
     os.replace(partial, path)
 
-
-__all__ = ["SweepArgs", "sweep", "START", "VARIABLE"]

@@ -56,8 +56,6 @@ class Settings:
     rtols: dict[str, tuple[float, ...]]
     ns: tuple[int, ...]
     """Points per edge for the model-error study."""
-    n_inertia: int
-    """N of the panel run whose inertia stands for the exact shell's."""
     traj_dt: float
     period_time: float
     period_dt: float
@@ -98,7 +96,6 @@ FULL = Settings(
     fixed_dts={"euler": _pow2(4, 10), "splitting": _pow2(2, 10), "implicit": _pow2(2, 10), "rk4": _pow2(2, 9)},
     rtols={"rk45": (1e-3, 1e-5, 1e-7, 1e-9), "dop853": (1e-4, 1e-6, 1e-8, 1e-10), "radau": (1e-3, 1e-5, 1e-7)},
     ns=(2, 4, 8, 16, 32, 64),
-    n_inertia=256,
     traj_dt=2.0**-10,
     period_time=3.0,
     period_dt=2.0**-9,
@@ -119,7 +116,6 @@ QUICK = Settings(
     fixed_dts={"euler": _pow2(5, 8), "splitting": _pow2(4, 8), "implicit": _pow2(4, 8), "rk4": _pow2(3, 7)},
     rtols={"rk45": (1e-4, 1e-7), "dop853": (1e-6, 1e-9), "radau": (1e-5,)},
     ns=(2, 4, 8, 16),
-    n_inertia=64,
     traj_dt=2.0**-8,
     period_time=1.6,
     period_dt=2.0**-8,
@@ -348,7 +344,6 @@ class ModelError:
     """rk4 at traj_dt against DOP853, panels: the integrator's share in these trajectory errors."""
     cost_points: list[float]
     cost_panels: float
-    n_inertia: int
     rates: dict[str, float] = field(default_factory=dict)
     """Convergence rate per error (numbers.model_rates)."""
 
@@ -377,19 +372,18 @@ def model_error(cfg: Settings, repeats: int, tick) -> ModelError:
     panels = with_overrides(damped, fluid__forces="panels")
     ref = trajectory(_dop853(panels, cfg.ref_rtol), T, every)
     panels10 = trajectory(panels, T, every, repeats)
-    exact_inertia = panels10  # panels take the mesh shell's exact inertia, whatever N
     I_exact = 5 / 18 * probes.body(Simulation(damped)).mass * damped.body.size**2  # thin-walled cube (PHYSICS.md)
     traj, inertia, inertia_rel, costs = [], [], [], []
     for n in cfg.ns:
         pan = trajectory(with_overrides(damped, fluid__forces="panels", body__points_per_edge=n), T, every, sampled_inertia=True)
         pts = trajectory(with_overrides(damped, fluid__forces="points", body__points_per_edge=n), T, every, repeats)
         traj.append(pose_error(pts.corners, pan.corners))
-        inertia.append(pose_error(pan.corners, exact_inertia.corners))
+        inertia.append(pose_error(pan.corners, panels10.corners))  # panels10: the mesh shell's exact inertia
         inertia_rel.append(probes.body(Simulation(with_overrides(damped, body__points_per_edge=n))).inertia[0] / I_exact - 1)
         costs.append(pts.cost)
         tick()
     return ModelError(cfg.ns, eq_panels, eq_points, upright_error, period_panels, 2 * math.pi / omega, period_points, traj, inertia,
-                      inertia_rel, pose_error(panels10.corners, ref.corners), costs, panels10.cost, cfg.n_inertia)  # fmt: skip
+                      inertia_rel, pose_error(panels10.corners, ref.corners), costs, panels10.cost)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------------------------

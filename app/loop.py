@@ -23,7 +23,7 @@ import numpy as np
 
 import sim
 from sim.config import PARAMS, load_scene
-from sim.hydrostatics import at_rest, describe_rest, hydrostatics
+from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
 from sim.simulation import initial_state
@@ -103,6 +103,8 @@ class Snapshot(Posed):
     """Counts resets, scene loads and body rebuilds (plots restart their history when it changes)."""
     steps: int
     """Steps taken since the loop started."""
+    advice: str = ""
+    """A standing warning about the running model for this body ('' when none): the points model in its bad band."""
 
     @property
     def params(self):
@@ -162,6 +164,7 @@ class SimLoop:
         self._epoch = 0
         self._diverged = False
         self._notice, self._notice_id, self._notice_until = "", 0, 0.0
+        self._advice_key, self._advice_text = None, ""
         self._errors_logged: set[str] = set()
         self._publish_now()
 
@@ -276,6 +279,7 @@ class SimLoop:
             diverged=self._diverged,
             epoch=self._epoch,
             steps=self._steps,
+            advice=self._advice(),
         )
         with self._lock:
             self._latest = snap
@@ -284,6 +288,18 @@ class SimLoop:
                 self._publish(snap)
             except Exception as e:  # noqa: BLE001
                 self._log("publish", e)
+
+    def _advice(self) -> str:
+        """sampled_model_warning for the running body and fluid, computed again only when either changes."""
+        key = (self.sim.body, self.sim.params)
+        if self._advice_key != key:
+            try:
+                self._advice_text = sampled_model_warning(*key) or ""
+            except Exception as e:  # noqa: BLE001 -- advice must never stop the run
+                self._log("advice", e)
+                self._advice_text = ""
+            self._advice_key = key
+        return self._advice_text
 
     def _rate(self) -> float:
         h = self._history

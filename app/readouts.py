@@ -69,6 +69,13 @@ class Readouts:
             self.plots[key].data = (data[0], data[i + 1])
 
 
+def _model_energy(f) -> str:
+    """The sampled models' own energy, where their potential differs from the exact one E total uses."""
+    if f.E_hyd_model is None or abs(f.E_hyd_model - f.E_hyd) <= 1e-9 * max(1.0, abs(f.E_hyd)):
+        return ""
+    return f" (exact potential; the model's own {f.E_kin + f.E_grav + f.E_hyd_model:.6g} J)"
+
+
 def describe(snap: Snapshot) -> str:
     """The readout text of a snapshot."""
     f, s = snap.frame, snap.settings
@@ -77,13 +84,16 @@ def describe(snap: Snapshot) -> str:
     lines = [
         f"t = **{f.t:.2f} s** · z = **{f.x_world[2]:+.3f} m**",
         f"|F| = **{np.linalg.norm(f.force_world):.4g} N** · |L| = **{np.linalg.norm(f.L_world):.4g} kg·m²/s**",
-        f"E total = **{f.E_total:.6g} J** · mass {snap.body.mass:.4g} kg · inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
+        f"E total = **{f.E_total:.6g} J**{_model_energy(f)} · mass {snap.body.mass:.4g} kg · "
+        f"inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
         f"Speed: {state} (asked {s.speed:g}×) · {snap.body.n_samples} samples",
     ]
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "
                      f"displaced {h.volume:.4g} m³")  # fmt: skip
+    if snap.advice:
+        lines.append(f"**⚠ {snap.advice[0].upper()}{snap.advice[1:]}.**")
     if snap.behind:
         lines.append(
             f"**⚠ This machine cannot keep up with {s.speed:g}× real time**: lower the speed, the points per edge, or pick a faster integrator."

@@ -41,6 +41,10 @@ class Body:
     """(f, 3) display mesh triangles (vertex indices)."""
     q_input_body: np.ndarray
     """(4,) rotation from the principal frame to the frame the shape was given in (w, x, y, z)."""
+    cells: np.ndarray | None = None
+    """(n, 4, 3) each sample's own patch of the surface (the cell its area stands for), as a planar convex
+    polygon, body frame, m: a box face's rectangle, or a mesh sample's triangle (last corner repeated).
+    The `cells` force model clips these at the water line."""
     name: str = "body"
     exact_inertia: bool = False
     """Whether `inertia` is the mesh shell's exact one (the panels model) rather than the samples' (the report's)."""
@@ -66,7 +70,19 @@ class Body:
         """The arrays the compiled kernels take: samples (r, n, area) and mesh (vertices, faces, normals)."""
         c = np.ascontiguousarray
         return (c(self.r_body), c(self.n_body), c(self.area), c(self.mesh_vertices, dtype=float),
-                c(self.mesh_faces, dtype=np.int64), c(self.face_normals), self.sample_moments)  # fmt: skip
+                c(self.mesh_faces, dtype=np.int64), c(self.face_normals), self.sample_moments, self.cell_corners, self.cell_reach)  # fmt: skip
+
+    @cached_property
+    def cell_corners(self) -> np.ndarray:
+        """(n, 4, 3) `cells`; a body made from bare samples has none: each cell is then its sample alone."""
+        cells = self.cells if self.cells is not None else np.repeat(self.r_body[:, None], 4, axis=1)
+        return np.ascontiguousarray(cells, dtype=float)
+
+    @cached_property
+    def cell_reach(self) -> np.ndarray:
+        """(n,) how far each cell's corners lie from its sample, m: a sample farther than this from the
+        water line has its whole cell on one side of it."""
+        return np.ascontiguousarray(np.linalg.norm(self.cell_corners - self.r_body[:, None], axis=2).max(axis=1))
 
     @cached_property
     def sample_moments(self) -> np.ndarray:
@@ -81,12 +97,12 @@ class Body:
         return np.ascontiguousarray(np.hstack([a, a * r, a * rr, a * n, a * n_r, a * c, a * c_r]))
 
 
-def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Cell-centre samples of a box surface: n x n cells per face (midpoint rule)."""
+def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Cell-centre samples of a box surface: n x n cells per face (midpoint rule); with their cells."""
     ext = np.asarray(extents, dtype=float)
     c = (np.arange(n) + 0.5) / n - 0.5  # cell centres on [-1/2, 1/2]
     a, b = np.meshgrid(c, c, indexing="ij")
-    pos, nor, area = [], [], []
+    pos, nor, area, cells = [], [], [], []
     for axis in range(3):
         j, k = (axis + 1) % 3, (axis + 2) % 3
         for sign in (1.0, -1.0):
@@ -99,7 +115,11 @@ def box_samples(extents, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             pos.append(p)
             nor.append(np.tile(normal, (n * n, 1)))
             area.append(np.full(n * n, ext[j] * ext[k] / n**2))
-    return np.concatenate(pos), np.concatenate(nor), np.concatenate(area)
+            half_j, half_k = np.zeros(3), np.zeros(3)
+            half_j[j], half_k[k] = ext[j] / (2 * n), ext[k] / (2 * n)
+            corners = np.array([-half_j - half_k, half_j - half_k, half_j + half_k, -half_j + half_k])
+            cells.append(p[:, None, :] + corners[None])
+    return np.concatenate(pos), np.concatenate(nor), np.concatenate(area), np.concatenate(cells)
 
 
 def _mass_from(cfg: BodyConfig, volume: float) -> float:
@@ -118,13 +138,14 @@ def shell_inertia(verts: np.ndarray, faces: np.ndarray, mass: float) -> np.ndarr
     return np.trace(S) * np.eye(3) - S
 
 
-def _assemble(r, nrm, area, mass, volume, verts, faces, name, exact: bool = False) -> Body:
+def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool = False) -> Body:
     """Shift to the centre of mass and rotate to principal axes; compute inertia (the samples', or
     with `exact` the mesh shell's; both share the centre of mass: the area centroid, which the
     samples' midpoint rule gets exactly)."""
     w = area / area.sum()
     com = w @ r
     r = r - com
+    cells = cells - com
     verts = verts - com
     m = mass * w
     if exact:
@@ -151,6 +172,7 @@ def _assemble(r, nrm, area, mass, volume, verts, faces, name, exact: bool = Fals
         mesh_vertices=np.ascontiguousarray(verts @ axes),
         mesh_faces=faces,
         q_input_body=matrix_to_quat(axes),
+        cells=np.ascontiguousarray(cells @ axes),
         name=name,
         exact_inertia=exact,
     )
@@ -159,9 +181,9 @@ def _assemble(r, nrm, area, mass, volume, verts, faces, name, exact: bool = Fals
 def make_box(extents, points_per_edge: int, mass: float, name: str = "box", exact: bool = False) -> Body:
     import trimesh
 
-    r, nrm, area = box_samples(extents, points_per_edge)
+    r, nrm, area, cells = box_samples(extents, points_per_edge)
     display = trimesh.creation.box(extents=extents)
-    return _assemble(r, nrm, area, mass, np.prod(extents), display.vertices, display.faces, name, exact)
+    return _assemble(r, nrm, area, cells, mass, np.prod(extents), display.vertices, display.faces, name, exact)
 
 
 MESH_FORMATS = ("stl", "obj", "ply")
@@ -238,7 +260,8 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
     normals = cross[keep] / (2 * area[keep, None])
     volume = float(mesh.volume)
     total = float(mass) if mass is not None else float(density) * volume
-    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], total, volume, verts, faces, name, exact)
+    cells = tri[keep][:, [0, 1, 2, 2]]  # each sample's own triangle, as a polygon of four corners
+    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], cells, total, volume, verts, faces, name, exact)
 
 
 def make_body(cfg: BodyConfig, base_dir: str = ".", exact_inertia: bool = False) -> Body:

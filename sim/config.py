@@ -43,8 +43,8 @@ BODY = (
 FLUID = (
     Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),
     Param("fluid", "g", 9.81, "Gravitational acceleration", "m/s^2", lo=0.0, hi=1e3, name="gravity g"),
-    Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model) or panels (exactly "
-          "over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
+    Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model), cells (the samples "
+          "with each cell clipped at the water line: continuous wetting) or panels (exactly over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
     Param("fluid", "radiation", "none", "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
           "boundary-element solve about the rest pose, Cummins' equation)", kind="choice", choices=("none", "bem"), label="Radiation", gui=()),
     *(p for term in TERMS for p in term.params),

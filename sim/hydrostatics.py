@@ -131,6 +131,38 @@ def describe_rest(body, fluid, R: np.ndarray | None = None) -> str:
     return f"{head}, floats at draft {draft:.4g} m with GM {h.gm[0]:+.3g} m ({verdict})"
 
 
+LEAK_BAND = 0.8
+"""The points model is known to keep rocking or drifting when |GM| / BM < LEAK_BAND * sqrt(h / L) (h the
+sample spacing, L the waterplane's size): an empirical bound read off the accuracy report's map of the
+cube over density and N (part 6), which also counts the runs it misses and the false alarms."""
+
+
+def leak_margin(body, fluid, R: np.ndarray | None = None) -> float | None:
+    """|GM| / BM / sqrt(h / L) of the body floating as given, h = sqrt(mean sample area), L = sqrt(waterplane
+    area): below LEAK_BAND the points model's rest is unreliable. None when it does not float with a waterplane."""
+    from .errors import ConfigError
+
+    try:
+        h = at_rest(body, fluid, R)[2]
+    except ConfigError:
+        return None
+    if h is None or h.bm[0] <= 0.0:
+        return None
+    spacing = float(np.sqrt(np.mean(body.area)))
+    return float(abs(h.gm[0]) / h.bm[0] / np.sqrt(spacing / np.sqrt(h.waterplane_area)))
+
+
+def sampled_model_warning(body, fluid, R: np.ndarray | None = None) -> str | None:
+    """A one-line warning when the points model runs a body in the band where it misbehaves, else None."""
+    if fluid.forces != "points" or fluid.rho * fluid.g == 0.0:
+        return None
+    margin = leak_margin(body, fluid, R)
+    if margin is None or margin >= LEAK_BAND:
+        return None
+    return ("the points model may keep this body rocking or drifting for ever: its GM is close to zero for its sample spacing "
+            f"(|GM|/BM = {margin:.2f} sqrt(h/L), band < {LEAK_BAND:g}); use the cells or panels force model (the accuracy report's part 6)")
+
+
 def floating_potential(body, fluid, R: np.ndarray) -> float:
     """The potential energy of the body held at orientation R and floating freely in height, J, up to a
     constant: with the displaced mass equal to the body's, U = M g (z_G - z_B) (gravity's M g z_G plus

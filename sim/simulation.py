@@ -12,14 +12,16 @@ from . import stability
 from .body import Body, make_body
 from .config import SceneConfig, with_overrides
 from .errors import SimulationDiverged
-from .forces import Model
+from .forces import Model, hydrostatic_energy
+from .hydrostatics import sampled_model_warning
 from .integrators import make_integrator
 from .rotation import normalized, quat_multiply
 from .state import State, angular_momentum, angular_velocity
+from .surface import wet_panels
 from .water import make_water
 
 CSV_COLUMNS = (
-    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad".split(",")
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model".split(",")
 )
 
 
@@ -45,6 +47,8 @@ class Frame:
     E_kin: float
     E_grav: float
     E_hyd: float
+    """The physical hydrostatic potential rho g * integral of (-z) dV over the body's mesh clipped at
+    the water surface, J: exact, and the same whatever the force model."""
     submerged_area: float
     """m^2."""
     submerged_volume: float
@@ -55,6 +59,13 @@ class Frame:
     """Water surface elevation at the centre of mass's (x, y), m."""
     E_rad: float = 0.0
     """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
+    E_hyd_model: float | None = None
+    """The force model's own hydrostatic potential, -(rho g / 2) * sum of w z^2 nu_z over its wet nodes, J:
+    E_hyd for panels; for points and cells their quadrature of it (None: as E_hyd)."""
+
+    @property
+    def E_hyd_of_model(self) -> float:
+        return self.E_hyd if self.E_hyd_model is None else self.E_hyd_model
 
     @property
     def E_total(self) -> float:
@@ -63,7 +74,8 @@ class Frame:
     def row(self) -> list[float]:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
-                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad]  # fmt: skip
+                self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
+                self.E_hyd_of_model]  # fmt: skip
 
 
 def observe(model: Model, state: State, compiled: bool = False, expand: bool = True) -> Frame:
@@ -80,7 +92,7 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
             - 0.5 * float(omega @ state.L_world)
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
-    if compiled:
+    if compiled and compiled_model(model):
         from .kernels import MODELS, pack, sea_pack
         from .kernels.simulation import observe as observe_kernel
 
@@ -88,19 +100,34 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
         terms, coef = pack(model)
         F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.t, state.u_world, omega, body.packed,
                                                    body.mass, terms, coef, sea_pack(water, body, expand), wet)  # fmt: skip
-        if model.radiation is not None:
-            f = model.radiation.force(R, state.memory)
-            F, T = F + f[:3], T + f[3:]
-        return Frame(**common, force_world=F, torque_world=T, E_hyd=e_hyd, submerged_area=a_sub, submerged_volume=v_sub,
-                     wet_index=np.flatnonzero(wet))  # fmt: skip
-    wet = model.wetted(state.x_world, R, state.t)
-    F, T = model.loads(wet, state.u_world, omega, state.t)
+        wet_index = np.flatnonzero(wet)
+    else:
+        wet = model.wetted(state.x_world, R, state.t)
+        F, T = model.loads(wet, state.u_world, omega, state.t)
+        e_hyd, a_sub, v_sub = model.hydrostatic_energy(wet), wet.submerged_area, wet.submerged_volume
+        wet_index = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
     if model.radiation is not None:
         f = model.radiation.force(R, state.memory)
         F, T = F + f[:3], T + f[3:]
-    wet_samples = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
-    return Frame(**common, force_world=F, torque_world=T, E_hyd=model.hydrostatic_energy(wet), submerged_area=wet.submerged_area,
-                 submerged_volume=wet.submerged_volume, wet_index=wet_samples)  # fmt: skip
+    exact = e_hyd if model.fluid.forces == "panels" else physical_hydrostatic_energy(model, state.x_world, R, state.t, compiled)
+    return Frame(**common, force_world=F, torque_world=T, E_hyd=exact, submerged_area=a_sub, submerged_volume=v_sub, wet_index=wet_index,
+                 E_hyd_model=None if model.fluid.forces == "panels" else e_hyd)  # fmt: skip
+
+
+def compiled_model(model: Model) -> bool:
+    """Whether the kernels have the model's force model for its water (cells: still water only)."""
+    return model.fluid.forces != "cells" or model.water.is_still
+
+
+def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: float, compiled: bool = False) -> float:
+    """rho g * integral of (-z) dV over the body's mesh clipped at the water surface, J (0 without pressure)."""
+    if not model.has("pressure"):
+        return 0.0
+    if compiled and model.water.is_still:
+        from .kernels.simulation import exact_hydrostatic_energy
+
+        return float(exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
+    return hydrostatic_energy(model.water, wet_panels(model.body, model.water, x, R, t))
 
 
 def initial_state(body: Body, scene: SceneConfig) -> State:
@@ -207,16 +234,19 @@ class Simulation:
         """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin)."""
         from .kernels.layout import SCHEMES
 
-        return self.backend == "numba" and self.integrator.name in SCHEMES
+        return self.backend == "numba" and self.integrator.name in SCHEMES and compiled_model(self.model)
 
     def _check_backend(self) -> None:
         from .kernels.layout import SCHEMES
 
         integ = self.integrator
+        note = None
         if self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
-            if note not in self.notes:
-                self.notes.append(note)
+        elif self.backend == "numba" and not compiled_model(self.model):
+            note = "the cells force model has no compiled twin in waves: it runs on the numpy reference (slower)"
+        if note and note not in self.notes:
+            self.notes.append(note)
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
@@ -286,8 +316,10 @@ class Simulation:
         return []
 
     def warnings(self) -> list[str]:
-        """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up)."""
-        return stability.warnings(self.stability_numbers(), self.integrator, self.dt)
+        """Settings past the integrator's stability limits (a run may blow up, or wander without blowing up),
+        and a body in the band where the points model is known to misbehave."""
+        leak = sampled_model_warning(self.body, self.params)
+        return stability.warnings(self.stability_numbers(), self.integrator, self.dt) + ([leak] if leak else [])
 
     def diagnose(self, t: float, what: str) -> str:
         return stability.diagnosis(self.stability_numbers(), self.integrator, self.dt, t, what)

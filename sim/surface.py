@@ -1,7 +1,12 @@
 """The wet part of a body's surface at one pose and time, as quadrature points every force term shares.
 
-Two models (`[fluid] forces`):
+Three models (`[fluid] forces`):
 - 'points': the body's samples under the surface, each one node of weight = its area (midpoint rule);
+  a sample is wet or dry as a whole, so the wet area jumps as samples cross the surface (the report's model);
+- 'cells': the same samples, but a sample whose cell (the patch its area stands for) crosses the
+  surface keeps only the cell's wet part: its node moves to that part's centroid and weighs its
+  area. Wetting is continuous, the pressure force exact (pressure is linear over the planar wet part),
+  the torque and damping integrals still the midpoint rule's;
 - 'panels': the mesh's triangles clipped where they cross the surface, each wet triangle carrying
   the three nodes at its edge midpoints with weight area/3, a rule exact for quadratic integrands:
   in still water pressure (linear) times position (linear), so Archimedes' force, its torque and the
@@ -17,7 +22,7 @@ from functools import cached_property
 
 import numpy as np
 
-FORCE_MODELS = ("points", "panels")
+FORCE_MODELS = ("points", "cells", "panels")
 # Dunavant's 6-point rule (degree 4) on a triangle: barycentric nodes and weights (sum 1). Used where
 # the integrand is no longer quadratic: wave pressure, and drag's cubic torque integrand.
 DUNAVANT4 = np.array([[0.108103018168070, 0.445948490915965, 0.445948490915965], [0.445948490915965, 0.108103018168070, 0.445948490915965],
@@ -108,6 +113,32 @@ def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
     return WetSurface(x, x + lever, lever, body.area[wet], body.n_body[wet] @ R.T, wet, water=water, t=t)
 
 
+def wet_cells(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface:
+    """The samples with their cells clipped at the water surface: a whole wet cell is its sample
+    (as in 'points'); a cell the surface crosses is one node at the centroid of its wet part,
+    weighted by that part's area (the surface between corners taken linear, exact for still water)."""
+    corners = body.cell_corners @ R.T  # (n, 4, 3) levers
+    if water.is_still:
+        h = x[2] + corners[..., 2] - water.elevation(x[:2], t)
+    else:
+        h = water.height_above_surface(x + corners.reshape(-1, 3), t).reshape(-1, 4)
+    below = h < 0.0
+    whole = np.flatnonzero(below.all(axis=1))
+    cut = np.flatnonzero(below.any(axis=1) & ~below.all(axis=1))
+    fans = ([0, 1, 2], [0, 2, 3])  # the cell as two triangles (degenerate for a triangle cell)
+    P, owner = clip_triangles(np.concatenate([corners[cut][:, f] for f in fans]), np.concatenate([h[cut][:, f] for f in fans]))
+    owner = np.concatenate([cut, cut])[owner]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    n = body.n_samples
+    wet_area = np.bincount(owner, area, minlength=n)[cut]
+    moment = np.stack([np.bincount(owner, area * P[:, :, i].mean(axis=1), minlength=n)[cut] for i in range(3)], axis=1)
+    keep = wet_area > 0.0
+    index = np.concatenate([whole, cut[keep]])
+    lever = np.concatenate([body.r_body[whole] @ R.T, moment[keep] / wet_area[keep, None]])
+    weight = np.concatenate([body.area[whole], wet_area[keep]])
+    return WetSurface(x, x + lever, lever, weight, body.n_body[index] @ R.T, index, water=water, t=t)
+
+
 def clip_triangles(P: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The parts of triangles P (k, 3, c) where the linear function with vertex values h (k, 3) is
     negative, as triangles (same winding) and the index of the triangle each came from. Columns past
@@ -166,4 +197,4 @@ def wet_panels(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
                       water, t)  # fmt: skip
 
 
-WET_SURFACE = {"points": wet_points, "panels": wet_panels}
+WET_SURFACE = {"points": wet_points, "cells": wet_cells, "panels": wet_panels}

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from sim.commands import main
+from sim.simulation import CSV_COLUMNS
 
 
 @pytest.mark.parametrize("out, why", [("/tmp", "is a folder"), ("/nonexistent/dir/x.csv", "does not exist"), ("/proc/x.csv", "cannot write"),
@@ -43,7 +44,7 @@ def test_ctrl_c_during_a_run_keeps_whole_rows_and_says_where_it_stopped(tmp_path
     assert done.returncode == 130 and stopped_in < 1.0
     assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C) at t = " in done.stderr and "rows in" in done.stderr
     rows = np.loadtxt(csv, delimiter=",", skiprows=1)
-    assert rows.ndim == 2 and rows.shape[1] == 31 and np.isfinite(rows).all()  # whole lines, no NaN
+    assert rows.ndim == 2 and rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()  # whole lines, no NaN
     assert f"kept {len(rows)} rows" in done.stderr
 
 

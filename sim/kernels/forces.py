@@ -50,7 +50,7 @@ def pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
     first 10 sums, so start them afresh (as advance and observe do) when the water changes."""
     if sea[0].shape[0] > 0:
         return wave_pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
-    r, nrm, area, verts, faces, fnormals, moments = geom
+    verts, faces, fnormals = geom[3], geom[4], geom[5]
     F = np.zeros(3)
     if terms & GRAVITY:
         F[2] = -mass * coef[G]
@@ -58,7 +58,7 @@ def pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws):
     D = np.zeros((6, 6))
     wet = False
     if terms & WET_TERMS:
-        zn, zt, A, S, rr = wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, (terms & DAMPING) != 0, flags, acc)
+        zn, zt, A, S, rr = wet_integrals(kind, x, R, geom, (terms & DAMPING) != 0, flags, acc, ws)
         if terms & PRESSURE:
             rg = coef[RHO] * coef[G]
             F += rg * zn
@@ -294,7 +294,8 @@ def _drag_node(lx, ly, lz, nx, ny, nz, a, vn, half_rc, F, T, D, need_D):
 def drag(kind, x, R, u, w, geom, coef, flags, need_D, ws):
     """Quadratic drag on the wet surface moving into the water: force, torque and (need_D) its
     Jacobian D = -d(F, T)/d(u, omega). Points: the wet samples (`flags`, set by the pose's loads),
-    each with the water's velocity there (ws[0]). Panels: the pose's wet triangles (ws[1:4]), each
+    each with the water's velocity there (ws[0]); cells: those, and the nodes of the cells the
+    water line crosses (ws[6]). Panels: the pose's wet triangles (ws[1:4]), each
     clipped again where v_rel . n changes sign (v_rel linear across it, the water's velocity too),
     with Dunavant's degree-4 rule (exact for the cubic torque integrand)."""
     r, nrm, area = geom[0], geom[1], geom[2]
@@ -302,9 +303,16 @@ def drag(kind, x, R, u, w, geom, coef, flags, need_D, ws):
     F = np.zeros(3)
     T = np.zeros(3)
     D = np.zeros((6, 6))
-    if kind == 0:
-        flow = ws[0]
+    if kind != 1:
+        flow, nodes = ws[0], ws[6]
         for k in range(r.shape[0]):
+            if kind == 2 and nodes[k, 0] > 0.0:  # a cell the water line crosses: its node, still water
+                lx, ly, lz = nodes[k, 1], nodes[k, 2], nodes[k, 3]
+                nx, ny, nz = world_normal(R, nrm, k)
+                vn = (u[0] + w[1] * lz - w[2] * ly) * nx + (u[1] + w[2] * lx - w[0] * lz) * ny + (u[2] + w[0] * ly - w[1] * lx) * nz
+                if vn > 0.0:
+                    _drag_node(lx, ly, lz, nx, ny, nz, nodes[k, 0], vn, half_rc, F, T, D, need_D)
+                continue
             if not flags[k]:
                 continue
             a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]

@@ -4,7 +4,8 @@ State vector y, (13,) float64: x_world (0:3, m), q_world_body (3:7, w x y z), u_
 L_world (10:13, kg m^2/s). Twist (6,): (u_world, omega_world).
 
 Geometry tuple `Body.packed`: (r_body (n, 3) m, n_body (n, 3), area (n,) m^2, mesh_vertices (v, 3) m,
-mesh_faces (f, 3) int64, face_normals (f, 3), sample_moments (n, MOMENTS)), all body frame, C order.
+mesh_faces (f, 3) int64, face_normals (f, 3), sample_moments (n, MOMENTS), cell_corners (n, 4, 3) m,
+cell_reach (n,) m), all body frame, C order.
 Sample moments, per sample (sums over the wet set give every still-water integral, since z is linear
 in r): a | a r (3) | a r r^T as xx xy xz yy yz zz (6) | a n (3) | a n r^T row-major (9) | a c (3) |
 a c r^T row-major (9), with c = r x n.
@@ -32,7 +33,7 @@ RHO, G = 0, 1
 COEF_BASE = 2
 SCHEMES = {"euler": 0, "splitting": 1, "implicit": 2, "rk4": 3}
 """Integrators with a compiled twin, by their number in `integrators.advance`."""
-MODELS = {"points": 0, "panels": 1}
+MODELS = {"points": 0, "panels": 1, "cells": 2}
 """Force models (`surface.FORCE_MODELS`) by their number in the kernels."""
 TERM_PARAMS = [p.key for term in TERMS for p in term.params]
 

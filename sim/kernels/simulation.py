@@ -7,7 +7,7 @@ import numpy as np
 from . import JIT, njit
 from .forces import C_DAMPING, DAMPING, GRAVITY, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
 from .layout import RHO, G
-from .surface import clip, vertex_levers, workspace
+from .surface import cell_node, clip, vertex_levers, workspace
 from .water import elevations, prepare
 
 
@@ -19,20 +19,38 @@ def observe(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
         return observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet)
     if kind == 0:
         return observe_points(x, R, u, w, geom, mass, terms, coef, wet)
+    if kind == 2:
+        return observe_cells(x, R, u, w, geom, mass, terms, coef, wet)
     return observe_panels(x, R, u, w, geom, mass, terms, coef, wet)
 
 
 @njit(**JIT)
 def observe_panels(x, R, u, w, geom, mass, terms, coef, wet):
-    r, verts, faces = geom[0], geom[3], geom[4]
-    flags, acc, ws = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
-    still = (np.zeros((0, 8)), np.inf, True, 0.0)
-    F, T, D, is_wet = pose_loads(1, x, R, 0.0, geom, mass, terms, coef, still, flags, acc, ws)
-    twist_loads(1, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
+    r = geom[0]
+    F, T = _loads(1, x, R, u, w, geom, mass, terms, coef)
     for k in range(r.shape[0]):
         wet[k] = x[2] + R[2, 0] * r[k, 0] + R[2, 1] * r[k, 1] + R[2, 2] * r[k, 2] < 0.0
+    a_sub, v_sub, z2n = mesh_integrals(x, R, geom)
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
+    return F, T, e_hyd, a_sub, v_sub
+
+
+@njit(**JIT)
+def _loads(kind, x, R, u, w, geom, mass, terms, coef):
+    """Force and torque of every used term at a state in still water, as the integrators see them."""
+    flags, acc, ws = np.zeros(geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
+    still = (np.zeros((0, 8)), np.inf, True, 0.0)
+    F, T, D, is_wet = pose_loads(kind, x, R, 0.0, geom, mass, terms, coef, still, flags, acc, ws)
+    twist_loads(kind, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
+    return F, T
+
+
+@njit(**JIT)
+def mesh_integrals(x, R, geom):
+    """(wet area, submerged volume, integral of z^2 nu_z) of the mesh clipped at the still water
+    line, exact (Simpson-like closed forms on each clipped triangle)."""
+    verts, faces, fnormals = geom[3], geom[4], geom[5]
     lev = vertex_levers(R, verts)
-    fnormals = geom[5]
     P = np.empty((3, 3))
     h = np.empty(3)
     tris = np.empty((2, 3, 3))
@@ -55,6 +73,33 @@ def observe_panels(x, R, u, w, geom, mass, terms, coef, wet):
             a_sub += area
             v_sub += area * sz / 3.0 * nz
             z2n += area / 12.0 * (z0 * z0 + z1 * z1 + z2 * z2 + sz * sz) * nz  # integral of z^2 over the triangle, times nu_z
+    return a_sub, v_sub, z2n
+
+
+@njit(**JIT)
+def exact_hydrostatic_energy(x, R, geom, rho_g):
+    """The physical hydrostatic potential rho g * integral of (-z) dV over the mesh clipped at the
+    still water line, J: the same for every force model."""
+    return -0.5 * rho_g * mesh_integrals(x, R, geom)[2]
+
+
+@njit(**JIT)
+def observe_cells(x, R, u, w, geom, mass, terms, coef, wet):
+    """observe for the cells model: the loads as the integrators see them, then the frame's
+    integrals over its nodes (whole wet cells at their samples, cut cells at their wet centroids)."""
+    r, nrm, cells = geom[0], geom[1], geom[7]
+    F, T = _loads(2, x, R, u, w, geom, mass, terms, coef)
+    node = np.empty(4)
+    z2n = a_sub = v_sub = 0.0
+    for k in range(r.shape[0]):
+        cell_node(x[2], R, cells[k], node)
+        wet[k] = node[0] > 0.0
+        if wet[k]:
+            z = x[2] + node[3]
+            nz = R[2, 0] * nrm[k, 0] + R[2, 1] * nrm[k, 1] + R[2, 2] * nrm[k, 2]
+            a_sub += node[0]
+            v_sub += node[0] * z * nz
+            z2n += node[0] * z * z * nz
     e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
     return F, T, e_hyd, a_sub, v_sub
 

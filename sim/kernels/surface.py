@@ -27,6 +27,13 @@ def wet_points(x, R, r, need_rr, moments, flags, acc):
             sign = 1.0 if w else -1.0
             for j in range(34):
                 acc[j] += sign * moments[k, j]
+    return sums_integrals(x, R, need_rr, acc)
+
+
+@njit(inline="always", **JIT)
+def sums_integrals(x, R, need_rr, acc):
+    """(zn, zt, A, S, rr) from the running sums over a wet set (layout.py's sample moments)."""
+    R20, R21, R22 = R[2, 0], R[2, 1], R[2, 2]
     x2 = x[2]
     nb = np.empty(3)
     cb = np.empty(3)
@@ -190,11 +197,87 @@ def wet_triangles(x, R, verts, faces, fnormals, ws):
     count[0] = m
 
 
+@njit(inline="always", **JIT)
+def cell_node(x2, R, cell, out):
+    """The wet part of one cell (4 corners, body frame) under the still water line: its area and
+    centroid lever (world frame) into out (4,). The cell is taken as the fan of two triangles."""
+    P = np.empty((3, 3))
+    h = np.empty(3)
+    parts = np.empty((2, 3, 3))
+    a = cx = cy = cz = 0.0
+    for fan in range(2):
+        for v in range(3):
+            c = 0 if v == 0 else fan + v
+            for i in range(3):
+                P[v, i] = R[i, 0] * cell[c, 0] + R[i, 1] * cell[c, 1] + R[i, 2] * cell[c, 2]
+            h[v] = x2 + P[v, 2]
+        for j in range(clip(P, h, parts)):
+            t = parts[j]
+            e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+            e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+            q0, q1, q2 = e11 * e22 - e12 * e21, e12 * e20 - e10 * e22, e10 * e21 - e11 * e20
+            area = 0.5 * np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+            a += area
+            cx += area * (t[0, 0] + t[1, 0] + t[2, 0]) / 3.0
+            cy += area * (t[0, 1] + t[1, 1] + t[2, 1]) / 3.0
+            cz += area * (t[0, 2] + t[1, 2] + t[2, 2]) / 3.0
+    out[0] = a
+    if a > 0.0:
+        out[1], out[2], out[3] = cx / a, cy / a, cz / a
+
+
+@njit(inline="always", **JIT)
+def wet_cells(x, R, r, nrm, cells, reach, need_rr, moments, flags, acc, nodes):
+    """Integrals of the cells model: the samples whose whole cell is under water as running sums
+    (like wet_points, `flags` marking them), plus one node per cell the water line crosses, at the
+    centroid of its wet part and weighted by its area, kept in `nodes` (n, 4: area, lever; area 0
+    for the others) for the twist terms."""
+    x2 = x[2]
+    R20, R21, R22 = R[2, 0], R[2, 1], R[2, 2]
+    for k in range(r.shape[0]):  # the whole cells first: the sums are the points model's, on them
+        z = x2 + R20 * r[k, 0] + R21 * r[k, 1] + R22 * r[k, 2]
+        nodes[k, 0] = -1.0 if z - reach[k] < 0.0 <= z + reach[k] else 0.0  # -1: to clip below
+        w = z + reach[k] < 0.0
+        if w != flags[k]:
+            flags[k] = w
+            sign = 1.0 if w else -1.0
+            for j in range(34):
+                acc[j] += sign * moments[k, j]
+    zn, zt, A, S, rr = sums_integrals(x, R, need_rr, acc)
+    for k in range(r.shape[0]):
+        if nodes[k, 0] == 0.0:
+            continue
+        cell_node(x2, R, cells[k], nodes[k])
+        a = nodes[k, 0]
+        if a == 0.0:
+            continue
+        lx, ly, lz = nodes[k, 1], nodes[k, 2], nodes[k, 3]
+        nx, ny, nz = world_normal(R, nrm, k)
+        za = a * (x2 + lz)
+        zn[0] += za * nx
+        zn[1] += za * ny
+        zn[2] += za * nz
+        zt[0] += za * (ly * nz - lz * ny)
+        zt[1] += za * (lz * nx - lx * nz)
+        zt[2] += za * (lx * ny - ly * nx)
+        A += a
+        if need_rr:
+            lev = (lx, ly, lz)
+            for i in range(3):
+                S[i] += a * lev[i]
+                for j in range(3):
+                    rr[i, j] += a * lev[i] * lev[j]
+    return zn, zt, A, S, rr
+
+
 @njit(**JIT)
-def wet_integrals(kind, x, R, r, verts, faces, fnormals, moments, need_rr, flags, acc):
+def wet_integrals(kind, x, R, geom, need_rr, flags, acc, ws):
     """(zn, zt, A, S, rr) of the model `kind` (layout.MODELS); S and rr only when need_rr."""
+    r, nrm, verts, faces, fnormals, moments = geom[0], geom[1], geom[3], geom[4], geom[5], geom[6]
     if kind == 0:
         return wet_points(x, R, r, need_rr, moments, flags, acc)
+    if kind == 2:
+        return wet_cells(x, R, r, nrm, geom[7], geom[8], need_rr, moments, flags, acc, ws[6])
     return wet_panels(x, R, verts, faces, fnormals, need_rr)
 
 
@@ -203,6 +286,8 @@ def workspace(geom):
     """Scratch a pose's loads leave for the twist terms of the same pose: the water's velocity at
     each sample (n, 3); the wet triangles as vertex levers and water velocities (2 f, 3, 6), their
     normals (2 f, 3), and how many there are (1,); damping's part from the water's motion (6,); in
-    waves, the frame's integrals over the wet nodes: area, volume (z nu_z) and z^2 nu_z (3,)."""
+    waves, the frame's integrals over the wet nodes: area, volume (z nu_z) and z^2 nu_z (3,); the
+    cells model's nodes on the cells the water line crosses (n, 4: area, lever)."""
     n, f = geom[0].shape[0], geom[4].shape[0]
-    return np.zeros((n, 3)), np.zeros((2 * f, 3, 6)), np.zeros((2 * f, 3)), np.zeros(1, dtype=np.int64), np.zeros(6), np.zeros(3)
+    return (np.zeros((n, 3)), np.zeros((2 * f, 3, 6)), np.zeros((2 * f, 3)), np.zeros(1, dtype=np.int64), np.zeros(6), np.zeros(3),
+            np.zeros((n, 4)))  # fmt: skip

@@ -93,3 +93,19 @@ def test_extreme_cases(quick):
     assert all(e.ok for e in by_case["light body, 1 kg/m^3"])
     assert any("too large for this damping" in msg for _, msg in data.messages)
     assert any("heave" in msg for _, msg in data.messages)
+
+
+def test_energy_and_leak_section(quick):
+    """Part 6: with d > 0 the exact model's energy never rises under the dissipative schemes, euler's
+    does; the cells model comes to rest where the exact one does, and the text names the cure."""
+    _, data = quick
+    section = data.markdown.split("## 6.")[1]
+    assert "leak.png" in section and "`cells`" in section
+    for rise in data.leak.energy:
+        if rise.forces == "panels" and rise.method != "euler":
+            assert rise.per_step <= 0 and rise.climb <= 0, rise
+        if rise.method == "euler" and rise.scene == "damped":
+            assert rise.per_step > 0, rise  # symplectic Euler is not dissipative
+    for run in data.leak.runs:
+        if run.forces in ("cells", "panels"):
+            assert run.at_rest, run

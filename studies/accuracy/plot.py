@@ -157,3 +157,34 @@ def creep(rows: list[StiffRow], path: Path) -> None:
     ax.legend(fontsize=8)
     fig.tight_layout()
     save(fig, path, DPI)
+
+
+def leak(data, path: Path) -> None:
+    """Steady rocking (colour) and drift (x) of the points and cells models over density and N, with
+    the exact model's transitions (GM = 0) drawn in."""
+    from matplotlib.colors import LogNorm
+
+    from .leak import DRIFT, ROCKING, transitions
+
+    plt = pyplot()
+    cfg = data.settings
+    densities = sorted(set(cfg.densities))
+    fig, axes = plt.subplots(1, 2, figsize=(14, 3.6), sharey=True)
+    norm = LogNorm(ROCKING / 10, 30.0)
+    for ax, forces in zip(axes, ("points", "cells")):
+        grid = np.array([[max(data.at(d, n, forces).rocking, ROCKING / 10) for d in densities] for n in cfg.ns])
+        edges = np.concatenate([[densities[0] - 10], 0.5 * (np.array(densities[1:]) + densities[:-1]), [densities[-1] + 10]])
+        mesh = ax.pcolormesh(edges, np.arange(len(cfg.ns) + 1) - 0.5, grid, norm=norm, cmap="magma_r")
+        for j, n in enumerate(cfg.ns):
+            drift = [d for d in densities if data.at(d, n, forces).speed > DRIFT]
+            ax.plot(drift, [j] * len(drift), "x", color="C0", ms=6, label="drifts sideways" if j == 0 and drift else None)
+        for t in transitions():
+            ax.axvline(t, color="C2", ls="--", lw=1)
+        ax.set_yticks(range(len(cfg.ns)), [str(n) for n in cfg.ns])
+        ax.set_xlabel("cube density (kg/m$^3$); dashed: exact GM = 0")
+        ax.set_title(f"{forces}: steady tilt range after {cfg.settle:g} s (d = {cfg.damping:g})")
+        if any(data.at(d, n, forces).speed > DRIFT for d in densities for n in cfg.ns):
+            ax.legend(loc="upper center", fontsize=8)
+    axes[0].set_ylabel("points per edge N")
+    fig.colorbar(mesh, ax=axes, label="tilt range (deg)")
+    save(fig, path, DPI)

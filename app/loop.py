@@ -267,6 +267,7 @@ class SimLoop:
         now = time.monotonic()
         if self._notice and not self._diverged and now > self._notice_until:
             self._notice = ""
+        advice = self._advice()  # before the notice is read: it raises one when it starts to apply
         snap = Snapshot(
             frame=frame,
             settings=self.settings,
@@ -279,7 +280,7 @@ class SimLoop:
             diverged=self._diverged,
             epoch=self._epoch,
             steps=self._steps,
-            advice=self._advice(),
+            advice=advice,
         )
         with self._lock:
             self._latest = snap
@@ -294,11 +295,13 @@ class SimLoop:
         key = (self.sim.body, self.sim.params)
         if self._advice_key != key:
             try:
-                self._advice_text = sampled_model_warning(*key) or ""
+                text = sampled_model_warning(*key) or ""
             except Exception as e:  # noqa: BLE001 -- advice must never stop the run
                 self._log("advice", e)
-                self._advice_text = ""
-            self._advice_key = key
+                text = ""
+            if text and text != self._advice_text:
+                self._raise_notice(text[0].upper() + text[1:] + ".")  # once, when it starts to apply; the readouts keep it
+            self._advice_key, self._advice_text = key, text
         return self._advice_text
 
     def _rate(self) -> float:

@@ -128,3 +128,16 @@ def quat_from_rotvec(rotvec) -> np.ndarray:
 
 def quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return quat_multiply(a, b)
+
+
+def leak_margin(sim: Simulation) -> float | None:
+    """sim.hydrostatics.leak_margin of `sim`'s body and fluid: below LEAK_BAND the points model warns."""
+    from sim.hydrostatics import leak_margin as margin
+
+    return margin(sim.model.body, sim.params)
+
+
+def leak_band() -> float:
+    from sim.hydrostatics import LEAK_BAND
+
+    return LEAK_BAND

@@ -412,6 +412,22 @@ def test_force_model_dropdown_switches_the_running_model(make_app):
     assert snap.params.forces == "panels" and "Force model" in snap.notice
 
 
+def test_points_model_in_its_bad_band_is_flagged_and_cells_clears_it(make_app):
+    """A density near the cube's stability transition on the points model raises a notice and keeps a
+    standing warning in the readouts; switching to cells (or back to a safe density) clears it."""
+    from app.readouts import describe
+
+    app = make_app("rest", paused=True)
+    assert app.sync().advice == ""
+    app.controls.density.value = 820.0
+    snap = app.sync()
+    assert "points model may keep this body rocking" in snap.advice and "rocking" in snap.notice
+    assert "rocking or drifting" in describe(snap)
+    app.controls.forces.value = "cells"
+    snap = app.sync()
+    assert snap.advice == "" and "rocking or drifting" not in describe(snap)
+
+
 def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
     """The drag coefficient's control (generated from its declaration) changes Simulation.scene, and
     the term joins the model only while it is nonzero."""

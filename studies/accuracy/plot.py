@@ -161,30 +161,39 @@ def creep(rows: list[StiffRow], path: Path) -> None:
 
 def leak(data, path: Path) -> None:
     """Steady rocking (colour) and drift (x) of the points and cells models over density and N, with
-    the exact model's transitions (GM = 0) drawn in."""
+    the exact model's transitions (GM = 0) drawn in; each mapped band of densities drawn on its own."""
     from matplotlib.colors import LogNorm
 
     from .leak import DRIFT, ROCKING, transitions
 
     plt = pyplot()
     cfg = data.settings
-    densities = sorted(set(cfg.densities))
-    fig, axes = plt.subplots(1, 2, figsize=(14, 3.6), sharey=True)
-    norm = LogNorm(ROCKING / 10, 30.0)
-    for ax, forces in zip(axes, ("points", "cells")):
-        grid = np.array([[max(data.at(d, n, forces).rocking, ROCKING / 10) for d in densities] for n in cfg.ns])
-        edges = np.concatenate([[densities[0] - 10], 0.5 * (np.array(densities[1:]) + densities[:-1]), [densities[-1] + 10]])
-        mesh = ax.pcolormesh(edges, np.arange(len(cfg.ns) + 1) - 0.5, grid, norm=norm, cmap="magma_r")
-        for j, n in enumerate(cfg.ns):
-            drift = [d for d in densities if data.at(d, n, forces).speed > DRIFT]
-            ax.plot(drift, [j] * len(drift), "x", color="C0", ms=6, label="drifts sideways" if j == 0 and drift else None)
-        for t in transitions():
-            ax.axvline(t, color="C2", ls="--", lw=1)
-        ax.set_yticks(range(len(cfg.ns)), [str(n) for n in cfg.ns])
-        ax.set_xlabel("cube density (kg/m$^3$); dashed: exact GM = 0")
-        ax.set_title(f"{forces}: steady tilt range after {cfg.settle:g} s (d = {cfg.damping:g})")
-        if any(data.at(d, n, forces).speed > DRIFT for d in densities for n in cfg.ns):
-            ax.legend(loc="upper center", fontsize=8)
-    axes[0].set_ylabel("points per edge N")
-    fig.colorbar(mesh, ax=axes, label="tilt range (deg)")
+    densities = np.array(sorted(set(cfg.densities)))
+    bands = np.split(densities, np.flatnonzero(np.diff(densities) > 50) + 1)
+    fig, axes = plt.subplots(2, len(bands), figsize=(13, 6.5), sharey=True, squeeze=False)
+    norm = LogNorm(ROCKING, 30.0, clip=True)
+    mesh = None
+    for row, forces in enumerate(("points", "cells")):
+        for col, band in enumerate(bands):
+            ax = axes[row, col]
+            grid = np.array([[max(data.at(d, n, forces).rocking, ROCKING) for d in band] for n in cfg.ns])
+            half = 0.5 * (np.diff(band).min() if len(band) > 1 else 10.0)
+            edges = np.concatenate([[band[0] - half], 0.5 * (band[1:] + band[:-1]), [band[-1] + half]])
+            mesh = ax.pcolormesh(edges, np.arange(len(cfg.ns) + 1) - 0.5, grid, norm=norm, cmap="magma_r")
+            for j, n in enumerate(cfg.ns):
+                drift = [d for d in band if data.at(d, n, forces).speed > DRIFT]
+                ax.plot(drift, [j] * len(drift), "x", color="C0", ms=7, mew=1.5, label="drifts sideways" if j == 0 else None)
+            for t in transitions():
+                if band[0] <= t <= band[-1]:
+                    ax.axvline(t, color="C2", ls="--", lw=1.2, label="exact GM = 0")
+            ax.set_yticks(range(len(cfg.ns)), [str(n) for n in cfg.ns])
+            ax.set_title(f"{forces}: final tilt range, {band[0]:g}-{band[-1]:g} kg/m$^3$", fontsize=10)
+            if row == 1:
+                ax.set_xlabel("cube density (kg/m$^3$)")
+            if col == 0:
+                ax.set_ylabel("points per edge N")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="upper right", fontsize=9)
+    fig.colorbar(mesh, ax=axes, label=f"tilt range (deg); at rest below {ROCKING:g}")
     save(fig, path, DPI)

@@ -351,7 +351,9 @@ def _leak(data: ReportData) -> list[str]:
     L.append("")
     lo, hi = transitions()
     L.append(f"**The sampled model's leak.** The cube started {cfg.tilt:g} deg from upright at its draft, d = {cfg.damping:g}, implicit "
-             f"dt = {cfg.dt:g} s, run {cfg.settle:g} s and then watched for {cfg.watch:g} s: the colour is the tilt range over the watch, "
+             f"dt = {cfg.dt:g} s, run {cfg.settle:g} s and then watched for {cfg.watch:g} s; a body still moving gets up to "
+             f"{cfg.patience:g} s more (near the transitions the exact model too can linger minutes at a tilted saddle before rolling "
+             "corner-up: a slow passage, not a leak) and is watched again. The colour is the final tilt range, "
              f"x marks a sideways drift faster than {DRIFT * 1000:g} mm/s. A body counts as at rest below {ROCKING:g} deg and "
              f"{DRIFT * 1000:g} mm/s. The exact model (panels) comes to rest at every density tried; the upright cube's metacentric height "
              f"GM changes sign at {lo:.1f} and {hi:.1f} kg/m^3 (s (1 - s) = 1/6), where the restoring moment vanishes.")  # fmt: skip
@@ -370,8 +372,8 @@ def _leak(data: ReportData) -> list[str]:
                     continue
                 r = lk.at(density, n, forces)
                 rows.append([f"{density:g}", forces, "any" if forces == "panels" else n, f"{r.tilt_min:.3f} to {r.tilt_max:.3f}",
-                             f"{r.speed * 1000:.3g}", f"{r.force_x:.3g}", "yes" if r.at_rest else "**no**"])  # fmt: skip
-    L += md_table(["density (kg/m^3)", "model", "N", "tilt (deg)", "drift (mm/s)", "mean horizontal force (N)", "at rest"], rows)
+                             f"{r.speed * 1000:.3g}", f"{r.force_x:.3g}", f"yes, by {r.t_end:.0f} s" if r.at_rest else f"**no**, at {r.t_end:.0f} s"])  # fmt: skip
+    L += md_table(["density (kg/m^3)", "model", "N", "tilt (deg)", "drift (mm/s)", "horizontal force, held still (N)", "at rest"], rows)
     L.append("")
     L.append(_leak_discussion(lk))
     L.append("")
@@ -437,5 +439,18 @@ def _leak_discussion(lk) -> str:
             "**Cure.** The `cells` model (`--forces cells`) keeps the same samples but clips each one's cell at the water line: its "
             "node moves to the wet part's centroid and weighs the wet area, so wetting is continuous and the pressure force exact "
             "(linear pressure over a planar part); only the midpoint rule's torque error, O(1/N^2), remains, which shifts the rest pose "
-            f"slightly. It {cells_ok}. The default `points` stays the source report's model; the viewer warns when the points model "
-            "runs a body whose GM is within 1.5 sample spacings of zero (the bands above).")  # fmt: skip
+            f"slightly. It {cells_ok}. The default `points` stays the source report's model. " + _warning_coverage(lk))  # fmt: skip
+
+
+def _warning_coverage(lk) -> str:
+    """How well the points model's warning rule (sim.hydrostatics.LEAK_BAND) covers the map."""
+    from .. import probes
+
+    points = [r for r in lk.runs if r.forces == "points"]
+    leaking = [r for r in points if not r.at_rest]
+    caught = sum(r.warned for r in leaking)
+    false = sum(r.warned for r in points if r.at_rest)
+    return (f"The run summary and the viewer warn when the points model runs a body with |GM| / BM < {probes.leak_band():g} sqrt(h / L) "
+            "(h the sample spacing, L the square root of the waterplane area; an empirical bound read off this map): of the "
+            f"{len(leaking)} runs above that do not come to rest it covers {caught}, and it also warns for {false} of the "
+            f"{len(points) - len(leaking)} that do.")

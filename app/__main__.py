@@ -6,13 +6,14 @@ import sys
 
 import tyro
 
+from sim.commands.tyro_errors import parse
 from sim.config import ConfigError
 
 from .args import ViewArgs
 
 
 def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:
-    args = tyro.cli(ViewArgs, args=argv, prog=prog)
+    args = parse(lambda: tyro.cli(ViewArgs, args=argv, prog=prog), prog)
     from .main import serve  # viser is imported only once the flags parsed
 
     try:

@@ -508,6 +508,8 @@ class SimLoop:
         except sim.ConfigError:  # it sinks: drop it from just under the surface, and say so
             z = -0.5 * height
             note += " It is heavier than the water it displaces: it sinks."
+        if self.sim.params.forces != old.forces:
+            note += f" Force model: {self.sim.params.forces} (exact on a mesh; the samples' midpoint rule would turn it slowly)."
         self.sim.update(initial__position=(0.0, 0.0, z))
         self.sim.reset()
         self._tell_changes(old)

@@ -7,7 +7,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from .body import Body, make_body  # noqa: E402
-from .config import PARAMS, FluidConfig, SceneConfig, load_scene, with_overrides
+from .config import PARAMS, BodyConfig, FluidConfig, InitialConfig, SceneConfig, StepConfig, WavesConfig, load_scene, with_overrides
 from .errors import ConfigError, SimulationDiverged
 from .forces import TERMS, Model
 from .integrators import INTEGRATORS, make_integrator
@@ -16,5 +16,5 @@ from .simulation import CSV_COLUMNS, Frame, Simulation, observe
 from .state import State
 from .water import StillWater
 
-__all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "FluidConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
+__all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "BodyConfig", "FluidConfig", "InitialConfig", "StepConfig", "WavesConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
            "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip

@@ -235,7 +235,8 @@ def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None
 
 def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m",
                    exact: bool = False) -> Body:  # fmt: skip
-    """Samples at triangle centroids after subdividing to at least `samples` triangles."""
+    """Samples at triangle centroids after subdividing to at least `samples` triangles (one per
+    triangle when the mesh already has more); the count used is `Body.n_samples`."""
     import trimesh
 
     if not isinstance(mesh, trimesh.Trimesh):
@@ -246,13 +247,15 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
         mesh = mesh.copy()
         mesh.invert()
     verts, faces = np.asarray(mesh.vertices, float), np.asarray(mesh.faces)
-    # the longest edge allowed shrinks until there are enough triangles: the first count past the target
+    # the longest edge allowed shrinks until there are enough triangles: the first count past the target.
+    # Every edge longer than it is halved, so mirror-image triangles split alike and the samples keep
+    # the mesh's symmetry (splitting only some equal triangles to hit the count exactly would break it)
     edge = float(mesh.edges_unique_length.max()) * 1.0001
     while True:
         v, f = trimesh.remesh.subdivide_to_size(verts, faces, max_edge=edge)
         if len(f) >= samples:
             break
-        edge *= 0.9
+        edge *= 0.95
     tri = v[f]
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area = 0.5 * np.linalg.norm(cross, axis=1)

@@ -143,3 +143,50 @@ def test_cells_in_waves_run_on_the_numpy_reference_with_a_note():
     assert not sim.compiled and any("cells" in note for note in sim.notes)
     sim.step(20)
     assert sim.state.is_finite() and sim.frame().submerged_volume > 0
+
+
+def rested(mesh, **changes):
+    """A Simulation of `mesh` (default force model for a mesh unless changed) placed at its rest height, at rest."""
+    import dataclasses
+
+    from sim.hydrostatics import at_rest
+
+    sim = Simulation(with_overrides(load_scene("rest"), body__density=500.0, fluid__damping=0.0, **changes), mesh=mesh)
+    sim.state = dataclasses.replace(sim.state, x_world=np.array([0.0, 0.0, at_rest(sim.body, sim.params)[0]]))
+    return sim
+
+
+@pytest.mark.parametrize("mesh", [trimesh.creation.box(extents=(1.0, 0.6, 0.3)), trimesh.creation.capsule(height=1.0, radius=0.3)],
+                         ids=["box", "capsule"])  # fmt: skip
+def test_a_symmetric_mesh_at_rest_feels_no_yaw_torque_and_stays_still(mesh):
+    """A mesh body runs on panels unless asked otherwise: at rest it feels no torque and does not turn
+    about the vertical (undamped, 10 s); on points the samples' midpoint rule gives a chiral triangulation a yaw torque,
+    which falls as 1/samples (the cause, kept measurable)."""
+    sim = rested(mesh)
+    weight = sim.body.mass * 9.81
+    assert sim.params.forces == "panels"
+    assert np.abs(sim.frame().torque_world).max() < 1e-12 * weight
+    sim.step(round(10.0 / sim.dt))
+    assert abs(sim.state.L_world[2]) < 1e-9 * weight  # no yaw (the capsule standing on end may roll over: that is physics)
+    if len(mesh.faces) > 12:  # the capsule, whose triangulation has a handedness (the box's halves alike: no yaw)
+        yaw = [rested(mesh, fluid__forces="points", body__shape="mesh", body__mesh="x", body__samples=n) for n in (1, 4 * len(mesh.faces))]
+        torque = [abs(sim.frame().torque_world[2]) for sim in yaw]
+        assert torque[0] > 1e-3 * weight  # the cause, kept measurable
+        ratio = yaw[1].body.n_samples / yaw[0].body.n_samples
+        assert torque[0] / torque[1] > ratio  # the midpoint rule's error shrinks as the triangles are split
+
+
+def test_mesh_samples_are_at_least_the_count_asked_and_keep_the_symmetry():
+    """Edges longer than a threshold are halved, all alike: at least the count asked, at most about
+    twice it, and a mirror-symmetric mesh keeps symmetric samples (their area-weighted centroid stays
+    at the mesh's centre)."""
+    from sim.body import make_mesh_body
+
+    box = trimesh.creation.box(extents=(1.0, 0.6, 0.3))
+    for n in (20, 600, 1500):
+        body = make_mesh_body(box, n, density=500.0)
+        assert n <= body.n_samples <= 2.2 * n
+        mirrored = body.r_body * np.array([-1.0, 1.0, 1.0])  # the samples' set is its own mirror image
+        assert np.abs(np.sort(mirrored, axis=0) - np.sort(body.r_body, axis=0)).max() < 1e-12
+    many = trimesh.creation.icosphere(4)  # 5120 triangles: one sample each, more than asked
+    assert make_mesh_body(many, 600, density=500.0).n_samples == len(many.faces)

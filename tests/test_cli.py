@@ -1,6 +1,7 @@
 """The headless command line: CSV contract, overrides, clear one-line errors, divergence handling."""
 
 import csv
+import os
 import subprocess
 import sys
 
@@ -65,12 +66,37 @@ def test_flags_override_the_scene(tmp_path):
         (["--points-per-edge", "0"], "points per edge must be >= 1"),
         (["--q0", "1", "1", "0", "0"], "unit quaternion"),
         (["--every", "0"], "--every must be >= 1"),
+        (["--density", "abc"], "--density: could not convert string to float: 'abc'"),  # tyro's own parse errors, one line too
+        (["--densty", "3"], "did you mean --density?"),
+        (["--q0", "1", "2"], "--q0: input length 2 did not match expected argument count 4"),
+        (["--density"], "Missing value for argument '--density'"),
     ],
 )
 def test_user_mistakes_get_one_clear_line(flags, message, capsys):
-    assert main(["run", *flags]) == 2
+    try:
+        code = main(["run", *flags])
+    except SystemExit as e:  # a parse error exits from the parser
+        code = e.code
+    assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
+
+
+def test_a_hand_typed_quaternion_is_normalised_with_a_note(capsys):
+    """Four digits give a norm of 0.99997: close enough to be meant as a rotation, so normalised and said."""
+    assert main(["run", "--scene", "rest", "--t-end", "0.01", "--q0", "0.9659", "0.2588", "0", "0"]) == 0
+    err = capsys.readouterr().err
+    assert "had norm 0.99997: normalised" in err
+    assert main(["run", "--scene", "rest", "--t-end", "0.01", "--q0", "0.9", "0.2", "0", "0"]) == 2  # norm 0.92: no rotation
+    assert "within 0.001 of 1 is normalised" in capsys.readouterr().err
+
+
+def test_help_says_where_unset_flags_come_from(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--help"])
+    assert e.value.code == 0
+    text = capsys.readouterr().out
+    assert "(default: from the scene)" in text and "{None}" not in text and "(default: None)" not in text
 
 
 def test_missing_mesh_file_gets_one_clear_line(tmp_path, capsys):
@@ -105,3 +131,25 @@ def test_python_dash_m_sim_and_console_script_exit_codes():
     assert ok.stderr == ""  # no progress bar when not on a terminal
     bad = subprocess.run([sys.executable, "-m", "app.cli", "run", "--density", "-1"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.strip() == "floatsim: error: density must be > 0, got -1.0"
+
+
+def test_tyro_panels_become_one_line_in_both_renderings():
+    """rich draws tyro's error in a box on a terminal and plain elsewhere: the same line from both."""
+    from sim.commands.tyro_errors import one_line
+
+    boxed = ("╭─ Unrecognized options ─────╮\n│ Unrecognized options: --densty, 3 │\n│ ────────── │\n│ Perhaps you meant: │\n"
+             "│     --density FLOAT │\n╰────────────╯\n")  # fmt: skip
+    plain = " Unrecognized options \n ---------- \n Unrecognized options: --densty, 3 \n ---------- \n Perhaps you meant: \n     --density FLOAT \n"
+    for panel in (boxed, plain):
+        assert one_line(panel) == "Unrecognized options: --densty, 3 (did you mean --density?)"
+
+
+def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
+    """`run` announces the one-time compile before it starts (not after a silent minute): it can tell."""
+    probe = "import sim.kernels as k; print(k.cached())"
+    fresh = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    assert fresh.stdout.strip() == "False"
+    from sim.kernels import cached, warm_up
+
+    warm_up()
+    assert cached()

@@ -17,6 +17,7 @@ import tyro
 
 from ..errors import ConfigError
 from ..parameters import Param
+from .tyro_errors import parse
 
 _TYPES = {"float": float, "int": int, "choice": str, "text": str, "optional": float}
 
@@ -25,6 +26,16 @@ def _flag_type(p: Param):
     if p.kind == "vector":
         return tuple[(float,) * p.size]  # type: ignore[misc]
     return _TYPES[p.kind]
+
+
+FROM_SCENE = "(default: from the scene)"
+
+
+def _metavar(p: Param) -> str:
+    if p.choices:
+        return "{" + ",".join(p.choices) + "}"
+    word = {"float": "FLOAT", "optional": "FLOAT", "int": "INT", "text": "STR", "choice": "STR"}.get(p.kind, "FLOAT")
+    return " ".join([word] * p.size) if p.kind == "vector" else word
 
 
 def _flag_help(p: Param) -> str:
@@ -41,7 +52,8 @@ def declared_flags(name: str, base: type, params: Iterable[Param]) -> type:
         if p.cli in taken:
             raise TypeError(f"flag --{p.cli} is declared twice")
         taken.add(p.cli)
-        fields.append((p.cli, Annotated[_flag_type(p) | None, tyro.conf.arg(help=_flag_help(p))], dataclasses.field(default=None)))
+        arg = tyro.conf.arg(help=_flag_help(p), metavar=_metavar(p), help_behavior_hint=FROM_SCENE)
+        fields.append((p.cli, Annotated[_flag_type(p) | None, arg], dataclasses.field(default=None)))
     cls = dataclasses.make_dataclass(name, fields, bases=(base,))
     cls.__doc__ = base.__doc__
     return cls
@@ -73,7 +85,8 @@ def _load(target: str):
 def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str = "floatsim") -> int:
     """Parse `argv` into one subcommand's dataclass and run it; user mistakes exit 2 with one line."""
     loaded = {name: _load(target) for name, target in commands.items()}
-    args = tyro.extras.subcommand_cli_from_dict({name: cls for name, (cls, _) in loaded.items()}, args=argv, prog=prog)
+    classes = {name: cls for name, (cls, _) in loaded.items()}
+    args = parse(lambda: tyro.extras.subcommand_cli_from_dict(classes, args=argv, prog=prog), prog)
     handler = next(fn for cls, fn in loaded.values() if isinstance(args, cls))
     if threading.current_thread() is threading.main_thread():  # a shell starts background jobs with Ctrl-C ignored: take it back
         signal.signal(signal.SIGINT, signal.default_int_handler)

@@ -16,7 +16,7 @@ from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_override
 from ..hydrostatics import describe_rest
 from ..limits import step_time
 from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
-from . import declared_flags, overrides
+from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .progress import progress_bar
 
@@ -27,19 +27,20 @@ class _RunBase:
 
     scene: str = "drop"
     """Preset name (assets/scenes/NAME.toml) or path to a scene .toml."""
-    z0: float | None = None
+    z0: Annotated[float | None, tyro.conf.arg(metavar="FLOAT", help_behavior_hint=FROM_SCENE)] = None
     """Initial height of the centre of mass, m."""
-    q0: tuple[float, float, float, float] | None = None
-    """Initial orientation, unit quaternion QW QX QY QZ (scalar first)."""
-    u0: tuple[float, float, float] | None = None
-    """Initial velocity UX UY UZ, world frame, m/s."""
-    omega0: tuple[float, float, float] | None = None
-    """Initial angular velocity WX WY WZ, world frame, rad/s."""
+    q0: Annotated[tuple[float, float, float, float] | None, tyro.conf.arg(metavar="QW QX QY QZ", help_behavior_hint=FROM_SCENE)] = None
+    """Initial orientation, unit quaternion (scalar first; within 1e-3 of unit norm is normalised)."""
+    u0: Annotated[tuple[float, float, float] | None, tyro.conf.arg(metavar="UX UY UZ", help_behavior_hint=FROM_SCENE)] = None
+    """Initial velocity, world frame, m/s."""
+    omega0: Annotated[tuple[float, float, float] | None, tyro.conf.arg(metavar="WX WY WZ", help_behavior_hint=FROM_SCENE)] = None
+    """Initial angular velocity, world frame, rad/s."""
     every: int = 10
     """Write one CSV row every K steps."""
-    out: str | None = None
-    """CSV file to write (omit for a summary only)."""
-    progress: Annotated[bool | None, tyro.conf.arg(help="Show a progress bar (default: only on a terminal, never under CI).")] = None
+    out: Annotated[str | None, tyro.conf.arg(metavar="FILE", help_behavior_hint="(default: none, a summary only)")] = None
+    """CSV file to write."""
+    progress: Annotated[bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")] = None
+    """Show a progress bar."""
 
 
 RunArgs = declared_flags("RunArgs", _RunBase, PARAMS.values())
@@ -60,11 +61,17 @@ def announce_compile(sim: Simulation) -> None:
     for note in sim.notes:
         print(f"floatsim: note: {note}", file=sys.stderr)
     if sim.compiled:
-        from ..kernels import warm_up
+        from ..kernels import cached, warm_up
 
+        if not cached():  # say so before the wait, not after it
+            print("floatsim: compiling the fast kernels, once for this machine (about 1-2 minutes; cached on disk afterwards)...",
+                  file=sys.stderr, flush=True)  # fmt: skip
         seconds = warm_up()
         if seconds > 5.0:  # loading from the cache takes under a second; compiling, about two minutes
             print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
+
+
+SAMPLES_NOTE = "a mesh's triangles are split by halving every edge over a length, or kept one sample each when more"
 
 
 def describe_terms(sim: Simulation) -> str:
@@ -157,7 +164,8 @@ def run(args: RunArgs, watch=None) -> int:
     last = sim.frame()
     steps = round(last.t / sim.dt)
     drift = last.E_total - first.E_total
-    print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples, mass {sim.body.mass:.6g} kg, "
+    asked = f" ({scene.body.samples} asked: {SAMPLES_NOTE})" if scene.body.shape == "mesh" and sim.body.n_samples != scene.body.samples else ""
+    print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples{asked}, mass {sim.body.mass:.6g} kg, "
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
           f"inertia {'exact (mesh shell)' if sim.body.exact_inertia else 'of the samples'}")  # fmt: skip
     print(f"at rest: {describe_rest(sim.body, sim.params)}")

@@ -25,10 +25,16 @@ def _cache_dir() -> str:
     return os.path.join(root, f"kernels-{digest}")
 
 
+def cached() -> bool:
+    """Whether these kernels were compiled on this machine before (their disk cache has entries)."""
+    return any(name.endswith(".nbi") for _, _, names in os.walk(KERNEL_CACHE) for name in names)
+
+
 JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
 
 _users_cache_dir = numba.config.CACHE_DIR
-numba.config.CACHE_DIR = _cache_dir()  # read by numba as each kernel below is decorated; others' code keeps the user's
+KERNEL_CACHE = _cache_dir()
+numba.config.CACHE_DIR = KERNEL_CACHE  # read by numba as each kernel below is decorated; others' code keeps the user's
 try:
     from .integrators import advance, advance_many, warm_up  # noqa: E402
     from .layout import MODELS, NO_RADIATION, SCHEMES, pack, radiation_pack, sea_pack  # noqa: E402
@@ -36,4 +42,4 @@ try:
 finally:
     numba.config.CACHE_DIR = _users_cache_dir
 
-__all__ = ["JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "NO_RADIATION", "SCHEMES", "pack", "radiation_pack", "sea_pack"]
+__all__ = ["cached", "JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "NO_RADIATION", "SCHEMES", "pack", "radiation_pack", "sea_pack"]

@@ -121,7 +121,7 @@ def stability(st: StabilityMap, cfg: Settings, path: Path) -> None:
         dd = np.logspace(0, math.log10(max(st.damping) * 3), 200)
         heave, _ = physics_limit(density, 1.0)
         ax.axhline(heave, color="gray", ls="--", lw=1, label=f"heave: dt = 2/omega = {heave:.3g} s")
-        ax.loglog(dd, 2 * u["M"] / (dd * u["A_sub"]), color="gray", ls="-.", lw=1, label="damping: dt = 2 M / (d A_sub) (PHYSICS.md)")
+        ax.loglog(dd, 2 * u["M"] / (dd * u["A_sub"]), color="gray", ls="-.", lw=1, label="damping: dt = 2 M / (d A_sub) (explicit Euler, linear)")
         kappa = next((st.lam_max[density, d] / d for d in st.damping if d > 0), None)
         if kappa:
             ax.loglog(dd, 2 / (kappa * dd), color="k", ls=(0, (1, 3)), lw=1.2, label=f"fastest damping mode: dt = 2/lambda_max, lambda_max = {kappa:.3g} d /s")

@@ -141,7 +141,7 @@ def _stability(data: ReportData) -> list[str]:
              "heavy one's once it submerges), so a large initial excitation lets wrong but bounded motion pass for stable; "
              f"{STAB_GROWTH:g} is far above a stable symplectic scheme's energy oscillation ((1 + dt omega/2)/(1 - dt omega/2) at most) "
              "and far below saturation. "
-             f"{st.runs} runs in all. PHYSICS.md's limits are drawn in: heave dt omega < 2 with omega = sqrt(rho g s^2 / M), damping "
+             f"{st.runs} runs in all. The explicit Euler's linear limits are drawn in: heave dt omega < 2 with omega = sqrt(rho g s^2 / M), damping "
              "dt d A_sub / M < 2. The constants are the explicit Euler's; the other schemes' linear limits differ: Stoermer-Verlet "
              "(the splitting's kick-drift-kick) 2 on the oscillator, its damping substeps (explicit midpoint over dt/2) 4; "
              "RK4 2.83 on the oscillator and 2.79 on pure decay; `implicit` has no damping limit, only the heave one.")  # fmt: skip
@@ -153,7 +153,7 @@ def _stability(data: ReportData) -> list[str]:
             lam = st.lam_max[density, d]
             row = [f"{density:g}", f"{d:g}", f"{heave:.3g}", _fmt(damp, ".3g") if np.isfinite(damp) else "-", f"{2 / lam:.3g}" if lam > 0 else "-"]
             rows.append(row + [_stable_dt_cell(st.limits[method, density, d], density, lam, cfg.stab_cap) for method in FIXED])
-    L += md_table(["density (kg/m^3)", "d (N s/m^3)", "heave 2/omega (s)", "PHYSICS.md damping 2M/(d A_sub) (s)", "fastest mode 2/lambda_max (s)",
+    L += md_table(["density (kg/m^3)", "d (N s/m^3)", "heave 2/omega (s)", "damping limit 2M/(d A_sub) (s)", "fastest mode 2/lambda_max (s)",
                    *[f"{m}: largest stable dt (s)" for m in FIXED]], rows)  # fmt: skip
     L += ["", _stability_discussion(data), ""]
     return L
@@ -275,8 +275,8 @@ def _stability_discussion(data: ReportData) -> str:
             lines.append(f"{method}: " + "; ".join(text) + ".")
     ratio = numbers.fastest_mode_ratios(st)
     if ratio:
-        lines.append(f"The fastest damping mode is {_span(ratio)}x faster than PHYSICS.md's d A_sub / M (sway and roll "
-                     "couple because the wet surface's centroid lies below the centre of mass), so PHYSICS.md's damping bound overestimates "
+        lines.append(f"The fastest damping mode is {_span(ratio)}x faster than the single-mode estimate d A_sub / M (sway and roll "
+                     "couple because the wet surface's centroid lies below the centre of mass), so that damping bound overestimates "
                      f"the explicit limit by that factor. The bisection's resolution is a factor {cfg.stab_ratio:g}.")  # fmt: skip
     return " ".join(lines)
 

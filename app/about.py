@@ -14,7 +14,7 @@ viscous damping (and drag, waves and radiation when a scene asks), gravity at it
 
 - <span style="color:#1e6ee6">●</span> **blue points**: surface samples under water, where the water pushes; <span style="color:#f59628">●</span> **orange**: dry ones.
 - **Red arrow**: the net force, 1 m = the body's weight. **Green arrow**: the net torque, 1 m = weight × the body's radius.
-- **B**: centre of buoyancy; **M**: metacentre; **yellow line**: the waterline. The axes sit at the centre of mass G: a small heel rights itself when **GM > 0** (M above G) and grows when GM < 0.
+- **B**: centre of buoyancy; **M**: metacentre; **yellow line**: the waterline. G is the centre of mass (Layers: show body axes): a small heel rights itself when **GM > 0** (M above G) and grows when GM < 0.
 - **Sliders** change the physics live (density: how deep it floats; damping: how fast motion dies out); **Reset** starts again with them.
 - **Record** keeps the run as one HTML page anyone can replay offline; **Your body** loads your own mesh; **Copy link** shares this setup."""
 
@@ -31,9 +31,8 @@ def readme_text(path: Path = README) -> str:
 class About:
     def __init__(self, server: viser.ViserServer):
         gui = server.gui
-        with gui.add_folder("About", expand_by_default=True):
-            gui.add_markdown(ABOUT)
-            self.readme = gui.add_button("Read the README", icon=viser.Icon.BOOK, hint="The full guide: models, flags, accuracy, speed")
+        gui.add_markdown(ABOUT)  # in the panel's first tab (app/main.py)
+        self.readme = gui.add_button("Read the README", icon=viser.Icon.BOOK, hint="The full guide: models, flags, accuracy, speed")
         self.readme.on_click(lambda event: self.show_readme(event.client))
 
     @staticmethod

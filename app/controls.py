@@ -82,6 +82,13 @@ class Controls:
         finally:
             self._quiet.on = False
 
+    def show_shape(self, shape: str) -> None:
+        """Only the sampling control that applies to the body at hand: points per edge for a cube or
+        box, samples for a mesh."""
+        for key, shown in (("points_per_edge", shape != "mesh"), ("samples", shape == "mesh")):
+            if key in self._handles and self._handles[key].visible != shown:
+                self._handles[key].visible = shown
+
     def show_notice(self, text: str) -> None:
         if text:
             self.notice.content = f"**⚠ {text}**"
@@ -112,3 +119,4 @@ class Layers:
             self.forces = server.gui.add_checkbox("Show force and torque", True, hint="Red: net force (1 m = body weight); green: torque")
             self.markers = server.gui.add_checkbox("Show B, M, waterline", True,
                                                    hint="Why it floats: centre of buoyancy B, metacentre M (GM > 0: rights itself), waterline")
+            self.axes = server.gui.add_checkbox("Show body axes", False, hint="The body's principal axes at its centre of mass G (x red, y green, z blue)")

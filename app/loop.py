@@ -429,7 +429,7 @@ class SimLoop:
             used = current
         if note or used != value:
             self._tell(param.key, used)
-        if param.key == "points_per_edge":
+        if param.key in ("points_per_edge", "samples"):
             self._epoch += 1  # a rebuilt body: new history for the plots
         if self.sim.body is not old_body or self.sim.integrator is not old_integrator:
             self._cost_unknown()

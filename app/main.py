@@ -39,7 +39,11 @@ class ViewerApp:
         self.url = f"http://{shown}:{self.port}"
         server.gui.configure_theme(control_width="large", show_share_button=False)
         snap = loop.latest()
-        self.about = About(server)
+        tabs = server.gui.add_tab_group()  # the panel's top: the guide first, the live numbers and plots one click away
+        with tabs.add_tab("About", viser.Icon.INFO_CIRCLE):
+            self.about = About(server)
+        with tabs.add_tab("Live", viser.Icon.CHART_LINE):
+            self.readouts = Readouts(server)
         self.controls = Controls(server, loop.post, snap.settings, loop.scene_options)
         self.layers = Layers(server)
         self.body_file = BodyFile(server, loop.post, lambda text, client=None: loop.post("notice", text))
@@ -47,7 +51,6 @@ class ViewerApp:
         with server.gui.add_folder("Share a link"):
             self.link = server.gui.add_html(copy_button_html(link_query(snap.settings)))
             self.link_text = server.gui.add_markdown("")
-        self.readouts = Readouts(server)
         self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.is_still)
         self._notice_id = snap.notice_id
         self._query, self._link_time = None, -1e9
@@ -106,6 +109,7 @@ class ViewerApp:
         with self.server.atomic():
             self.scene.show(snap)
             self.readouts.update(snap)
+            self.controls.show_shape(snap.settings.config.body.shape)
             self._update_link(snap)
             fresh = snap.notice_id != self._notice_id and snap.notice
             if fresh or (not snap.notice and self.controls.notice.visible):

@@ -24,6 +24,24 @@ SERIES = (
     ("F", "|F| (N)", "#c92a2a", lambda f: float(np.linalg.norm(f.force_world))),
     ("E", "E total (J)", "#7048e8", lambda f: f.E_total),
 )
+NOISE = 1e-9
+"""Plotted values are rounded to this fraction of the body's own scale (`scales`): round-off (|F| of 1e-13 N
+at rest) then plots as the flat zero it is, not as swings with every tick labelled 0."""
+Y_AXIS_PX = 76
+"""Room for the y labels, px: uPlot's default 50 cuts the leading digits and the sign of '-1,226.3'."""
+
+
+def scales(body, g: float) -> np.ndarray:
+    """The natural size of each plotted quantity for a body (SERIES order): its radius, M r sqrt(g r),
+    its weight, its weight times its radius."""
+    r, weight = max(body.radius, 1e-6), body.mass * max(g, 1e-6)
+    return np.array([r, body.mass * r * np.sqrt(max(g, 1e-6) * r), weight, weight * r])
+
+
+def denoise(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """(k, m) values of the m series rounded to NOISE x their scale (m,)."""
+    quantum = NOISE * scale
+    return np.round(values / quantum) * quantum
 
 
 class Readouts:
@@ -31,18 +49,18 @@ class Readouts:
 
     def __init__(self, server: viser.ViserServer):
         gui = server.gui
-        with gui.add_folder("Readouts"):
-            self.text = gui.add_markdown("")
+        self.text = gui.add_markdown("")
         self.plots = {}
-        with gui.add_folder("Plots"):
-            for key, label, colour, _ in SERIES:
-                self.plots[key] = gui.add_uplot(
-                    (np.zeros(1), np.zeros(1)),
-                    ({"label": "t (s)"}, {"label": label, "stroke": colour, "width": 1.5}),
-                    scales={"x": {"time": False}},
-                    legend={"show": True},
-                    aspect=2.2,
-                )
+        # the plots under the numbers, in the panel's "Live" tab (app/main.py)
+        for key, label, colour, _ in SERIES:
+            self.plots[key] = gui.add_uplot(
+                (np.zeros(1), np.zeros(1)),
+                ({"label": "t (s)"}, {"label": label, "stroke": colour, "width": 1.5}),
+                scales={"x": {"time": False}},
+                legend={"show": True},
+                axes=({}, {"size": Y_AXIS_PX}),
+                aspect=2.2,
+            )
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._epoch = -1
         self._last = -math.inf
@@ -62,7 +80,8 @@ class Readouts:
             self._history.clear()
         if self._history and self._history[-1][0] == frame.t:
             return  # paused: nothing new to draw
-        self._history.append((frame.t, *(f(frame) for *_, f in SERIES)))
+        values = denoise(np.array([f(frame) for *_, f in SERIES], dtype=float), scales(snap.body, snap.params.g))
+        self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
         data[~np.isfinite(data)] = np.nan
         for i, (key, *_) in enumerate(SERIES):

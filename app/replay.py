@@ -31,10 +31,11 @@ class FixedLayers:
     water: Layer
     forces: Layer
     markers: Layer
+    axes: Layer
 
     @classmethod
     def of(cls, points: bool = True, markers: bool = True) -> FixedLayers:
-        return cls(Layer(True), Layer(points), Layer(True), Layer(True), Layer(markers))
+        return cls(Layer(True), Layer(points), Layer(True), Layer(True), Layer(markers), Layer(False))
 
 
 @contextlib.contextmanager

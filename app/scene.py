@@ -37,7 +37,7 @@ class SceneView:
         size = max(8.0, 8.0 * body.radius)
         self.water = WaterView(server, size, lighter=replay)
         self.markers = MarkersView(server, body.radius)
-        self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
+        self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=layers.axes.value)
         self.arrows = scene.add_arrows(
             "/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
         )
@@ -59,7 +59,7 @@ class SceneView:
             self._sized_for = body.radius
             self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay)
             self.markers = MarkersView(self.server, body.radius)
-            self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius)
+            self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value)
         self.mesh = scene.add_mesh_simple(
             "/body/mesh", body.mesh_vertices, body.mesh_faces, color=(215, 235, 250), flat_shading=True, visible=self.layers.mesh.value
         )
@@ -83,6 +83,8 @@ class SceneView:
         for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.arrows, layers.forces)):
             if node.visible != box.value:
                 node.visible = box.value
+        if self.frame.show_axes != layers.axes.value:
+            self.frame.show_axes = layers.axes.value
         frame = snap.frame
         with self.server.atomic():
             if self.replay:  # viser skips a pose within 1e-5 of the last one sent: a replay keeps every pose exactly

@@ -24,6 +24,8 @@ class ShotArgs:
     height: int = 800
     wait: float = 6.0
     """Seconds after the page loads (the drop is under way)."""
+    tab: str = ""
+    """Open this tab of the panel first (e.g. Live: the numbers and plots)."""
 
 
 def main(args: ShotArgs) -> int:
@@ -43,6 +45,8 @@ def main(args: ShotArgs) -> int:
             page = browser.new_page(viewport={"width": args.width, "height": args.height})
             page.goto(app.url + "/?fixedDpr=0.75", timeout=60_000)
             page.wait_for_selector("canvas", timeout=60_000)
+            if args.tab:
+                page.get_by_role("tab", name=args.tab).click()
             time.sleep(args.wait)
             for close in page.locator(".mantine-Notification-closeButton").all():  # the software-WebGL toast
                 close.click()

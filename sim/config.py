@@ -35,7 +35,7 @@ BODY = (
     Param("body", "mesh_unit", "m", "Unit of the mesh file's coordinates (scaled to metres)", kind="choice", choices=tuple(UNITS),
           name="mesh unit"),
     Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
-          kind="int", name="mesh samples"),
+          kind="int", name="mesh samples", label="Samples", gui=(100, 20000, 100), live=(1, 60000)),
     Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=0.0, lo_open=True,
           hi=1e5, live=(1.0, 1e5), kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
     Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=0.0, lo_open=True, hi=1e12, kind="optional"),

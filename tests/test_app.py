@@ -451,7 +451,7 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     app = make_app("damped")
     water = app.scene.water
     wait_for(app, lambda s: s.frame.t > 0.5, what="the run to go on")
-    assert water.updates == 0 and water.grid.visible and not water.surface.visible
+    assert water.updates == 0 and water.calm.visible and not water.surface.visible
     app.controls.kind.value = "regular"
     app.controls.height.value = 0.6
     snap = app.sync()
@@ -460,7 +460,7 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     wait_for(app, lambda s: water.updates >= before + 5, what="wave surfaces")
     elapsed = time.monotonic() - started
     assert water.updates - before <= WAVE_HZ * elapsed + 2  # throttled
-    assert water.surface.visible and not water.grid.visible
+    assert water.surface.visible and not water.calm.visible
     vertices = np.asarray(water.surface.vertices, float)
     np.testing.assert_allclose(vertices[:, 2], snap.water.elevation(vertices[:, :2], water.sent_time), atol=1e-6)
     assert np.ptp(vertices[:, 2]) > 0.05 and np.abs(vertices[:, 2]).max() <= 0.3 + 1e-6  # a 0.3 m amplitude, 100 m long wave over 8 m
@@ -469,3 +469,41 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     frozen = water.updates
     time.sleep(0.5)
     assert water.updates == frozen and not water.surface.visible
+
+
+def test_plots_draw_round_off_as_zero_and_leave_room_for_their_labels(make_app):
+    """The cube at rest: |F| and |L| are round-off (1e-13) and plot as exact zeros, not as swings
+    with every tick labelled 0; z and E keep their values to 1e-9 of the body's scale. Each y axis is
+    wide enough for '-1,226.3' (uPlot's default 50 px cut the sign and the leading digits)."""
+    import time
+
+    from app.readouts import Y_AXIS_PX
+
+    app = make_app("rest")
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline and len(app.readouts.plots["F"].data[0]) < 5:
+        time.sleep(0.2)
+    snap = app.sync()
+    plots = app.readouts.plots
+    assert len(plots["F"].data[0]) >= 5
+    assert np.all(plots["F"].data[1] == 0.0) and np.all(plots["L"].data[1] == 0.0)
+    assert np.abs(plots["z"].data[1] - (-0.4)).max() < 1e-8
+    assert plots["E"].data[1][-1] == pytest.approx(snap.frame.E_total, abs=1e-9 * snap.body.mass * 9.81 * snap.body.radius)
+    for plot in plots.values():
+        assert plot.axes[1]["size"] == Y_AXIS_PX >= 70
+
+
+def test_the_sampling_control_follows_the_body(make_app):
+    """A cube shows 'Points per edge', a mesh 'Samples'; moving the Samples slider rebuilds the mesh
+    body with at least that many samples."""
+    app = make_app("damped", paused=True)
+    app.sync()
+    app._publish(app.loop.latest())
+    assert app.controls.points_per_edge.visible and not app.controls.samples.visible
+    app.loop.post("scene", "log")
+    app.sync()
+    app._publish(app.loop.latest())
+    assert app.controls.samples.visible and not app.controls.points_per_edge.visible
+    app.controls.samples.value = 3000
+    snap = app.sync()
+    assert snap.settings.samples == 3000 and 3000 <= snap.body.n_samples <= 6600

@@ -21,7 +21,7 @@ def intro(quick_setting: bool, cube: Cube, n_samples: int, points_per_edge: int)
 
 The source report (`{SOURCE}`, "Simulation of a Cubic Floating Body Suspended in Viscous Fluid") simulates a hollow
 cube sampled by surface points in MATLAB. This page redoes each of its figures with floatsim's corrected model
-(`PHYSICS.md`) and says where and why the results differ. It is generated, numbers included, by
+(the README's *The model*) and says where and why the results differ. It is generated, numbers included, by
 `python -m studies figures{" --quick" if quick_setting else ""}` (package `studies/seed_figures/`); the settings of every run are given as the
 equivalent `python -m sim run` command.{quick}
 

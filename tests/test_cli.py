@@ -153,3 +153,14 @@ def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
 
     warm_up()
     assert cached()
+
+
+def test_compare_says_what_it_does_before_it_starts_and_orders_the_errors(capsys):
+    """`compare` announces its runs (it takes a while before any row), then one row per integrator and
+    dt; on the damped scene rk4's error falls as dt halves."""
+    assert main(["compare", "--scene", "damped", "--t-end", "1", "--dts", "0.02", "0.01", "--integrators", "rk4", "--repeats", "1"]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith("compare: a DOP853 reference, then 2 runs of 'damped'")
+    rows = [line.split("|") for line in out.splitlines() if line.startswith("| rk4 |")]
+    errors = [float(row[3]) for row in rows]
+    assert len(rows) == 2 and errors[1] < errors[0]

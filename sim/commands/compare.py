@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import statistics
+import sys
 import time
 from dataclasses import dataclass
 
@@ -47,10 +48,12 @@ def timed_run(scene, repeats: int = 1) -> tuple[np.ndarray, float]:
 
 def compare(args: CompareArgs) -> int:
     base = with_overrides(load_scene(args.scene), step__t_end=args.t_end)
-    reference, _ = timed_run(with_overrides(base, step__integrator="dop853", step__dt=0.05, step__rtol=1e-11, step__atol=1e-13))
-    rows = []
     jobs = [(name, dt) for name in args.integrators for dt in args.dts]
-    bar = progress_bar(len(jobs), unit="run")
+    print(f"compare: a DOP853 reference, then {len(jobs)} runs of '{base.name}' over {args.t_end:g} s...", file=sys.stderr, flush=True)
+    bar = progress_bar(len(jobs) + 1, unit="run")
+    reference, _ = timed_run(with_overrides(base, step__integrator="dop853", step__dt=0.05, step__rtol=1e-11, step__atol=1e-13))
+    bar.update()
+    rows = []
     for name, dt in jobs:
         pose, cost = timed_run(with_overrides(base, step__integrator=name, step__dt=dt), args.repeats)
         rows.append((name, dt, float(np.abs(pose - reference).max()), cost))

@@ -139,8 +139,9 @@ class ViewerApp:
             threading.Thread(target=lambda: self.body_file.describe(f"**{body.name}**: {describe_rest(body, fluid)}."), daemon=True).start()
 
 
-def check_address(host: str, port: int) -> None:
-    """Refuse an address viser could never bind (it would retry 1000 ports and hang), as a one-line ConfigError."""
+def check_address(host: str, port: int) -> int:
+    """The port to serve on: `port`, or the next free one above it (0: any). Refuses, as a one-line
+    ConfigError, an address viser could never bind (it would retry past 65535 and hang)."""
     if not 0 <= port <= 65535:
         raise ConfigError(f"--port must be in 0..65535, got {port}")
     try:
@@ -152,6 +153,14 @@ def check_address(host: str, port: int) -> None:
             s.bind((address[0], 0))
         except OSError as e:
             raise ConfigError(f"cannot listen on --host {host!r}: {e.strerror}") from None
+    for candidate in range(port, min(port + 100, 65535) + 1) if port else (0,):
+        with socket.socket(family, socket.SOCK_STREAM) as s:
+            try:
+                s.bind((address[0], candidate))
+                return candidate
+            except OSError:
+                continue
+    raise ConfigError(f"port {port} is busy and so is every port up to {min(port + 100, 65535)}: give another --port (0: any free one)")
 
 
 def warm_kernels() -> None:
@@ -182,7 +191,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
         from sim.body import load_mesh
 
         load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
-    check_address(args.host, args.port)
+    port = check_address(args.host, args.port)
     warm_kernels()
     presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
@@ -191,7 +200,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
-    server = viser.ViserServer(host=args.host, port=args.port, label="floatsim", verbose=False)
+    server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
         return ViewerApp(server, loop, args.host)
     except BaseException:

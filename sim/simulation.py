@@ -319,6 +319,9 @@ class Simulation:
         (its weight and displaced water lifted by its own size, plus its kinetic energy) is no drift."""
         frame = self.frame()
         body, p = self.body, self.params
+        if not (np.isfinite(frame.E_total) and np.all(np.isfinite(frame.force_world)) and np.all(np.isfinite(frame.torque_world))):
+            raise SimulationDiverged(f"the state at t = {self.state.t:g} s gives non-finite forces or energy: check the initial "
+                                     "position, velocities and the body's size and density")  # fmt: skip
         self._E_ref = frame.E_total
         self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
 

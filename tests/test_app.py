@@ -507,3 +507,17 @@ def test_the_sampling_control_follows_the_body(make_app):
     app.controls.samples.value = 3000
     snap = app.sync()
     assert snap.settings.samples == 3000 and 3000 <= snap.body.n_samples <= 6600
+
+
+def test_the_last_port_busy_is_one_line_not_a_hang():
+    """viser moves a busy port to the next one: past 65535 there is none, and it used to hang."""
+    from app.main import check_address
+
+    with socket.socket() as s:
+        try:
+            s.bind(("127.0.0.1", 65535))
+        except OSError:
+            pytest.skip("port 65535 is taken on this machine already")
+        s.listen()
+        with pytest.raises(sim.ConfigError, match="port 65535 is busy and so is every port up to 65535"):
+            check_address("127.0.0.1", 65535)

@@ -4,6 +4,7 @@ import csv
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -164,3 +165,15 @@ def test_compare_says_what_it_does_before_it_starts_and_orders_the_errors(capsys
     rows = [line.split("|") for line in out.splitlines() if line.startswith("| rk4 |")]
     errors = [float(row[3]) for row in rows]
     assert len(rows) == 2 and errors[1] < errors[0]
+
+
+def test_an_output_never_overwrites_the_runs_own_input(tmp_path, capsys):
+    scene = tmp_path / "mine.toml"
+    scene.write_text((Path(__file__).resolve().parent.parent / "assets" / "scenes" / "rest.toml").read_text())
+    before = scene.read_text()
+    assert main(["run", "--scene", str(scene), "--out", str(scene), "--t-end", "0.1"]) == 2
+    assert "this run's own input file" in capsys.readouterr().err and scene.read_text() == before
+    other = tmp_path / "other.toml"
+    other.write_text("# a scene of mine\n")
+    assert main(["run", "--scene", "rest", "--out", str(other), "--t-end", "0.1"]) == 2
+    assert "is not overwritten" in capsys.readouterr().err and other.read_text() == "# a scene of mine\n"

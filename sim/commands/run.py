@@ -83,14 +83,23 @@ def describe_terms(sim: Simulation) -> str:
     return "+".join(parts)
 
 
-def check_output(path: str | None, flag: str = "out", suffix: str | None = None) -> None:
-    """Refuse, before any work, an output file that cannot be written: one line naming why. An existing
-    file is overwritten (as the README says)."""
+INPUTS = (".toml", ".stl", ".obj", ".ply", ".py", ".md")
+"""Suffixes of files a run reads or a user keeps: never overwritten by an output flag."""
+
+
+def check_output(path: str | None, flag: str = "out", suffix: str | None = None, inputs: tuple = ()) -> None:
+    """Refuse, before any work, an output file that cannot be written, or that is one of the run's
+    `inputs` (its scene or mesh file) or an existing file of an input's kind: one line naming why.
+    Another existing file is overwritten (as the README says)."""
     if path is None:
         return
     p = Path(path)
     if suffix and p.suffix.lower() != suffix:
         raise ConfigError(f"--{flag} must name a {suffix} file, got {path!r}")
+    if any(p.resolve() == Path(i).resolve() for i in inputs if i):
+        raise ConfigError(f"--{flag} {path}: that is this run's own input file; give another name (the run would overwrite it)")
+    if p.is_file() and p.suffix.lower() in INPUTS:
+        raise ConfigError(f"--{flag} {path}: an existing {p.suffix} file is not overwritten by an output; give another name")
     if p.is_dir():
         raise ConfigError(f"--{flag} {path}: is a folder, give a file name")
     if p.exists() and not p.is_file():
@@ -112,7 +121,7 @@ def run(args: RunArgs, watch=None) -> int:
     and at the start: how the viewer's recorder takes its frames without sim knowing of it."""
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
-    check_output(args.out)
+    check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
     scene = scene_from_args(args)
     sim = Simulation(scene)
     for warning in sim.warnings():

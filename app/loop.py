@@ -33,6 +33,8 @@ NOTICE_SECONDS = 10.0
 
 SPEED = Param("viewer", "speed", 1.0, "Simulated seconds per wall-clock second asked for", "×", lo=0.01, hi=100.0, label="Speed",
               gui=(0.1, 10.0, 0.1))  # fmt: skip
+STEP_SECONDS = 0.25
+"""Most wall time one step of an adaptive method may take here: the thread must get back to Pause and Reset."""
 CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
 """Scene parameters with a live control, by key (the command that changes each is its key)."""
 _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
@@ -148,7 +150,7 @@ class SimLoop:
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
-        self.sim = sim.Simulation(scene)
+        self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
         self._queue: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
@@ -289,6 +291,12 @@ class SimLoop:
                 self._publish(snap)
             except Exception as e:  # noqa: BLE001
                 self._log("publish", e)
+
+    @staticmethod
+    def _simulation(scene) -> sim.Simulation:
+        out = sim.Simulation(scene)
+        out.step_seconds = STEP_SECONDS
+        return out
 
     def _advice(self) -> str:
         """sampled_model_warning for the running body and fluid, computed again only when either changes."""
@@ -478,7 +486,7 @@ class SimLoop:
             self._tell("scene", self._scene_name)
             return
         old = self.settings
-        self.sim = sim.Simulation(load_scene(value))
+        self.sim = self._simulation(load_scene(value))
         self._scene_name = value
         self._tell_changes(old)
         self._diverged = False

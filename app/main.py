@@ -18,6 +18,7 @@ from .about import About
 from .args import ViewArgs
 from .controls import Controls, Layers
 from .guard import big_blocks_go_back, quiet_repeated_tracebacks, release_memory
+from .gui_guard import Refusals, guard_gui
 from .loop import SimLoop, Snapshot
 from .readouts import Readouts
 from .recorder import RecordPanel
@@ -57,6 +58,9 @@ class ViewerApp:
         self._described = None
         self.connections = 0
         """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
+        self.refusals = Refusals(lambda text: loop.post("notice", text))
+        """Counts GUI updates refused before viser applied them (app/gui_guard.py)."""
+        guard_gui(server.gui, self.refusals)
         server.on_client_connect(self._connected)
         self._stopped = threading.Event()
         threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()
@@ -71,6 +75,7 @@ class ViewerApp:
     def _connected(self, client: viser.ClientHandle) -> None:
         """A new page: the first browser restarts the run; every page's address may carry a setup."""
         self.connections += 1
+        guard_gui(client.gui, self.refusals)  # the page's own controls (the address probe, the README modal)
         if len(self.server.get_clients()) <= 1:
             self.loop.post("reset")
         probe_address(client, self._apply_link)
@@ -209,11 +214,27 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
         raise
 
 
+def is_loopback(host: str) -> bool:
+    """Whether `host` only listens on this machine."""
+    import ipaddress
+
+    if host in ("localhost", ""):
+        return host == "localhost"
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
 def serve(args: ViewArgs) -> int:
     """Run the viewer until Ctrl-C (or SIGTERM); exit status 0."""
     app = start(args)
     moved = f" (port {args.port} was busy)" if args.port not in (0, app.port) else ""
     print(f"floatsim viewer: {app.url}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
+    if not is_loopback(args.host):
+        print(f"floatsim viewer: warning: --host {args.host} serves beyond this machine: anyone who can reach port {app.port} can "
+              "watch and drive this run (there is no login); keep it on a trusted network, or use the default 127.0.0.1 with an "
+              "SSH tunnel (ssh -L 8080:127.0.0.1:8080 host)", file=sys.stderr, flush=True)  # fmt: skip
     done = threading.Event()
     if threading.current_thread() is threading.main_thread():
         # Both set explicitly: a shell starts background jobs with SIGINT ignored, and Ctrl-C must still stop us.

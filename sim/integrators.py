@@ -6,8 +6,12 @@ only through the `Model`. Rotations are exact (quaternion exponentials), never l
 
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
 
+from .errors import SimulationDiverged
 from .forces import Model
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotate_body, rotate_world
 from .state import State, angular_momentum, angular_velocity
@@ -253,17 +257,32 @@ class Adaptive:
     method, order = "RK45", 5
     heave_limit = damping_limit = float("inf")  # error control picks stable steps
 
+    max_evaluations = 1_000_000
+    """Force evaluations allowed for one output step (about a minute): a stiff setting stops with a message, never hangs."""
+
     def __init__(self, rtol: float = 1e-8, atol: float = 1e-10):
         self.name = self.method.lower()
         self.rtol, self.atol = rtol, atol
         self._h: float | None = None  # last step size: the next interval starts from it
+        self.max_seconds: float | None = None
+        """Wall-time budget of one output step (the viewer sets it, so its thread always gets back to its commands)."""
 
     def step(self, model: Model, s: State, dt: float) -> State:
         from scipy.integrate import solve_ivp  # 0.6 s to import: only for the adaptive methods
 
         t_end = s.t + dt
         options = {"first_step": min(self._h, t_end - s.t)} if self._h else {}  # (t + dt) - t may be < dt
-        sol = solve_ivp(lambda t, y: derivative(model, t, y), (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
+        deadline = time.monotonic() + self.max_seconds if self.max_seconds else math.inf
+        count = [0]
+
+        def fun(t, y):
+            count[0] += 1
+            if count[0] > self.max_evaluations or (count[0] % 64 == 0 and time.monotonic() > deadline):
+                raise SimulationDiverged(f"'{self.name}' needed more than {count[0]:,} force evaluations for one {dt:g} s step at "
+                                         f"t = {s.t:g} s (a stiff setting): use --integrator implicit" + ("" if self.name == "radau" else ", or radau"))  # fmt: skip
+            return derivative(model, t, y)
+
+        sol = solve_ivp(fun, (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)
         if not sol.success:
             return State(s.t + dt, *(np.full(n, np.nan) for n in (3, 4, 3, 3)))
         if sol.t.size > 1:

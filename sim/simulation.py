@@ -197,6 +197,9 @@ class Simulation:
         self.largest_turn = 0.0
         """With radiation: the largest rotation away from the rest orientation so far, degrees."""
         self._memory_of = None  # the radiation whose memory the state carries
+        self.step_seconds: float | None = None
+        """Wall-time budget of one step of an adaptive method (None: only its evaluation cap); past it the
+        step stops with SimulationDiverged naming a better integrator. The viewer sets it."""
         self.expand_waves = True
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
@@ -281,6 +284,8 @@ class Simulation:
 
     def _advance_numpy(self, n: int) -> State:
         model, integrator, dt = self.model, self.integrator, self.dt
+        if integrator.adaptive:
+            integrator.max_seconds = self.step_seconds
         state = self.state
         for _ in range(n):
             try:

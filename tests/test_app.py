@@ -521,3 +521,30 @@ def test_the_last_port_busy_is_one_line_not_a_hang():
         s.listen()
         with pytest.raises(sim.ConfigError, match="port 65535 is busy and so is every port up to 65535"):
             check_address("127.0.0.1", 65535)
+
+
+@pytest.mark.parametrize("integrator", ["rk45", "radau"])
+def test_a_stiff_adaptive_setting_stops_with_a_message_and_the_loop_stays_responsive(make_app, integrator):
+    """rk45 or radau at density 1 and d = 1e7 used to stall the simulation thread for minutes (Pause and
+    Reset ignored): each step now has a wall-time budget, past which the run pauses naming a better integrator."""
+    import time
+
+    app = make_app("damped")
+    app.controls.density.value = 1.0
+    app.controls.damping.value = 1e7
+    app.sync()
+    app.loop.post("integrator", integrator)
+    started = time.monotonic()
+    snap = app.sync(timeout=20)
+    deadline = time.monotonic() + 20
+    while not snap.diverged and time.monotonic() < deadline:
+        time.sleep(0.1)
+        snap = app.sync(timeout=5)
+    if integrator == "rk45":  # explicit: hopeless at this stiffness, so it must stop, and say what to use
+        assert snap.diverged and "implicit" in snap.notice, snap.notice
+    else:  # radau copes here; either way the budget keeps the thread's turns short
+        assert snap.diverged or snap.frame.t > 1.0
+    assert time.monotonic() - started < 25
+    app.controls.paused.value = True
+    t0 = time.monotonic()
+    assert app.sync(timeout=5).settings.paused and time.monotonic() - t0 < 2.0  # the thread is back at its commands

@@ -150,3 +150,15 @@ def test_implicit_is_stable_for_light_spinning_tilted_bodies_at_any_damping(d, d
         frame = sim.frame()
         assert sim.state.is_finite() and frame.E_total < e0
         assert np.linalg.norm(frame.omega_world) < 0.5 * w0
+
+
+def test_an_adaptive_method_past_its_work_budget_stops_naming_a_better_one():
+    """rk45 on a stiff setting takes ever smaller steps: past its evaluation cap (or the viewer's time
+    budget) one step stops with SimulationDiverged, keeping the last good state, instead of hanging."""
+    scene = with_overrides(load_scene("damped"), body__density=1.0, fluid__damping=1e7, step__integrator="rk45", step__dt=0.01)
+    sim = Simulation(scene)
+    sim.integrator.max_evaluations = 2000
+    start = sim.state
+    with pytest.raises(SimulationDiverged, match="more than 2,001 force evaluations .* use --integrator implicit, or radau"):
+        sim.step(5)
+    assert sim.state.t <= start.t + 5 * sim.dt and sim.state.is_finite()

@@ -1,0 +1,98 @@
+"""Every GUI update a browser sends is checked before viser applies it.
+
+viser applies a client's `GuiUpdateMessage` to the handle's state (any property it names, any value
+its type can be cast to), broadcasts it to every other client, and only then runs our callbacks. So
+one message could leave a value no client can decode (an int of 1e300 dropped every connection, for
+good), switch controls off for everyone (`disabled`, `visible`, `min`...), or make the server send a
+20 MB string to every tab. `guard_gui` puts a check in front of viser's handler: only the `value`
+property, of the handle's own type (finite, bounded numbers; capped strings; a dropdown's own
+options; vectors of its length). Anything else is dropped whole, with a short notice that never
+repeats the input. Range clamps with a visible note stay the simulation loop's job (app/loop.py).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from numbers import Real
+
+MAX_NUMBER = 1e12
+"""Largest magnitude a number control may carry (every declared range is far inside it)."""
+MAX_TEXT = 4096
+"""Longest text a control may carry (the page's own address, copied by share.probe_address, fits)."""
+NOTICE_SECONDS = 2.0
+"""At most one notice about refused updates per this many seconds (a flood gives one, with a count)."""
+
+
+def refusal(state, updates: dict) -> str | None:
+    """Why a GUI update must not reach the handle whose state is `state`, or None when it may."""
+    if not isinstance(updates, dict) or set(updates) != {"value"}:
+        return "it changed something other than a control's value"
+    value, current = updates["value"], state.value
+    if isinstance(current, bool):
+        return None if isinstance(value, bool) else "not a yes/no value"
+    if isinstance(current, Real):
+        return _number(value, integral=isinstance(current, int))
+    if isinstance(current, str):
+        if not isinstance(value, str) or len(value) > MAX_TEXT:
+            return "not a text of reasonable length"
+        options = getattr(state, "options", None)
+        return None if options is None or value in options else "not one of the choices"
+    if isinstance(current, tuple):
+        if not isinstance(value, (list, tuple)) or len(value) != len(current):
+            return "not a vector of the right length"
+        return next((why for why in (_number(v, isinstance(c, int)) for v, c in zip(value, current)) if why), None)
+    return "not a value a browser sets on this control"  # e.g. an upload button's file: those come by file transfer
+
+
+def _number(value, integral: bool = False) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value) or abs(value) > MAX_NUMBER:
+        return "not a finite number of reasonable size"
+    if integral and value != int(value):
+        return "not a whole number"
+    return None
+
+
+class Refusals:
+    """Counts refused updates and reports them through `notify`, at most once per NOTICE_SECONDS."""
+
+    def __init__(self, notify: Callable[[str], None]):
+        self.notify = notify
+        self.count = 0
+        self._pending = 0
+        self._last = -math.inf
+        self._lock = threading.Lock()
+
+    def __call__(self, why: str) -> None:
+        with self._lock:
+            self.count += 1
+            self._pending += 1
+            now = time.monotonic()
+            if now - self._last < NOTICE_SECONDS:
+                return
+            n, self._pending, self._last = self._pending, 0, now
+        self.notify(f"Ignored {n} control update{'s' if n > 1 else ''} from a browser: {why}.")
+
+
+def guard_gui(gui, refused: Callable[[str], None]) -> None:
+    """Put `refusal` in front of `gui`'s (a viser GuiApi's) handler of client GUI updates."""
+    from viser import _messages
+
+    handlers = gui._websock_interface._incoming_handlers.get(_messages.GuiUpdateMessage, [])
+    original = gui._handle_gui_updates
+    if original not in handlers:
+        return  # already guarded, or a viser that handles updates elsewhere (then its own checks apply)
+
+    async def guarded(client_id, message) -> None:
+        handle = gui._gui_input_handle_from_uuid.get(message.uuid, None)
+        if handle is None:
+            return
+        why = refusal(handle._impl, message.updates)
+        if why is not None:
+            refused(why)
+            return
+        await original(client_id, message)
+
+    handlers[handlers.index(original)] = guarded

@@ -13,6 +13,8 @@ class ViewArgs:
     """Interface to bind (0.0.0.0 to share on the network)."""
     port: int = 8080
     """Port to serve on (a busy port moves to the next free one; the banner says which)."""
+    token: str | None = None
+    """A shared secret: only pages opened with ?token=TOKEN may drive the run (others watch); for --host beyond this machine."""
     mesh: str | None = None
     """Your own closed mesh (STL, OBJ, PLY) as the body, with the scene's other settings."""
     mesh_unit: str = "m"

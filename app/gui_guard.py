@@ -76,18 +76,22 @@ class Refusals:
         self.notify(f"Ignored {n} control update{'s' if n > 1 else ''} from a browser: {why}.")
 
 
-def guard_gui(gui, refused: Callable[[str], None]) -> None:
-    """Put `refusal` in front of `gui`'s (a viser GuiApi's) handler of client GUI updates."""
+def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, object], bool] | None = None) -> None:
+    """Put `refusal` in front of `gui`'s (a viser GuiApi's) handler of client GUI updates; with
+    `may_drive(client_id, handle)`, also refuse updates and uploads from pages it does not allow."""
     from viser import _messages
 
-    handlers = gui._websock_interface._incoming_handlers.get(_messages.GuiUpdateMessage, [])
+    handlers = gui._websock_interface._incoming_handlers
     original = gui._handle_gui_updates
-    if original not in handlers:
+    if original not in handlers.get(_messages.GuiUpdateMessage, []):
         return  # already guarded, or a viser that handles updates elsewhere (then its own checks apply)
 
     async def guarded(client_id, message) -> None:
         handle = gui._gui_input_handle_from_uuid.get(message.uuid, None)
         if handle is None:
+            return
+        if may_drive is not None and not may_drive(client_id, handle):
+            refused("this page has no access token (open the link the viewer printed)")
             return
         why = refusal(handle._impl, message.updates)
         if why is not None:
@@ -95,4 +99,18 @@ def guard_gui(gui, refused: Callable[[str], None]) -> None:
             return
         await original(client_id, message)
 
-    handlers[handlers.index(original)] = guarded
+    updates = handlers[_messages.GuiUpdateMessage]
+    updates[updates.index(original)] = guarded
+    upload = gui._handle_file_transfer_start
+    starts = handlers.get(_messages.FileTransferStartUpload, [])
+    if may_drive is not None and upload in starts:
+
+        async def guarded_upload(client_id, message) -> None:
+            if not may_drive(client_id, None):
+                refused("this page has no access token (open the link the viewer printed)")
+                return
+            result = upload(client_id, message)
+            if hasattr(result, "__await__"):
+                await result
+
+        starts[starts.index(upload)] = guarded_upload

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import hmac
 import signal
 import socket
 import sys
 import threading
 import time
 from pathlib import Path
+from urllib.parse import parse_qsl
 
 import viser
 
@@ -23,7 +25,7 @@ from .loop import SimLoop, Snapshot
 from .readouts import Readouts
 from .recorder import RecordPanel
 from .scene import SceneView
-from .share import copy_button_html, link_query, mesh_left_out, parse_link, probe_address
+from .share import PROBE, copy_button_html, link_query, mesh_left_out, parse_link, probe_address
 from .upload import BodyFile
 
 TRIM_SECONDS = 5.0
@@ -32,7 +34,7 @@ TRIM_SECONDS = 5.0
 class ViewerApp:
     """A running viewer. GUI and scene are server-global: every browser tab shows and drives the same run."""
 
-    def __init__(self, server: viser.ViserServer, loop: SimLoop, host: str):
+    def __init__(self, server: viser.ViserServer, loop: SimLoop, host: str, token: str | None = None):
         self.server = server
         self.loop = loop
         self.port = server.get_port()
@@ -60,7 +62,10 @@ class ViewerApp:
         """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
         self.refusals = Refusals(lambda text: loop.post("notice", text))
         """Counts GUI updates refused before viser applied them (app/gui_guard.py)."""
-        guard_gui(server.gui, self.refusals)
+        self.token = token
+        self.drivers: set[int] = set()
+        """Pages that showed the token (all pages when there is none)."""
+        guard_gui(server.gui, self.refusals, self._may_drive if token else None)
         server.on_client_connect(self._connected)
         self._stopped = threading.Event()
         threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()
@@ -75,12 +80,22 @@ class ViewerApp:
     def _connected(self, client: viser.ClientHandle) -> None:
         """A new page: the first browser restarts the run; every page's address may carry a setup."""
         self.connections += 1
-        guard_gui(client.gui, self.refusals)  # the page's own controls (the address probe, the README modal)
+        guard_gui(client.gui, self.refusals, self._may_drive if self.token else None)  # its own controls (address probe, README modal)
         if len(self.server.get_clients()) <= 1:
             self.loop.post("reset")
         probe_address(client, self._apply_link)
 
+    def _may_drive(self, client_id: int, handle) -> bool:
+        """With a token, a page drives the run only once its address showed it; the probe that reads
+        the address is always let through."""
+        return client_id in self.drivers or getattr(getattr(handle, "_impl", None), "label", None) == PROBE
+
     def _apply_link(self, client: viser.ClientHandle, query: str) -> None:
+        if self.token:
+            given = dict(parse_qsl(query.lstrip("?"))).get("token", "")
+            if not hmac.compare_digest(given.encode(), self.token.encode()):
+                return  # it may watch; its setup and its controls are refused
+            self.drivers.add(client.client_id)
         commands, problems = parse_link(query, self.loop.scene_options)
         for name, value in commands:
             self.loop.post(name, value)
@@ -207,7 +222,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
-        return ViewerApp(server, loop, args.host)
+        return ViewerApp(server, loop, args.host, args.token)
     except BaseException:
         loop.stop()
         server.stop()
@@ -230,11 +245,12 @@ def serve(args: ViewArgs) -> int:
     """Run the viewer until Ctrl-C (or SIGTERM); exit status 0."""
     app = start(args)
     moved = f" (port {args.port} was busy)" if args.port not in (0, app.port) else ""
-    print(f"floatsim viewer: {app.url}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
-    if not is_loopback(args.host):
+    link = f"{app.url}/?token={args.token}" if args.token else app.url
+    print(f"floatsim viewer: {link}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
+    if not is_loopback(args.host) and not args.token:
         print(f"floatsim viewer: warning: --host {args.host} serves beyond this machine: anyone who can reach port {app.port} can "
-              "watch and drive this run (there is no login); keep it on a trusted network, or use the default 127.0.0.1 with an "
-              "SSH tunnel (ssh -L 8080:127.0.0.1:8080 host)", file=sys.stderr, flush=True)  # fmt: skip
+              "watch and drive this run; give --token SECRET so only pages opened with ?token=SECRET can drive it, or keep the "
+              "default 127.0.0.1 and use an SSH tunnel (ssh -L 8080:127.0.0.1:8080 host)", file=sys.stderr, flush=True)  # fmt: skip
     done = threading.Event()
     if threading.current_thread() is threading.main_thread():
         # Both set explicitly: a shell starts background jobs with SIGINT ignored, and Ctrl-C must still stop us.

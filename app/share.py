@@ -45,7 +45,7 @@ def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[s
     commands, problems = [], []
     pairs = parse_qsl(query.lstrip("?"), keep_blank_values=True)
     for key, text in sorted(pairs, key=lambda kv: kv[0] != "scene"):
-        if key in VISER_PARAMS:
+        if key in VISER_PARAMS or key == "token":  # viser's own, and the viewer's access token (app/main.py)
             continue
         if key == "scene":
             if text in scene_options:

@@ -130,3 +130,25 @@ def test_serving_beyond_loopback_warns_that_anyone_can_drive_the_run():
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+
+
+def test_with_a_token_only_pages_that_show_it_may_drive_the_run():
+    """--token: a page opened without ?token=... watches, its control updates and its link's setup are
+    refused; the viewer's own controls still work."""
+    from app.args import ViewArgs
+    from app.main import start
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = start(ViewArgs(scene="damped", port=0, token="s3cret"))
+    try:
+        density = app.controls.density
+        frame = msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": density._impl.uuid, "updates": {"value": 123.0}})
+        asyncio.run(send_all(app.port, [frame]))
+        snap = app.sync()
+        assert snap.density != pytest.approx(123.0) and app.refusals.count >= 1
+        app._apply_link(type("Page", (), {"client_id": 99})(), "?token=wrong&density=321")
+        assert app.sync().density != pytest.approx(321.0) and 99 not in app.drivers
+        app._apply_link(type("Page", (), {"client_id": 7})(), "?token=s3cret&density=321")
+        assert app.sync().density == pytest.approx(321.0) and 7 in app.drivers
+    finally:
+        app.stop()

@@ -76,7 +76,8 @@ def bench(args: BenchArgs) -> int:
 
     compile_s = warm_up()
     base = load_scene(args.scene)
-    cells = [("points", n, name) for n in args.sizes for name in args.integrators] + [("panels", 0, name) for name in args.integrators]
+    cells = ([("points", n, name) for n in args.sizes for name in args.integrators] + [("cells", n, "implicit") for n in args.sizes]
+             + [("panels", 0, name) for name in args.integrators])  # fmt: skip
     bar = progress_bar(len(cells) + (len(args.integrators) if args.ensemble else 0) + (2 if args.waves else 0), unit="cell")
     rows = []
     for forces, n, name in cells:
@@ -86,8 +87,9 @@ def bench(args: BenchArgs) -> int:
         t_fast = _median_step_seconds(fast, args.repeats, args.budget)
         t_ref = _median_step_seconds(ref, max(1, args.repeats // 2), args.budget)
         samples = fast.body.n_samples
-        per = f"{t_fast * 1e9 / samples:.2f}" if forces == "points" else f"{t_fast * 1e9 / len(fast.body.mesh_faces):.0f} / triangle"
-        rows.append((forces, str(samples) if forces == "points" else f"{len(fast.body.mesh_faces)} triangles", name,
+        sampled = forces != "panels"
+        per = f"{t_fast * 1e9 / samples:.2f}" if sampled else f"{t_fast * 1e9 / len(fast.body.mesh_faces):.0f} / triangle"
+        rows.append((forces, str(samples) if sampled else f"{len(fast.body.mesh_faces)} triangles", name,
                      f"{t_fast * 1e6:.2f}", per, f"{fast.dt / t_fast:.0f}", f"{t_ref * 1e6:.0f}", f"{t_ref / t_fast:.0f}"))  # fmt: skip
         bar.update()
     ens_rows = []

@@ -198,9 +198,43 @@ def wet_triangles(x, R, verts, faces, fnormals, ws):
 
 
 @njit(inline="always", **JIT)
+def _whole_cell(R, cell, out):
+    """Area and centroid lever (world frame) of a whole cell, the fan of triangles (0, 1, 2) and (0, 2, 3), into out (4,)."""
+    a = cx = cy = cz = 0.0
+    for fan in range(2):
+        i1, i2 = 1 + fan, 2 + fan
+        e1 = (cell[i1, 0] - cell[0, 0], cell[i1, 1] - cell[0, 1], cell[i1, 2] - cell[0, 2])
+        e2 = (cell[i2, 0] - cell[0, 0], cell[i2, 1] - cell[0, 1], cell[i2, 2] - cell[0, 2])
+        q0, q1, q2 = e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]
+        area = 0.5 * np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+        a += area
+        cx += area * (cell[0, 0] + cell[i1, 0] + cell[i2, 0]) / 3.0
+        cy += area * (cell[0, 1] + cell[i1, 1] + cell[i2, 1]) / 3.0
+        cz += area * (cell[0, 2] + cell[i1, 2] + cell[i2, 2]) / 3.0
+    out[0] = a
+    if a > 0.0:  # the centroid in the body frame, then turned into the world's
+        bx, by, bz = cx / a, cy / a, cz / a
+        out[1] = R[0, 0] * bx + R[0, 1] * by + R[0, 2] * bz
+        out[2] = R[1, 0] * bx + R[1, 1] * by + R[1, 2] * bz
+        out[3] = R[2, 0] * bx + R[2, 1] * by + R[2, 2] * bz
+
+
+@njit(inline="always", **JIT)
 def cell_node(x2, R, cell, out):
     """The wet part of one cell (4 corners, body frame) under the still water line: its area and
-    centroid lever (world frame) into out (4,). The cell is taken as the fan of two triangles."""
+    centroid lever (world frame) into out (4,). The cell is taken as the fan of two triangles. A cell
+    wholly on one side (most of those near the line: a face lying in the water plane has them all)
+    is settled from its corner heights without clipping."""
+    lo, hi = np.inf, -np.inf
+    for c in range(4):
+        z = x2 + R[2, 0] * cell[c, 0] + R[2, 1] * cell[c, 1] + R[2, 2] * cell[c, 2]
+        lo, hi = min(lo, z), max(hi, z)
+    if lo >= 0.0:
+        out[0] = 0.0
+        return
+    if hi < 0.0:
+        _whole_cell(R, cell, out)
+        return
     P = np.empty((3, 3))
     h = np.empty(3)
     parts = np.empty((2, 3, 3))

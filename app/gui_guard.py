@@ -22,6 +22,7 @@ MAX_NUMBER = 1e12
 """Largest magnitude a number control may carry (every declared range is far inside it)."""
 MAX_TEXT = 4096
 """Longest text a control may carry (the page's own address, copied by share.probe_address, fits)."""
+NO_TOKEN = "this page has no access token (open the link the viewer printed)"
 NOTICE_SECONDS = 2.0
 """At most one notice about refused updates per this many seconds (a flood gives one, with a count)."""
 
@@ -91,7 +92,7 @@ def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, obj
         if handle is None:
             return
         if may_drive is not None and not may_drive(client_id, handle):
-            refused("this page has no access token (open the link the viewer printed)")
+            refused(NO_TOKEN)
             return
         why = refusal(handle._impl, message.updates)
         if why is not None:
@@ -107,7 +108,7 @@ def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, obj
 
         async def guarded_upload(client_id, message) -> None:
             if not may_drive(client_id, None):
-                refused("this page has no access token (open the link the viewer printed)")
+                refused(NO_TOKEN)
                 return
             result = upload(client_id, message)
             if hasattr(result, "__await__"):

@@ -106,7 +106,7 @@ class Snapshot(Posed):
     steps: int
     """Steps taken since the loop started."""
     advice: str = ""
-    """A standing warning about the running model for this body ('' when none): the points model in its bad band."""
+    """A standing warning about the running model for this body, a sentence ('' when none): the points model in its bad band."""
 
     @property
     def params(self):
@@ -307,8 +307,9 @@ class SimLoop:
             except Exception as e:  # noqa: BLE001 -- advice must never stop the run
                 self._log("advice", e)
                 text = ""
+            text = text and text[0].upper() + text[1:] + "."  # a sentence, for the notice and the readouts
             if text and text != self._advice_text:
-                self._raise_notice(text[0].upper() + text[1:] + ".")  # once, when it starts to apply; the readouts keep it
+                self._raise_notice(text)  # once, when it starts to apply; the readouts keep it
             self._advice_key, self._advice_text = key, text
         return self._advice_text
 

@@ -112,7 +112,7 @@ def describe(snap: Snapshot) -> str:
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "
                      f"displaced {h.volume:.4g} m³")  # fmt: skip
     if snap.advice:
-        lines.append(f"**⚠ {snap.advice[0].upper()}{snap.advice[1:]}.**")
+        lines.append(f"**⚠ {snap.advice}**")
     if snap.behind:
         lines.append(
             f"**⚠ This machine cannot keep up with {s.speed:g}× real time**: lower the speed, the points per edge, or pick a faster integrator."

@@ -89,10 +89,10 @@ def observe_cells(x, R, u, w, geom, mass, terms, coef, wet):
     integrals over its nodes (whole wet cells at their samples, cut cells at their wet centroids)."""
     r, nrm, cells = geom[0], geom[1], geom[7]
     F, T = _loads(2, x, R, u, w, geom, mass, terms, coef)
-    node = np.empty(4)
+    node, P, h, parts = np.empty(4), np.empty((3, 3)), np.empty(3), np.empty((2, 3, 3))
     z2n = a_sub = v_sub = 0.0
     for k in range(r.shape[0]):
-        cell_node(x[2], R, cells[k], node)
+        cell_node(x[2], R, cells[k], node, P, h, parts)
         wet[k] = node[0] > 0.0
         if wet[k]:
             z = x[2] + node[3]

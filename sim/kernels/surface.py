@@ -220,11 +220,11 @@ def _whole_cell(R, cell, out):
 
 
 @njit(inline="always", **JIT)
-def cell_node(x2, R, cell, out):
+def cell_node(x2, R, cell, out, P, h, parts):
     """The wet part of one cell (4 corners, body frame) under the still water line: its area and
     centroid lever (world frame) into out (4,). The cell is taken as the fan of two triangles. A cell
     wholly on one side (most of those near the line: a face lying in the water plane has them all)
-    is settled from its corner heights without clipping."""
+    is settled from its corner heights without clipping. P (3, 3), h (3,), parts (2, 3, 3): scratch."""
     lo, hi = np.inf, -np.inf
     for c in range(4):
         z = x2 + R[2, 0] * cell[c, 0] + R[2, 1] * cell[c, 1] + R[2, 2] * cell[c, 2]
@@ -235,9 +235,6 @@ def cell_node(x2, R, cell, out):
     if hi < 0.0:
         _whole_cell(R, cell, out)
         return
-    P = np.empty((3, 3))
-    h = np.empty(3)
-    parts = np.empty((2, 3, 3))
     a = cx = cy = cz = 0.0
     for fan in range(2):
         for v in range(3):
@@ -278,10 +275,11 @@ def wet_cells(x, R, r, nrm, cells, reach, need_rr, moments, flags, acc, nodes):
             for j in range(34):
                 acc[j] += sign * moments[k, j]
     zn, zt, A, S, rr = sums_integrals(x, R, need_rr, acc)
+    P, h, parts = np.empty((3, 3)), np.empty(3), np.empty((2, 3, 3))  # once per pose, not per cell
     for k in range(r.shape[0]):
         if nodes[k, 0] == 0.0:
             continue
-        cell_node(x2, R, cells[k], nodes[k])
+        cell_node(x2, R, cells[k], nodes[k], P, h, parts)
         a = nodes[k, 0]
         if a == 0.0:
             continue

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import functools
 import logging
 import sys
 import threading
@@ -57,20 +58,27 @@ def quiet_repeated_tracebacks() -> OncePerKind:
 M_MMAP_THRESHOLD = -3
 
 
+@functools.cache
+def _libc() -> ctypes.CDLL | None:
+    """The C library, found once: ctypes.util.find_library forks `ldconfig -p` on every call."""
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+    except OSError:
+        return None
+
+
 def big_blocks_go_back() -> bool:
     """Make glibc serve every block over 1 MiB by mmap, returned to the system when freed. By default the
     threshold rises after the first large free, and later large messages then stay in the heap."""
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        return bool(libc.mallopt(M_MMAP_THRESHOLD, 1 << 20))
-    except (OSError, AttributeError):
+        return bool(_libc().mallopt(M_MMAP_THRESHOLD, 1 << 20))
+    except AttributeError:  # no C library found, or one without mallopt (not glibc)
         return False
 
 
 def release_memory() -> bool:
     """Return freed heap memory to the system where the C library can (glibc); False elsewhere."""
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        return bool(libc.malloc_trim(0))
-    except (OSError, AttributeError):
+        return bool(_libc().malloc_trim(0))
+    except AttributeError:
         return False

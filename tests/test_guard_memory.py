@@ -23,3 +23,57 @@ def test_heap_trim_forks_no_process_after_the_first(monkeypatch):
         guard.release_memory()
     assert looked_up == ["c"] and forked == []
     assert hasattr(guard._libc(), "malloc_trim")  # glibc here: the trim really runs
+
+
+CAMERA = {"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (3.0, 3.0, 3.0), "fov": 1.0, "near": 0.01, "far": 100.0,
+          "image_height": 600, "image_width": 800, "look_at": (0.0, 0.0, 0.0), "up_direction": (0.0, 0.0, 1.0)}  # fmt: skip
+"""What a browser sends first; viser counts a page as connected (and runs our on-connect) only after it."""
+
+
+def test_pages_that_come_and_go_leave_nothing_behind():
+    """300 pages connect (speaking viser's protocol), get the scene and the address probe, and leave:
+    the server keeps no handle of any of them and its memory does not grow with them."""
+    import asyncio
+    import contextlib
+    import gc
+    import io
+    import time
+
+    import msgspec
+    import viser
+    import websockets
+
+    from app.args import ViewArgs
+    from app.guard import release_memory
+    from app.main import start
+    from tests.test_gui_guard import rss_mib
+
+    camera = msgspec.msgpack.encode(CAMERA)
+
+    async def come_and_go(port: int, n: int) -> None:
+        for _ in range(n):
+            async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as ws:
+                await ws.send(camera)
+                with contextlib.suppress(asyncio.TimeoutError):
+                    for _ in range(4):
+                        await asyncio.wait_for(ws.recv(), timeout=0.05)
+
+    def handles() -> int:
+        gc.collect()
+        return sum(isinstance(o, viser.ClientHandle) for o in gc.get_objects())
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = start(ViewArgs(scene="damped", port=0))
+    try:
+        asyncio.run(come_and_go(app.port, 50))  # the first pages warm viser's and the allocator's pools
+        time.sleep(1.0)
+        release_memory()
+        before, seen = rss_mib(), app.connections
+        asyncio.run(come_and_go(app.port, 300))
+        time.sleep(1.0)
+        assert app.connections - seen == 300  # every page counted as a browser: the on-connect path ran for each
+        assert handles() == 0 and not app.server.get_clients()
+        release_memory()
+        assert rss_mib() - before < 8.0  # measured: under 1 MiB per 1000 pages
+    finally:
+        app.stop()

@@ -15,6 +15,9 @@ class ViewArgs:
     """Port to serve on (a busy port moves to the next free one; the banner says which)."""
     token: str | None = None
     """A shared secret: only pages opened with ?token=TOKEN may drive the run (others watch); for --host beyond this machine."""
+    share: bool = False
+    """Let the page's share button open a public link through viser's share service (share.viser.studio): anyone
+    with it can watch, and drive unless --token is given. Without it, pages cannot open one."""
     mesh: str | None = None
     """Your own closed mesh (STL, OBJ, PLY) as the body, with the scene's other settings."""
     mesh_unit: str = "m"

@@ -8,6 +8,11 @@ good), switch controls off for everyone (`disabled`, `visible`, `min`...), or ma
 property, of the handle's own type (finite, bounded numbers; capped strings; a dropdown's own
 options; vectors of its length). Anything else is dropped whole, with a short notice that never
 repeats the input. Range clamps with a visible note stay the simulation loop's job (app/loop.py).
+
+A control's declared properties live in `handle._impl.props` (viser 1.1.1: `props.label`, `props.options`);
+its value in `handle._impl.value`. An update from a page viser does not count as connected yet (it sent no
+camera message) is refused too: viser would apply and broadcast it but run no callback, so every page
+would show a value the run never used.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ MAX_NUMBER = 1e12
 MAX_TEXT = 4096
 """Longest text a control may carry (the page's own address, copied by share.probe_address, fits)."""
 NO_TOKEN = "this page has no access token (open the link the viewer printed)"
+NOT_CONNECTED = "this page has not finished connecting"
 NOTICE_SECONDS = 2.0
 """At most one notice about refused updates per this many seconds (a flood gives one, with a count)."""
 
@@ -39,7 +45,7 @@ def refusal(state, updates: dict) -> str | None:
     if isinstance(current, str):
         if not isinstance(value, str) or len(value) > MAX_TEXT:
             return "not a text of reasonable length"
-        options = getattr(state, "options", None)
+        options = getattr(getattr(state, "props", None), "options", None)
         return None if options is None or value in options else "not one of the choices"
     if isinstance(current, tuple):
         if not isinstance(value, (list, tuple)) or len(value) != len(current):
@@ -57,10 +63,12 @@ def _number(value, integral: bool = False) -> str | None:
 
 
 class Refusals:
-    """Counts refused updates and reports them through `notify`, at most once per NOTICE_SECONDS."""
+    """Counts refused updates (or other requests: `what`) and reports them through `notify`, at most
+    once per NOTICE_SECONDS."""
 
-    def __init__(self, notify: Callable[[str], None]):
+    def __init__(self, notify: Callable[[str], None], what: str = "control update"):
         self.notify = notify
+        self.what = what
         self.count = 0
         self._pending = 0
         self._last = -math.inf
@@ -74,7 +82,7 @@ class Refusals:
             if now - self._last < NOTICE_SECONDS:
                 return
             n, self._pending, self._last = self._pending, 0, now
-        self.notify(f"Ignored {n} control update{'s' if n > 1 else ''} from a browser: {why}.")
+        self.notify(f"Ignored {n} {self.what}{'s' if n > 1 else ''} from a browser: {why}.")
 
 
 def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, object], bool] | None = None) -> None:
@@ -90,6 +98,9 @@ def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, obj
     async def guarded(client_id, message) -> None:
         handle = gui._gui_input_handle_from_uuid.get(message.uuid, None)
         if handle is None:
+            return
+        if gui._resolve_client(client_id) is None:
+            refused(NOT_CONNECTED)
             return
         if may_drive is not None and not may_drive(client_id, handle):
             refused(NO_TOKEN)

@@ -9,7 +9,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from urllib.parse import parse_qsl
+from urllib.parse import parse_qsl, quote
 
 import viser
 
@@ -17,6 +17,7 @@ from sim.config import ConfigError, available_scenes, load_scene
 from sim.hydrostatics import describe_rest
 
 from .about import About
+from .access import own_origin_only, refuse_share
 from .args import ViewArgs
 from .controls import Controls, Layers
 from .guard import big_blocks_go_back, quiet_repeated_tracebacks, release_memory
@@ -34,13 +35,13 @@ TRIM_SECONDS = 5.0
 class ViewerApp:
     """A running viewer. GUI and scene are server-global: every browser tab shows and drives the same run."""
 
-    def __init__(self, server: viser.ViserServer, loop: SimLoop, host: str, token: str | None = None):
+    def __init__(self, server: viser.ViserServer, loop: SimLoop, host: str, token: str | None = None, share: bool = False):
         self.server = server
         self.loop = loop
         self.port = server.get_port()
         shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
         self.url = f"http://{shown}:{self.port}"
-        server.gui.configure_theme(control_width="large", show_share_button=False)
+        server.gui.configure_theme(control_width="large", show_share_button=share)
         snap = loop.latest()
         tabs = server.gui.add_tab_group()  # the panel's top: the guide first, the live numbers and plots one click away
         with tabs.add_tab("About", viser.Icon.INFO_CIRCLE):
@@ -66,11 +67,17 @@ class ViewerApp:
         self.drivers: set[int] = set()
         """Pages that showed the token (all pages when there is none)."""
         guard_gui(server.gui, self.refusals, self._may_drive if token else None)
+        if not share:  # a public tunnel only when the user asked for one (app/access.py)
+            refuse_share(server, Refusals(lambda text: loop.post("notice", text), "request for a public share link"))
         server.on_client_connect(self._connected)
         self._stopped = threading.Event()
         threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()
+
+    def address(self) -> str:
+        """The link the banner prints: with a token, the page it opens may drive the run."""
+        return f"{self.url}/?token={quote(self.token, safe='')}" if self.token else self.url
 
     def _trim(self) -> None:
         """Every few seconds, hand back to the system what refused oversized messages took (app/guard.py; ~5 ms)."""
@@ -88,7 +95,8 @@ class ViewerApp:
     def _may_drive(self, client_id: int, handle) -> bool:
         """With a token, a page drives the run only once its address showed it; the probe that reads
         the address is always let through."""
-        return client_id in self.drivers or getattr(getattr(handle, "_impl", None), "label", None) == PROBE
+        props = getattr(getattr(handle, "_impl", None), "props", None)  # viser 1.1.1 keeps the label there
+        return client_id in self.drivers or getattr(props, "label", None) == PROBE
 
     def _apply_link(self, client: viser.ClientHandle, query: str) -> None:
         if self.token:
@@ -220,9 +228,10 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
-    server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
+    with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)
+        server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
-        return ViewerApp(server, loop, args.host, args.token)
+        return ViewerApp(server, loop, args.host, args.token, args.share)
     except BaseException:
         loop.stop()
         server.stop()
@@ -245,8 +254,7 @@ def serve(args: ViewArgs) -> int:
     """Run the viewer until Ctrl-C (or SIGTERM); exit status 0."""
     app = start(args)
     moved = f" (port {args.port} was busy)" if args.port not in (0, app.port) else ""
-    link = f"{app.url}/?token={args.token}" if args.token else app.url
-    print(f"floatsim viewer: {link}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
+    print(f"floatsim viewer: {app.address()}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
     if not is_loopback(args.host) and not args.token:
         print(f"floatsim viewer: warning: --host {args.host} serves beyond this machine: anyone who can reach port {app.port} can "
               "watch and drive this run; give --token SECRET so only pages opened with ?token=SECRET can drive it, or keep the "

@@ -41,12 +41,18 @@ _PROBE_JS = """(function(){
 
 
 def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[str, object]], list[str]]:
-    """The loop commands a link's query asks for (scene first) and what in it was not understood."""
-    commands, problems = [], []
+    """The loop commands a link's query asks for (scene first) and what in it was refused: unknown keys,
+    values that are not numbers or choices or lie outside the control's range, and repeats of a key
+    (the first one counts). Nothing refused reaches the run."""
+    commands, problems, seen = [], [], set()
     pairs = parse_qsl(query.lstrip("?"), keep_blank_values=True)
-    for key, text in sorted(pairs, key=lambda kv: kv[0] != "scene"):
+    for key, text in sorted(pairs, key=lambda kv: kv[0] != "scene"):  # stable: the first of a repeated key stays first
         if key in VISER_PARAMS or key == "token":  # viser's own, and the viewer's access token (app/main.py)
             continue
+        if key in seen:
+            problems.append(f"{key[:30]!r} given more than once (the first kept)")
+            continue
+        seen.add(key)
         if key == "scene":
             if text in scene_options:
                 commands.append(("scene", text))
@@ -57,18 +63,29 @@ def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[s
         if param is None:
             problems.append(f"unknown parameter {key[:30]!r}")
             continue
-        try:
-            if param.kind == "choice":
-                value = text
-            elif param.kind == "vector":
-                value = tuple(float(v) for v in text.split(","))
-            else:
-                value = float(text)
-        except ValueError:
-            problems.append(f"{key} = {text[:30]!r} is not a number")
-            continue
-        commands.append((key, value))
+        value, why = _link_value(param, text)
+        if why:
+            problems.append(why)
+        else:
+            commands.append((key, value))
     return commands, problems
+
+
+def _link_value(param, text: str):
+    """(value, None) when `text` is a value the control takes as it is; (None, why) when not."""
+    try:
+        if param.kind == "choice":
+            value = text
+        elif param.kind == "vector":
+            value = tuple(float(v) for v in text.split(","))
+        else:
+            value = float(text)
+    except ValueError:
+        return None, f"{param.key} = {text[:30]!r} is not a number"
+    used, note = param.clamp(value, None)
+    if note is not None or used is None:  # the clamp would change it: a link carries only values it keeps
+        return None, (note or f"{param.key} = {text[:30]!r} is not accepted").split(";")[0]
+    return used, None
 
 
 @functools.lru_cache(maxsize=32)

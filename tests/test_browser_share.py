@@ -146,3 +146,39 @@ def test_export_video_of_the_last_recording(app):
         frames = list(video.decode(video=0))
     assert len(frames) == int(app.recorder.last.duration * 10 + 1e-9) + 1 and (frames[0].width, frames[0].height) == (640, 360)
     assert not app.recorder.progress.visible and not app.recorder.video.disabled
+
+
+def test_the_banners_link_drives_the_run_and_pages_without_the_token_cannot(browser_page):
+    """--token in chromium: the link the banner prints changes density through the page's own slider box;
+    the same page opened without the token, or with a wrong one, cannot."""
+    import contextlib
+
+    from test_browser import control_row
+
+    from app.args import ViewArgs
+    from app.main import start
+
+    page = browser_page
+    with contextlib.redirect_stdout(io.StringIO()):
+        viewer = start(ViewArgs(scene="rest", port=0, token="s3cret"), publish_hz=10.0)
+    try:
+
+        def set_density(address: str, value: str, ready=lambda: True) -> None:
+            page.goto(address)
+            box = control_row(page, "Density (kg/m³)").locator("input.mantine-NumberInput-input")
+            box.wait_for()
+            wait_for(viewer, lambda s: len(viewer.server.get_clients()) == 1 and ready(), what="the page to connect")
+            time.sleep(1.0)  # its address probe answered
+            box.fill(value)
+            box.press("Enter")
+
+        set_density(viewer.address() + "&fixedDpr=0.5", "500", ready=lambda: len(viewer.drivers) == 1)
+        wait_for(viewer, lambda s: s.density == 500.0, what="density 500 from the banner's link")
+        for address in (viewer.url + "/?fixedDpr=0.5", viewer.url + "/?token=wrong&fixedDpr=0.5"):
+            refused = viewer.refusals.count
+            set_density(address, "700")
+            wait_for(viewer, lambda s: viewer.refusals.count > refused, what="the update to be refused")
+            assert viewer.sync().density == 500.0
+        page.get_by_text("this page has no access token", exact=False).first.wait_for()  # the reason is shown
+    finally:
+        viewer.stop()

@@ -15,6 +15,7 @@ import msgspec
 import pytest
 import viser
 import websockets
+from page import CAMERA
 
 from app.gui_guard import MAX_NUMBER, refusal
 
@@ -42,7 +43,10 @@ def bad_messages(uuids: list[str]) -> list[bytes]:
 
 
 async def send_all(port: int, frames: list[bytes]) -> None:
+    """From a page viser counts as connected (it sent a camera message first), so every check is reached."""
     async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as ws:
+        await ws.send(msgspec.msgpack.encode(CAMERA))
+        await asyncio.sleep(0.5)
         for frame in frames:
             await ws.send(frame)
         await asyncio.sleep(1.0)
@@ -62,10 +66,15 @@ async def connects(port: int) -> int:
     return received
 
 
+def shown(handle) -> tuple:
+    """What a message could switch on a control: its declared properties (viser 1.1.1: `_impl.props`)."""
+    return tuple(getattr(handle._impl.props, name, None) for name in ("disabled", "visible", "label", "min", "max", "options"))
+
+
 def test_refusal_keeps_only_a_sane_value_of_the_controls_own_type():
-    class State:
+    class State:  # as viser 1.1.1 keeps a control: its value, and its declared properties in `props`
         def __init__(self, value, options=None):
-            self.value, self.options = value, options
+            self.value, self.props = value, type("Props", (), {"options": options, "label": "x"})()
 
     assert refusal(State(10), {"value": 12}) is None and refusal(State(10), {"value": 12.5})
     assert refusal(State(10), {"value": 1e300}) and refusal(State(1.5), {"value": math.nan}) and refusal(State(1.5), {"value": True})
@@ -89,11 +98,12 @@ def test_bad_gui_updates_leave_the_viewer_working_for_everyone():
         time.sleep(1.0)
         gc.collect()
         before, t0 = rss_mib(), app.sync().frame.t
+        props = {uuid: shown(h) for uuid, h in handles.items()}
         asyncio.run(send_all(app.port, frames))
         time.sleep(1.0)
         assert app.refusals.count >= len(frames) - len(uuids)  # every one refused ({"value": 1.0} alone on a number control is fine)
-        for handle in handles.values():  # no property of any control was changed by them
-            assert not getattr(handle._impl, "disabled", False) and getattr(handle._impl, "label", "") != "pwned"
+        for uuid, h in handles.items():  # no property of any control was changed by them
+            assert shown(h) == props[uuid]
         assert asyncio.run(connects(app.port)) > 1000  # a new page gets the scene
         c = app.controls
         c.density.value = 500.0
@@ -130,25 +140,3 @@ def test_serving_beyond_loopback_warns_that_anyone_can_drive_the_run():
     finally:
         proc.terminate()
         proc.wait(timeout=30)
-
-
-def test_with_a_token_only_pages_that_show_it_may_drive_the_run():
-    """--token: a page opened without ?token=... watches, its control updates and its link's setup are
-    refused; the viewer's own controls still work."""
-    from app.args import ViewArgs
-    from app.main import start
-
-    with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0, token="s3cret"))
-    try:
-        density = app.controls.density
-        frame = msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": density._impl.uuid, "updates": {"value": 123.0}})
-        asyncio.run(send_all(app.port, [frame]))
-        snap = app.sync()
-        assert snap.density != pytest.approx(123.0) and app.refusals.count >= 1
-        app._apply_link(type("Page", (), {"client_id": 99})(), "?token=wrong&density=321")
-        assert app.sync().density != pytest.approx(321.0) and 99 not in app.drivers
-        app._apply_link(type("Page", (), {"client_id": 7})(), "?token=s3cret&density=321")
-        assert app.sync().density == pytest.approx(321.0) and 7 in app.drivers
-    finally:
-        app.stop()

@@ -184,7 +184,7 @@ def test_links_carry_the_preset_and_what_differs_from_it():
     assert "dt=" not in query  # unchanged from the preset
     commands, problems = parse_link(query + "&fixedDpr=0.5&bogus=1&dt=abc&scene=nowhere", ("drop",))
     assert commands[0] == ("scene", "drop") and ("density", 500.0) in commands
-    assert problems == ["scene 'nowhere' is not a preset", "unknown parameter 'bogus'", "dt = 'abc' is not a number"]
+    assert problems == ["'scene' given more than once (the first kept)", "unknown parameter 'bogus'", "dt = 'abc' is not a number"]
 
 
 def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):

@@ -27,6 +27,7 @@ from .recorder import RecordPanel
 from .scene import SceneView
 from .share import PROBE, copy_button_html, link_query, mesh_left_out, parse_link, probe_address
 from .upload import BodyFile
+from .upload_guard import guard_uploads
 
 TRIM_SECONDS = 5.0
 
@@ -66,6 +67,7 @@ class ViewerApp:
         self.drivers: set[int] = set()
         """Pages that showed the token (all pages when there is none)."""
         guard_gui(server.gui, self.refusals, self._may_drive if token else None)
+        self.uploads = guard_uploads(server.gui, self.body_file, loop)  # bytes capped as they arrive; the uploads folder bounded
         server.on_client_connect(self._connected)
         self._stopped = threading.Event()
         threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()

@@ -213,12 +213,12 @@ def printable(name: str, limit: int = 80) -> str:
 
 def _declared_counts(data: bytes, kind: str) -> tuple[int, int]:
     """(triangles, vertices) a mesh file declares, read cheaply before any parser allocates for them:
-    a binary STL's header count; an ASCII STL's 'facet' words; an OBJ's 'f' and 'v' lines (a polygon
+    a binary STL's header count; an ASCII STL's 'vertex' words (three a facet); an OBJ's 'f' and 'v' lines (a polygon
     line is at least one triangle); a PLY header's `element face N` and `element vertex N`. -1: unknown."""
     if kind == "stl":  # binary exactly when its length is what its header's count makes it (as trimesh reads it)
         if len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little"):
             return int.from_bytes(data[80:84], "little"), 0
-        return data.count(b"endfacet"), 0
+        return data.count(b"vertex") // 3, 0  # three corners a facet
     if kind == "obj":
         def lines(tag: bytes) -> int:
             return sum(data.count(b"\n" + tag + sep) + data.startswith(tag + sep) for sep in (b" ", b"\t"))

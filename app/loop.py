@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 import sim
+from sim.body import printable
 from sim.config import PARAMS, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
@@ -496,36 +497,47 @@ class SimLoop:
 
     def _cmd_mesh(self, value) -> None:
         """A checked mesh file (app/upload.py) becomes the body, with the running parameters; it starts
-        a quarter of its height above where it floats, so the user sees it settle."""
+        a quarter of its height above where it floats, so the user sees it settle. All or nothing: the
+        new simulation is built and started whole before it replaces the running one, which any
+        failure leaves running, with a note saying why."""
         path, unit = value
         old = self.settings
+        try:
+            new, note = self._mesh_simulation(path, unit)
+        except Exception as e:  # noqa: BLE001 -- a bad body (ConfigError, SimulationDiverged, 0/0 in strict mode): the old one runs on
+            why = str(e) if isinstance(e, sim.ConfigError) else f"{type(e).__name__}: {e}"
+            self._raise_notice(f"Mesh not loaded: {why[:300]}. The running body is unchanged.")
+            return
+        self.sim = new
+        self._tell_changes(old)
+        self._raise_notice(f"Loaded {printable(Path(path).name.rsplit('-', 1)[0])}: {describe_rest(new.body, new.params)}." + note)
+        self._diverged = False
+        self._epoch += 1
+        self._cost_unknown()
+
+    def _mesh_simulation(self, path: str, unit: str) -> tuple[sim.Simulation, str]:
+        """The running scene with the mesh as its body, set a quarter of its height above rest and
+        reset; and the note that goes with it."""
         change = {"body__shape": "mesh", "body__mesh": path, "body__mesh_unit": unit}
         note = ""
         if self.sim.scene.fluid.radiation != "none":  # a new body would need a boundary-element solve: not on this thread
             change["fluid__radiation"] = "none"
             note = " Radiation is off for it (solve its coefficients with `floatsim decay --mesh FILE --radiation bem`)."
-        try:
-            self.sim.update(**change)
-        except sim.ConfigError as e:
-            self._raise_notice(f"Mesh not loaded: {e}. The running body is unchanged.")
-            return
-        body = self.sim.body
-        R = initial_state(body, self.sim.scene).R_world_body
+        new = self._simulation(sim.with_overrides(self.sim.scene, **change))
+        body = new.body
+        R = initial_state(body, new.scene).R_world_body
         height = float(np.ptp((body.mesh_vertices @ R.T)[:, 2]))
         try:
-            z = at_rest(body, self.sim.params, R)[0] + 0.25 * height
+            z = at_rest(body, new.params, R)[0] + 0.25 * height
         except sim.ConfigError:  # it sinks: drop it from just under the surface, and say so
             z = -0.5 * height
             note += " It is heavier than the water it displaces: it sinks."
-        if self.sim.params.forces != old.forces:
-            note += f" Force model: {self.sim.params.forces} (exact on a mesh; the samples' midpoint rule would turn it slowly)."
-        self.sim.update(initial__position=(0.0, 0.0, z))
-        self.sim.reset()
-        self._tell_changes(old)
-        self._raise_notice(f"Loaded {Path(path).name.rsplit('-', 1)[0]}: {describe_rest(body, self.sim.params)}." + note)
-        self._diverged = False
-        self._epoch += 1
-        self._cost_unknown()
+        if new.params.forces != self.sim.params.forces:
+            note += f" Force model: {new.params.forces} (exact on a mesh; the samples' midpoint rule would turn it slowly)."
+        new.update(initial__position=(0.0, 0.0, z))
+        new.reset()
+        new.frame()  # what every publish asks of it: fails here, not on the next tick
+        return new, note
 
     def _tell_changes(self, old: Settings) -> None:
         new = self.settings

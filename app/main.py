@@ -28,6 +28,7 @@ from .recorder import RecordPanel
 from .scene import SceneView
 from .share import PROBE, copy_button_html, link_query, mesh_left_out, parse_link, probe_address
 from .upload import BodyFile
+from .upload_guard import guard_uploads
 
 TRIM_SECONDS = 5.0
 
@@ -69,6 +70,7 @@ class ViewerApp:
         guard_gui(server.gui, self.refusals, self._may_drive if token else None)
         if not share:  # a public tunnel only when the user asked for one (app/access.py)
             refuse_share(server, Refusals(lambda text: loop.post("notice", text), "request for a public share link"))
+        self.uploads = guard_uploads(server.gui, self.body_file, loop)  # bytes capped as they arrive; the uploads folder bounded
         server.on_client_connect(self._connected)
         self._stopped = threading.Event()
         threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()

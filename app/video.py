@@ -24,6 +24,11 @@ from .take import Take
 
 RENDER_PIXELS = 130_000
 SIZES = {"640x360": (360, 640), "960x540": (540, 960), "1280x720": (720, 1280)}
+FRAMES_PER_SECOND = {"640x360": 12.0, "960x540": 9.0, "1280x720": 6.0}
+"""Frames rendered and encoded per wall second at each size on a 2-core machine without a GPU (about; the start costs STARTUP_SECONDS)."""
+STARTUP_SECONDS = 5.0
+MAX_RENDER_SECONDS = 600.0
+"""The viewer's Export video refuses a take whose render would take longer than this (the CLI's --video has no limit)."""
 
 
 def check_video_tools() -> None:
@@ -38,6 +43,27 @@ def check_video_tools() -> None:
 
 def frame_count(take: Take, fps: float) -> int:
     return int(math.floor(take.duration * fps + 1e-9)) + 1
+
+
+def render_seconds(take: Take, fps: float, size: str) -> float:
+    """About how long rendering the take takes here, s (from its frame count)."""
+    return STARTUP_SECONDS + frame_count(take, fps) / FRAMES_PER_SECOND[size]
+
+
+def longest_take(fps: float = 30.0, size: str = "640x360", limit: float | None = None) -> float:
+    """The longest take, s, whose render stays within `limit` (MAX_RENDER_SECONDS)."""
+    return ((limit or MAX_RENDER_SECONDS) - STARTUP_SECONDS) * FRAMES_PER_SECOND[size] / fps
+
+
+def check_render_time(take: Take, fps: float, size: str, limit: float | None = None) -> None:
+    """ConfigError (one line, stating the limit) when rendering the take would take longer than `limit` (MAX_RENDER_SECONDS)."""
+    limit = limit or MAX_RENDER_SECONDS
+    estimate = render_seconds(take, fps, size)
+    if estimate > limit:
+        longest = longest_take(fps, size, limit)
+        raise ConfigError(f"this {take.duration:.1f} s take is {frame_count(take, fps):,} frames at {fps:g} fps, about "
+                          f"{estimate / 60:.1f} min to render here, over the limit of {limit / 60:.1f} min: record a take of at most "
+                          f"{longest:.0f} s, or make the video with `floatsim run ... --video FILE` (no limit there)")  # fmt: skip
 
 
 def render_video(take: Take, path: str | Path, fps: float = 30.0, size: str = "640x360", layers: FixedLayers | None = None,

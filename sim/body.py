@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -189,60 +190,150 @@ def make_box(extents, points_per_edge: int, mass: float, name: str = "box", exac
 MESH_FORMATS = ("stl", "obj", "ply")
 MAX_TRIANGLES = 200_000
 """Larger meshes are refused: their samples would not keep real time, nor fit a browser."""
+MAX_VERTICES = 3 * MAX_TRIANGLES
+"""More vertices than a mesh of MAX_TRIANGLES triangles can use: refused before parsing, like the triangles."""
+MAX_MESH_BYTES = 50_000_000
+"""A larger file is refused before it is read (a 200 000-triangle binary STL is 10 MB, an ASCII one about 50 MB)."""
 SIZE_RANGE = (1e-3, 500.0)
 """Plausible extents of a floating body, m: outside, the file is most likely in another unit."""
+MIN_FILL = 1e-6
+"""Least enclosed volume, as a fraction of the cube on the mesh's largest extent: below it the surface
+folds onto itself (two faces back to back enclose nothing) and no density or buoyancy can be had."""
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254, "ft": 0.3048}
+
+
+def printable(name: str, limit: int = 80) -> str:
+    """A file name fit to show and to build a file name from: control characters (a NUL byte, a
+    newline, an escape) become '?', at most `limit` characters."""
+    import unicodedata
+
+    text = "".join("?" if unicodedata.category(c).startswith("C") else c for c in str(name))
+    return text[:limit] or "mesh"
+
+
+def _declared_counts(data: bytes, kind: str) -> tuple[int, int]:
+    """(triangles, vertices) a mesh file declares, read cheaply before any parser allocates for them:
+    a binary STL's header count; an ASCII STL's 'vertex' words (three a facet); an OBJ's 'f' and 'v' lines (a polygon
+    line is at least one triangle); a PLY header's `element face N` and `element vertex N`. -1: unknown."""
+    if kind == "stl":  # binary exactly when its length is what its header's count makes it (as trimesh reads it)
+        if len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little"):
+            return int.from_bytes(data[80:84], "little"), 0
+        return data.count(b"vertex") // 3, 0  # three corners a facet
+    if kind == "obj":
+        def lines(tag: bytes) -> int:
+            return sum(data.count(b"\n" + tag + sep) + data.startswith(tag + sep) for sep in (b" ", b"\t"))
+
+        return lines(b"f"), lines(b"v")
+    if kind == "ply":
+        header = data[: data.find(b"end_header")] if b"end_header" in data[:65536] else b""
+        counts = dict(re.findall(rb"element\s+(face|vertex)\s+(\d+)", header))
+        return int(counts.get(b"face", -1)), int(counts.get(b"vertex", -1))
+    return -1, -1
+
+
+def _read(source, name: str, file_type: str | None) -> tuple[bytes, str]:
+    """The file's bytes and its format, refused when of another format or too large to read."""
+    if isinstance(source, (bytes, bytearray)):
+        kind, data = (file_type or Path(name).suffix.lstrip(".")).lower(), bytes(source)
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise ConfigError(f"mesh file not found: {printable(str(source), 200)}")
+        kind = path.suffix.lstrip(".").lower()
+        if kind in MESH_FORMATS and path.stat().st_size > MAX_MESH_BYTES:
+            raise ConfigError(f"'{name}' is {path.stat().st_size / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)")
+        data = path.read_bytes() if kind in MESH_FORMATS else b""
+    if kind not in MESH_FORMATS:
+        raise ConfigError(f"'{name}': mesh files must be {', '.join(f'.{f}' for f in MESH_FORMATS)}, got '.{printable(kind, 12)}'")
+    if len(data) > MAX_MESH_BYTES:
+        raise ConfigError(f"'{name}' is {len(data) / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)")
+    return data, kind
 
 
 def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None = None):
     """A closed triangle mesh from a path or bytes (STL, OBJ or PLY), scaled from `unit` to metres,
-    checked: readable, one mesh, at most MAX_TRIANGLES, watertight, of a plausible size.
-    ConfigError with one line saying what is wrong otherwise."""
+    checked: readable, at most MAX_TRIANGLES (counted before parsing where the format says), finite,
+    of a plausible size, watertight, one piece, enclosing a volume. ConfigError with one line saying
+    what is wrong otherwise."""
     import io
 
     import trimesh
 
+    name = printable(name)
     if unit not in UNITS:
-        raise ConfigError(f"mesh unit must be one of {', '.join(UNITS)}, got {unit!r}")
-    if isinstance(source, (bytes, bytearray)):
-        kind = (file_type or Path(name).suffix.lstrip(".")).lower()
-        data = io.BytesIO(source)
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise ConfigError(f"mesh file not found: {source}")
-        kind, data = path.suffix.lstrip(".").lower(), str(path)
-    if kind not in MESH_FORMATS:
-        raise ConfigError(f"'{name}': mesh files must be {', '.join(f'.{f}' for f in MESH_FORMATS)}, got '.{kind}'")
+        raise ConfigError(f"mesh unit must be one of {', '.join(UNITS)}, got {printable(unit, 20)!r}")
+    data, kind = _read(source, name, file_type)
+    triangles, vertices = _declared_counts(data, kind)
+    if triangles > MAX_TRIANGLES or vertices > MAX_VERTICES:
+        what = f"{triangles:,} faces" if triangles > MAX_TRIANGLES else f"{vertices:,} vertices"
+        raise ConfigError(f"'{name}' has {what}, more than a mesh of {MAX_TRIANGLES:,} triangles needs: simplify it first (e.g. in Blender)")
     try:
-        mesh = trimesh.load(data, file_type=kind, force="mesh", process=True)
+        mesh = trimesh.load(io.BytesIO(data), file_type=kind, force="mesh", process=False)
     except Exception as e:  # noqa: BLE001 -- trimesh raises many types for unreadable files
-        raise ConfigError(f"'{name}' is not a mesh: not readable as {kind.upper()} ({type(e).__name__}: {str(e)[:80]})") from None
+        why = printable(f"{type(e).__name__}: {str(e)[:80]}", 120)
+        raise ConfigError(f"'{name}' is not a mesh: not readable as {kind.upper()} ({why})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise ConfigError(f"'{name}' holds no triangles: not a mesh")
     if len(mesh.faces) > MAX_TRIANGLES:
         raise ConfigError(f"'{name}' has {len(mesh.faces):,} triangles, more than {MAX_TRIANGLES:,}: simplify it first (e.g. in Blender)")
+    if not np.isfinite(mesh.vertices[mesh.referenced_vertices]).all():
+        raise ConfigError(f"'{name}' has vertices with coordinates that are not finite numbers (nan or inf)")
+    _check_size(mesh, name, unit)
+    mesh.process()  # merges the corners triangles share (an STL repeats them): needed to tell closed from open
+    check_closed(mesh, name)
+    mesh.apply_scale(UNITS[unit])
+    return mesh
+
+
+def _check_size(mesh, name: str, unit: str) -> None:
+    """Before merging vertices (which would fuse a tiny body into a point): a size in metres within SIZE_RANGE."""
+    size = float(mesh.extents.max()) * UNITS[unit]
+    lo, hi = SIZE_RANGE
+    if size < lo:
+        hint = "in another unit? give a larger one" if unit != "ft" else "really this small?"
+        raise ConfigError(f"'{name}' is too small: {size:.4g} m across in {unit}, less than {lo:g} m: is the file {hint}")
+    if size > hi:
+        raise ConfigError(f"'{name}' is {size:.4g} m across in {unit}, more than {hi:g} m: is the file in millimetres? give the unit mm")
+
+
+def check_closed(mesh, name: str) -> None:
+    """ConfigError unless the mesh is one closed surface that encloses a volume."""
+    import trimesh
+
     if not mesh.is_watertight:
         raise ConfigError(f"'{name}' is not watertight (it has holes or open edges): a floating body needs a closed surface")
-    mesh.apply_scale(UNITS[unit])
-    size = float(mesh.extents.max())
-    lo, hi = SIZE_RANGE
-    if not lo <= size <= hi:
-        hint = "millimetres? give the unit mm" if size > hi else "another unit? give a larger one"
-        raise ConfigError(f"'{name}' is {size:.4g} m across in {unit}, outside {lo:g}-{hi:g} m: is the file in {hint}")
-    return mesh
+    pieces = len(trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(mesh.faces)), min_len=1))
+    if pieces > 1:
+        raise ConfigError(f"'{name}' is {pieces} separate closed surfaces, not one: a floating body must be a single closed surface "
+                          "(join overlapping parts into one, e.g. a boolean union in Blender)")  # fmt: skip
+    with np.errstate(all="ignore"):  # trimesh divides by the volume for the centre of mass: 0/0 when there is none
+        volume, size = abs(float(mesh.volume)), float(mesh.extents.max())
+    if not volume > MIN_FILL * size**3:  # nan too
+        raise ConfigError(f"'{name}' encloses no volume (its faces lie back to back, or nearly): a floating body needs a solid inside")
+
+
+def check_body(body: Body) -> Body:
+    """ConfigError unless the body has a positive volume and mass and finite, positive moments of inertia
+    (anything else gives a density or an angular velocity of 0/0 once it runs)."""
+    numbers = np.concatenate([[body.volume, body.mass, body.radius], body.inertia])
+    if not (np.isfinite(numbers).all() and body.volume > 0 and body.mass > 0 and body.radius > 0 and (body.inertia > 0).all()):
+        raise ConfigError(f"mesh '{body.name}' gives no usable body (volume {body.volume:.3g} m^3, mass {body.mass:.3g} kg, "
+                          f"moments of inertia {', '.join(f'{i:.3g}' for i in body.inertia)} kg m^2): it needs a solid, closed surface")  # fmt: skip
+    return body
 
 
 def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m",
                    exact: bool = False) -> Body:  # fmt: skip
     """Samples at triangle centroids after subdividing to at least `samples` triangles (one per
-    triangle when the mesh already has more); the count used is `Body.n_samples`."""
+    triangle when the mesh already has more); the count used is `Body.n_samples`. ConfigError (one
+    line) for a mesh that is not one closed surface enclosing a volume, or that gives no usable body."""
     import trimesh
 
+    name = printable(name)
     if not isinstance(mesh, trimesh.Trimesh):
         mesh = load_mesh(mesh, Path(mesh).name, unit)
-    elif not mesh.is_watertight:
-        raise ConfigError(f"mesh '{name}' is not watertight: a floating body needs a closed surface")
+    else:
+        check_closed(mesh, name)
     if mesh.volume < 0:
         mesh = mesh.copy()
         mesh.invert()
@@ -263,8 +354,10 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
     normals = cross[keep] / (2 * area[keep, None])
     volume = float(mesh.volume)
     total = float(mass) if mass is not None else float(density) * volume
+    if not (np.isfinite(total) and total > 0):  # before the principal axes, which a nan would stop with LinAlgError
+        raise ConfigError(f"mesh '{name}' gives no usable body: mass {total:.3g} kg (it needs a positive mass or density)")
     cells = tri[keep][:, [0, 1, 2, 2]]  # each sample's own triangle, as a polygon of four corners
-    return _assemble(tri.mean(axis=1)[keep], normals, area[keep], cells, total, volume, verts, faces, name, exact)
+    return check_body(_assemble(tri.mean(axis=1)[keep], normals, area[keep], cells, total, volume, verts, faces, name, exact))
 
 
 def make_body(cfg: BodyConfig, base_dir: str = ".", exact_inertia: bool = False) -> Body:

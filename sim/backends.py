@@ -89,12 +89,40 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
     return stats
 
 
-def _ignore_ctrl_c() -> None:
-    """Workers leave Ctrl-C to the parent, which stops them."""
+def _start_worker(parent: int) -> None:
+    """Workers leave Ctrl-C to the parent, which stops them, and die with it."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with(parent)
     _warm()
+
+
+def _die_with(parent: int) -> None:
+    """End this worker when the process `parent` ends, even by SIGKILL (which leaves it no time to stop its
+    workers): on Linux the kernel sends SIGKILL (prctl PR_SET_PDEATHSIG), elsewhere a thread watches os.getppid()."""
+    import signal
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # 1: PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="floatsim-parent-watch", daemon=True).start()
 
 
 def _check(stop) -> None:
@@ -113,7 +141,8 @@ def _run_local(sweep, todo, done, n, stop=None) -> None:
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     if method == "fork":
         _warm()
-    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_ignore_ctrl_c)
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_start_worker,
+                               initargs=(os.getpid(),))
     try:
         futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
         pending = set(futures)

@@ -17,6 +17,8 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import sys
+import tempfile
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +29,13 @@ from .errors import ConfigError
 
 DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
 SHIPPED = Path(__file__).resolve().parent.parent / "assets" / "coefficients"
+CACHE_ENV = "FLOATSIM_BEM_CACHE"
+"""A folder to cache solved coefficients in, instead of $XDG_CACHE_HOME/floatsim/bem (~/.cache/floatsim/bem)."""
+UNREADABLE = (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError, zipfile.BadZipFile)
+
+
+class MissingSolver(ConfigError):
+    """Capytaine is not installed."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,16 +57,57 @@ class Coefficients:
     """How many panels the wet surface had."""
 
     def save(self, path: Path) -> None:
+        """Written to a new temporary file beside it (mkstemp: O_EXCL, so never through a link someone placed),
+        then renamed over it: never a half-written cache file."""
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp.npz")
-        np.savez_compressed(tmp, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
-                            rho=self.rho, depth=self.depth, panels=self.panels)  # fmt: skip
-        os.replace(tmp, path)  # never a half-written cache file
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.npz")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
+                                    rho=self.rho, depth=self.depth, panels=self.panels)  # fmt: skip
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
 
     @classmethod
     def load(cls, path: Path) -> Coefficients:
-        with np.load(path) as f:
-            return cls(f["omega"], f["added_mass"], f["damping"], f["added_mass_inf"], float(f["rho"]), float(f["depth"]), int(f["panels"]))
+        """The coefficients in `path`, checked (ValueError saying what is wrong with the file)."""
+        try:
+            with np.load(path) as f:
+                c = cls(f["omega"], f["added_mass"], f["damping"], f["added_mass_inf"], float(f["rho"]), float(f["depth"]), int(f["panels"]))
+        except UNREADABLE as e:
+            raise ValueError(f"not a coefficients file ({type(e).__name__})") from None
+        check(c)
+        return c
+
+
+def check(c: Coefficients) -> None:
+    """ValueError unless `c` can be used: shapes that agree with the frequency grid (6x6 per frequency), finite
+    real numbers, frequencies positive and increasing, added mass with a positive diagonal (translations
+    strictly; rotations down to -1e-4 of the largest diagonal entry, a sphere's numerical noise), and damping
+    symmetric (to 10 % of each frequency's largest entry) and positive semi-definite (to 2 %): passive, the
+    body only gives energy to the waves. The shipped files pass with room to spare (3 % and 0.2 % at worst)."""
+    w, A, B, Ainf = (np.asarray(a) for a in (c.omega, c.added_mass, c.damping, c.added_mass_inf))
+    if w.ndim != 1 or len(w) < 3:
+        raise ValueError(f"{w.size} frequencies, need at least 3")
+    n = len(w)
+    if A.shape != (n, 6, 6) or B.shape != (n, 6, 6) or Ainf.shape != (6, 6):
+        raise ValueError(f"added mass {A.shape}, damping {B.shape}, A_inf {Ainf.shape}: need ({n}, 6, 6) for {n} frequencies and (6, 6)")
+    if not all(np.isrealobj(a) and a.dtype.kind in "fiu" for a in (w, A, B, Ainf)):
+        raise ValueError("not arrays of real numbers")
+    if not all(np.isfinite(a).all() for a in (w, A, B, Ainf)) or not (math.isfinite(c.rho) and c.rho > 0 and c.depth > 0):
+        raise ValueError("numbers that are not finite (or rho, depth not positive)")
+    if w[0] <= 0 or np.any(np.diff(w) <= 0):
+        raise ValueError("frequencies not positive and increasing")
+    diag = np.concatenate([np.diagonal(A, axis1=1, axis2=2), np.diag(Ainf)[None]])
+    if diag[:, :3].min() <= 0 or diag[:, 3:].min() < -1e-4 * diag.max():
+        raise ValueError(f"added mass with a diagonal entry <= 0 ({diag.min():.3g})")
+    scale = np.abs(B).max(axis=(1, 2))
+    if np.any(np.abs(B - B.transpose(0, 2, 1)).max(axis=(1, 2)) > 0.1 * scale):
+        raise ValueError("damping matrices not symmetric")
+    if np.any(np.linalg.eigvalsh(0.5 * (B + B.transpose(0, 2, 1))).min(axis=1) < -0.02 * scale):
+        raise ValueError("damping not positive semi-definite (the body would draw energy from the waves)")
 
 
 def default_frequencies(length: float, g: float = 9.81, n: int = 60) -> np.ndarray:
@@ -90,31 +140,60 @@ def cache_key(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, dep
 
 
 def user_cache() -> Path:
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV])
     root = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
     return Path(root) / "floatsim" / "bem"
+
+
+def note(text: str) -> None:
+    print(f"floatsim: {text}", file=sys.stderr, flush=True)
 
 
 def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf,
                            omega: np.ndarray | None = None, panel: float | None = None, progress: bool = True) -> Coefficients:  # fmt: skip
     """A(omega), B(omega), A_inf of the closed mesh (world frame, at rest, centre of mass at the
     origin) floating in water of density rho: from the shipped files or the user's cache when they
-    hold this case, else solved by Capytaine (and cached)."""
+    hold this case, else solved by Capytaine (and cached). A file that fails `check` counts as absent, with a note."""
     vertices = np.asarray(vertices, float)
     size = float(np.ptp(vertices, axis=0).max())
     panel = panel or size / 8
     wv, wf = wet_mesh(vertices, faces, panel)
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     key = cache_key(wv, wf, rho, g, depth, omega)
-    for folder in (SHIPPED, user_cache()):
-        path = folder / f"{key}.npz"
+    cached = user_cache() / f"{key}.npz"
+    bad = []
+    for path in (SHIPPED / f"{key}.npz", cached):
         if path.exists():
             try:
                 return Coefficients.load(path)
-            except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):  # damaged: solve again (and rewrite it)
-                continue
-    result = solve(wv, wf, rho, g, depth, omega, progress)
-    result.save(user_cache() / f"{key}.npz")
+            except ValueError as e:
+                bad.append(f"{path} is not usable ({e})")
+    try:
+        if bad:
+            import capytaine  # noqa: F401  (said before a solve of minutes starts, or instead of it)
+
+            note(f"note: {bad[0]}: solving again")
+        result = solve(wv, wf, rho, g, depth, omega, progress)
+    except (ImportError, MissingSolver):
+        raise MissingSolver(f"radiation = 'bem': {bad[0]} and solving again needs Capytaine: pip install -e \".[bem]\"" if bad else
+                            f"radiation = 'bem' needs the boundary-element solver Capytaine for this body (or its coefficients in {cached}): "
+                            'pip install -e ".[bem]"') from None  # fmt: skip
+    keep(result, cached)
     return result
+
+
+def keep(result: Coefficients, path: Path) -> None:
+    """Cache a fresh solve; one that fails the check, or a cache that cannot be written, costs a warning, not the run."""
+    try:
+        check(result)
+    except ValueError as e:
+        note(f"warning: Capytaine's coefficients for this body fail the check ({e}): used for this run, not cached")
+        return
+    try:
+        result.save(path)
+    except OSError as e:
+        note(f"warning: cannot cache the radiation coefficients in {path.parent} ({e.strerror or e}): this run goes on, the next one solves again")
 
 
 def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True) -> Coefficients:
@@ -123,7 +202,7 @@ def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: 
     try:
         import capytaine as cpt
     except ImportError:
-        raise ConfigError("radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\"") from None
+        raise MissingSolver("radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\"") from None
     import logging
 
     logging.getLogger("capytaine").setLevel(logging.ERROR)  # its resolution warnings concern the top of the grid, where B has died out

@@ -4,6 +4,7 @@ as a Parquet file as it completes; `--resume` finishes only what is missing."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
@@ -24,6 +25,7 @@ from .progress import progress_bar
 
 MANIFEST = "_manifest.json"
 """Names starting with '_' are skipped by pyarrow/pandas when reading the folder as one table."""
+HISTORY = "_history"
 
 
 @dataclass
@@ -60,7 +62,7 @@ class SweepArgs:
     chunk: int | None = None
     """Cases per chunk (default 64; cases that cannot share an ensemble never share a chunk)."""
     resume: bool = False
-    """Finish a sweep in --out: run only the chunks without a results file."""
+    """Finish a sweep in --out: run only the chunks not done (a chunk file missing, unreadable or unlike its checksum in the manifest runs again)."""
     history_every: int | None = None
     """Also keep each case's pose every K steps (in --out/_history/)."""
     progress: bool | None = None
@@ -157,27 +159,23 @@ def sweep(args: SweepArgs) -> int:
     scenes = [case_scene(base, c) for c in cases]
     plan = chunks(spec, scenes)
     out = Path(args.out)
-    manifest = out / MANIFEST
     key = spec.key()
-    if out.exists() and not out.is_dir():
-        raise ConfigError(f"--out {out}: is a file, give a folder")
-    if manifest.exists() and any(out.glob("chunk-*.parquet")):
-        try:
-            old = json.loads(manifest.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError, OSError):
-            old = {}
-        if not args.resume:
-            raise ConfigError(f"{out} already holds a sweep's results: add --resume to finish it, or choose another --out")
-        if old.get("key") != key:
-            raise ConfigError(f"{out} holds a different sweep (another grid, scene or settings): --resume needs the same one")
+    files = open_folder(out, key, args.resume)
+    todo = [(cid, idx) for cid, idx in enumerate(plan)]
+    if files is not None:  # resuming: only chunks whose files check out count as done
+        todo, files = verify(out, plan, files, bool(spec.history_every))
+    files = files or {}
+    info = {"key": key, "scene": spec.scene, "params": [[n, list(v)] for n, v in spec.params], "set": [[k, v] for k, v in spec.overrides],
+            "settle": spec.settle, "chunk": spec.chunk, "cases": len(cases), "chunks": plan, "history_every": spec.history_every}  # fmt: skip
+
+    def save_manifest() -> None:
+        write_text(out / MANIFEST, json.dumps({**info, "files": files}, default=str))  # compact: rewritten after every chunk
+
     try:
         out.mkdir(parents=True, exist_ok=True)
-        write_text(manifest, json.dumps({"key": key, "scene": spec.scene, "params": [[n, list(v)] for n, v in spec.params],
-                                    "set": [[k, v] for k, v in spec.overrides], "settle": spec.settle, "chunk": spec.chunk,
-                                    "cases": len(cases), "chunks": plan, "history_every": spec.history_every}, indent=1, default=str))  # fmt: skip
+        save_manifest()
     except OSError as e:
         raise ConfigError(f"--out {out}: cannot write there ({e.strerror})") from None
-    todo = [(cid, idx) for cid, idx in enumerate(plan) if not (out / f"chunk-{cid:05d}.parquet").exists()]
     skipped = len(plan) - len(todo)
     print(f"sweep {key}: {len(cases)} cases of '{base.name}' in {len(plan)} chunks"
           + (f" ({skipped} already done, {len(todo)} to run)" if skipped else "") + f", backend {backend}", flush=True)  # fmt: skip
@@ -188,9 +186,11 @@ def sweep(args: SweepArgs) -> int:
 
     def done(cid: int, rows: dict, history: dict | None) -> None:
         nonlocal ran
-        write(out / f"chunk-{cid:05d}.parquet", rows)
+        name = chunk_name(cid)
+        files[name] = write(out / name, rows)
         if history is not None:
-            write(out / "_history" / f"chunk-{cid:05d}.parquet", history)
+            files[f"{HISTORY}/{name}"] = write(out / HISTORY / name, history)
+        save_manifest()  # a chunk counts as done once its checksums are recorded here
         statuses.update(rows["status"])
         ran += 1
         bar.update(len(rows["case"]))
@@ -213,6 +213,97 @@ def sweep(args: SweepArgs) -> int:
     return 3 if statuses.get("diverged") else 0
 
 
+def chunk_name(cid: int) -> str:
+    return f"chunk-{cid:05d}.parquet"
+
+
+def open_folder(out: Path, key: str, resume: bool) -> dict | None:
+    """None for a fresh start; with --resume, the checksums the manifest recorded. Refuses a file, a folder
+    of chunks that cannot be told apart from another sweep's, and a sweep that would mix with another."""
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out}: is a file, give a folder")
+    if not (any(out.glob("chunk-*.parquet")) or any(out.glob(f"{HISTORY}/chunk-*.parquet"))):
+        return None  # nothing done yet: any old manifest is simply replaced
+    manifest = out / MANIFEST
+    if not manifest.exists():
+        raise ConfigError(f"{out} holds chunk files but no {MANIFEST}: they cannot be checked against this sweep, so they are not mixed with it; "
+                          "choose another --out (or empty the folder)")  # fmt: skip
+    old = read_manifest(manifest)
+    if not resume:
+        raise ConfigError(f"{out} already holds a sweep's results: add --resume to finish it, or choose another --out")
+    if old["key"] != key:
+        raise ConfigError(f"{out} holds a different sweep (another grid, scene or settings): --resume needs the same one")
+    return old["files"]
+
+
+def read_manifest(path: Path) -> dict:
+    """The manifest's key and per-file records ({name: [sha256, rows]}), or a one-line error saying it is damaged."""
+    try:
+        data = json.loads(path.read_text())
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot read it ({e.strerror})") from None
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        data = None
+    if not isinstance(data, dict) or not isinstance(data.get("key"), str) or not isinstance(data.get("files", {}), dict):
+        raise ConfigError(f"{path} is damaged (not a floatsim sweep manifest), so the chunks beside it cannot be checked: "
+                          f"choose another --out, or delete {path.parent} to start over")  # fmt: skip
+    return {"key": data["key"], "files": data.get("files", {})}
+
+
+def verify(out: Path, plan: list[list[int]], files: dict, history: bool) -> tuple[list, dict]:
+    """(chunks to run, records of the chunks kept). A chunk is kept when each of its files (results and, if
+    kept, history) reads as Parquet, has the rows recorded (the results: one per case) and the checksum
+    recorded when it was written; a bad one is deleted and run again, with a note."""
+    todo, kept, bad = [], {}, 0
+    for cid, indices in enumerate(plan):
+        names = [chunk_name(cid)] + ([f"{HISTORY}/{chunk_name(cid)}"] if history else [])
+        if not any((out / n).exists() for n in names):
+            todo.append((cid, indices))  # never written
+            continue
+        problems = [(n, why) for n in names if (why := check_chunk(out / n, files.get(n), len(indices) if n == names[0] else None))]
+        if not problems:
+            kept.update({n: files[n] for n in names})
+            continue
+        for n in names:
+            (out / n).unlink(missing_ok=True)
+        todo.append((cid, indices))
+        bad += 1
+        if bad <= 10:
+            name, why = problems[0]
+            print(f"floatsim: note: {out / name}: {why}; running chunk {cid} again", file=sys.stderr)
+    if bad > 10:
+        print(f"floatsim: note: {bad - 10} more damaged chunks run again", file=sys.stderr)
+    return todo, kept
+
+
+def check_chunk(path: Path, record, rows: int | None) -> str | None:
+    """Why a chunk file cannot be trusted, or None."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if not path.exists():
+        return "missing"
+    if not (isinstance(record, list) and len(record) == 2):
+        return "no checksum in the manifest (written by a run that was killed, or by an older floatsim)"
+    try:
+        found = pq.read_metadata(path).num_rows
+    except (OSError, ValueError, pa.ArrowException):
+        return "not readable as Parquet (truncated, empty or damaged)"
+    if found != record[1] or (rows is not None and found != rows):
+        return f"{found} rows where {record[1] if rows is None else rows} were written"
+    if digest(path) != record[0]:
+        return "its checksum differs from the one recorded when it was written"
+    return None
+
+
+def digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def write_text(path: Path, text: str) -> None:
     """A text file, whole or not at all."""
     partial = path.with_suffix(".partial")
@@ -220,13 +311,17 @@ def write_text(path: Path, text: str) -> None:
     os.replace(partial, path)
 
 
-def write(path: Path, columns: dict) -> None:
-    """A Parquet file, whole or not at all (written aside, then renamed): a killed run leaves no half file."""
+def write(path: Path, columns: dict) -> list:
+    """A Parquet file, whole or not at all (written aside, then renamed): a killed run leaves no half file.
+    Returns its record for the manifest: [sha256 of its bytes, rows]."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_suffix(".partial")
-    pq.write_table(pa.table(columns), partial)
+    table = pa.table(columns)
+    pq.write_table(table, partial)
+    record = [digest(partial), table.num_rows]
     os.replace(partial, path)
+    return record
 

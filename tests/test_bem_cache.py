@@ -1,0 +1,115 @@
+"""The BEM cache trusts nothing it finds (issue 23, item 8), through `python -m sim run`: a damaged,
+wrongly shaped or non-passive coefficients file is refused in one line naming it (Capytaine is blocked
+here: no solve of tens of seconds), or solved again when a solver is there; the cache's temporary file
+is never written through a link someone placed; an unwritable cache costs a warning, not the run.
+The solver, where one is needed, is a stand-in returning the shipped sphere's coefficients."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim.bem import SHIPPED, Coefficients
+
+ROOT = Path(__file__).resolve().parent.parent
+RUN = ["run", "--scene", "sphere", "--density", "400", "--t-end", "0.1"]
+"""The sphere preset made lighter: a rest pose whose coefficients are not shipped, so the cache is asked."""
+FAKE_SOLVE = ("import sys, sim.bem as bem\n"
+              "bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '53091b72e92df34a7ed0.npz')\n"
+              "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def no_solver(tmp_path_factory) -> Path:
+    """A folder that, first on the path, makes `import capytaine` fail."""
+    folder = tmp_path_factory.mktemp("block")
+    (folder / "capytaine").mkdir()
+    (folder / "capytaine" / "__init__.py").write_text("raise ImportError('blocked by the test: no BEM solve here')\n")
+    return folder
+
+
+def cli(cache: Path, solver: Path | None = None) -> subprocess.CompletedProcess:
+    """`python -m sim run` with the BEM cache in `cache`; Capytaine blocked by `solver` (a folder), else the stand-in solve."""
+    env = {**os.environ, "FLOATSIM_BEM_CACHE": str(cache), "PYTHONPATH": os.pathsep.join(([str(solver)] if solver else []) + [str(ROOT)])}
+    command = [sys.executable, "-m", "sim", *RUN] if solver else [sys.executable, "-c", FAKE_SOLVE, *RUN]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120, env=env)
+
+
+@pytest.fixture(scope="module")
+def key_name(no_solver, tmp_path_factory) -> str:
+    """The cache file name of RUN's body, from the line that says where its coefficients would be."""
+    done = cli(tmp_path_factory.mktemp("empty"), no_solver)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    return Path(re.search(r"its coefficients in (\S+\.npz)", done.stderr).group(1)).name
+
+
+def sphere(**changes) -> Coefficients:
+    c = Coefficients.load(SHIPPED / "53091b72e92df34a7ed0.npz")
+    fields = {k: getattr(c, k) for k in ("omega", "added_mass", "damping", "added_mass_inf", "rho", "depth", "panels")}
+    return Coefficients(**{**fields, **changes})
+
+
+GOOD = sphere()
+DAMAGED = {
+    "garbage": lambda p: p.write_bytes(b"not a zip file\n" * 40),
+    "empty file": lambda p: p.write_bytes(b""),
+    "empty arrays": lambda p: sphere(omega=np.empty(0), added_mass=np.empty((0, 6, 6)), damping=np.empty((0, 6, 6))).save(p),
+    "wrong shape": lambda p: sphere(added_mass=GOOD.added_mass[:, :5, :5]).save(p),
+    "zero added mass": lambda p: sphere(added_mass=0 * GOOD.added_mass, added_mass_inf=0 * GOOD.added_mass_inf).save(p),
+    "negative damping": lambda p: sphere(damping=-GOOD.damping).save(p),
+    "not a number": lambda p: sphere(damping=np.where(GOOD.damping > 1.0, np.nan, GOOD.damping)).save(p),
+    "frequencies out of order": lambda p: sphere(omega=GOOD.omega[::-1].copy()).save(p),
+}
+
+
+@pytest.mark.parametrize("damage", list(DAMAGED))
+def test_a_bad_cache_file_is_refused_in_one_line_naming_it(damage, key_name, no_solver, tmp_path):
+    path = tmp_path / key_name
+    DAMAGED[damage](path)
+    done = cli(tmp_path, no_solver)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"{path} is not usable" in done.stderr and "solving again needs Capytaine" in done.stderr
+
+
+def test_a_good_cache_file_is_used(key_name, no_solver, tmp_path):
+    GOOD.save(tmp_path / key_name)
+    done = cli(tmp_path, no_solver)
+    assert done.returncode == 0 and "floatsim:" not in done.stderr and "t = 0.1 s:" in done.stdout, done.stderr
+
+
+def test_a_bad_cache_file_is_solved_again_and_replaced(key_name, tmp_path):
+    path = tmp_path / key_name
+    DAMAGED["negative damping"](path)
+    done = cli(tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert f"note: {path} is not usable (damping not positive semi-definite" in done.stderr and "solving again" in done.stderr
+    np.testing.assert_array_equal(Coefficients.load(path).damping, GOOD.damping)
+
+
+def test_a_link_at_the_old_temporary_name_is_not_written_through(key_name, tmp_path):
+    cache, victim = tmp_path / "cache", tmp_path / "victim.txt"
+    cache.mkdir()
+    victim.write_text("precious")
+    link = cache / key_name.replace(".npz", ".tmp.npz")
+    link.symlink_to(victim)
+    done = cli(cache)
+    assert done.returncode == 0, done.stderr
+    assert victim.read_text() == "precious" and link.is_symlink()
+    path = cache / key_name
+    assert not path.is_symlink() and Coefficients.load(path).panels == GOOD.panels
+    assert sorted(p.name for p in cache.iterdir()) == sorted([key_name, link.name])  # no temporary left behind
+
+
+def test_an_unwritable_cache_costs_a_warning_not_the_run(tmp_path):
+    (tmp_path / "file").write_text("")
+    done = cli(tmp_path / "file" / "bem")  # a folder under a file: cannot be made, even by root
+    assert done.returncode == 0, done.stderr
+    warnings = [line for line in done.stderr.splitlines() if line.startswith("floatsim:")]
+    assert len(warnings) == 1 and "warning: cannot cache the radiation coefficients" in warnings[0] and "Traceback" not in done.stderr
+    assert "t = 0.1 s:" in done.stdout and "E_rad" in done.stdout  # the run went on with the solved coefficients

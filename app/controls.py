@@ -73,6 +73,8 @@ class Controls:
             return
         if field == "scene" and value not in handle.options:
             return
+        if handle.value == value:
+            return  # already shown: no echo to the pages (one dragging this slider would jump)
         if hasattr(handle, "max") and isinstance(value, (int, float)):  # sliders: widen the range rather than refuse the value
             handle.max = max(handle.max, value)
             handle.min = min(handle.min, value)

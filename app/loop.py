@@ -235,6 +235,7 @@ class SimLoop:
                         barriers.append(value)
                     elif name != "_wake":
                         self._apply(name, value)
+                self._show_used({name for name, _ in commands if name in CONTROLLED})
                 now = time.monotonic()
                 if now >= next_tick:
                     next_tick = now + self.period
@@ -406,6 +407,18 @@ class SimLoop:
             except Exception as e:  # noqa: BLE001
                 self._log("GUI update", e)
 
+    def _show_used(self, keys: set[str]) -> None:
+        """After a batch of commands, every control it touched shows the value the run uses (a clamp, a
+        refusal): unless a newer command for it is already queued. Each command's own write-back raced
+        the page's next update (a clamp written after the next valid value showed it, which then ran
+        unseen), so this runs once per batch, after the last command, and the GUI writes only a change."""
+        if not keys:
+            return
+        with self._queue.mutex:
+            pending = {name for name, _ in self._queue.queue}
+        for key in keys - pending:
+            self._tell(key, self.settings.value(key))
+
     def _apply(self, name: str, value: Any) -> None:
         handler = getattr(self, f"_cmd_{name}", None)
         if handler is None and name in CONTROLLED:
@@ -437,8 +450,6 @@ class SimLoop:
         except sim.ConfigError as e:
             self._raise_notice(f"{param.label or param.what}: {e}; kept {param.describe(current)}.")
             used = current
-        if note or used != value:
-            self._tell(param.key, used)
         if param.key in ("points_per_edge", "samples"):
             self._epoch += 1  # a rebuilt body: new history for the plots
         if self.sim.body is not old_body or self.sim.integrator is not old_integrator:

@@ -57,7 +57,11 @@ class Page:
         return self.control(label)["value"]
 
     async def update(self, label: str, value) -> None:
-        await self.send({"type": "GuiUpdateMessage", "uuid": self.control(label)["uuid"], "updates": {"value": value}})
+        """What a browser does when its user sets a control: it shows the value and sends it (viser echoes it to
+        the other pages only)."""
+        control = self.control(label)
+        control["value"] = value
+        await self.send({"type": "GuiUpdateMessage", "uuid": control["uuid"], "updates": {"value": value}})
 
     async def read(self, seconds: float, until=None) -> None:
         """Take in what the server sends for `seconds` (or until `until(self)` holds)."""

@@ -200,3 +200,29 @@ def test_a_link_with_no_setting_restarts_nobody(query):
 
         epoch = asyncio.run(scenario())
         assert app.sync().epoch == epoch
+
+
+def test_a_burst_of_updates_leaves_every_control_showing_what_runs():
+    """Out-of-range values each followed at once by a valid one (a fast drag, or a hostile page): the clamp of
+    the first was written back after the second already showed, so pages showed the clamp while the run used
+    the second value. After the burst a fresh page shows exactly what the run uses."""
+    pairs = [("Period", 30000.0, 30.0), ("Damping", -1.0, 5e4), ("Density", 1e11, 450.0), ("Tp", 0.01, 12.0)] * 12
+    with viewer() as app:
+
+        async def burst():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Mesh unit" in p.controls)
+                await page.camera()
+                await page.read(0.5)
+                for label, bad, good in pairs:
+                    await page.update(label, bad)
+                    await page.update(label, good)
+                await page.read(1.0)
+                return page
+
+        page = asyncio.run(burst())
+        snap = app.sync()
+        shown = asyncio.run(fresh_page(app.port))
+        for label, key, _bad, good in ((p[0], p[0].lower(), *p[1:]) for p in pairs[:4]):
+            assert snap.settings.value(key) == good, key
+            assert shown.value(label) == good and page.value(label) == good, label

@@ -200,11 +200,9 @@ def _round(app, rng: random.Random, args: HostileArgs, tally: Tally) -> None:
     tally.broken_bodies += snap.body is not body or not snap.body.volume > 0 or not math.isfinite(snap.frame.E_total)
 
     for query in LINKS + REFUSED_LINKS:
-        t0 = app.sync().frame.t
-        _open_link(app, query)
+        restarted = _open_link(app, query)
         tally.links += 1
-        if query in REFUSED_LINKS and app.sync().frame.t < t0:
-            tally.restarts_by_refused_links += 1
+        tally.restarts_by_refused_links += query in REFUSED_LINKS and restarted
 
     for _ in range(args.connections):
         asyncio.run(_page(app.port, [], linger=0.02))
@@ -216,24 +214,36 @@ def _round(app, rng: random.Random, args: HostileArgs, tally: Tally) -> None:
         tally.notes.append(f"check failed: {type(e).__name__}: {e}")
 
 
-def _open_link(app, query: str) -> None:
-    """A page whose address is `query`: it answers the viewer's address probe over the protocol."""
+def _open_link(app, query: str) -> bool:
+    """A page whose address is `query` (it answers the viewer's address probe over the protocol) while another
+    page watches (the first page to connect restarts the run by design); whether the watched run restarted."""
 
-    async def visit() -> None:
-        async with websockets.connect(f"ws://127.0.0.1:{app.port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as ws:
-            await ws.send(msgspec.msgpack.encode(CAMERA))
-            probe = None
-            for _ in range(40):
-                await asyncio.sleep(0.05)
-                probe = next((u for c in list(app.server.get_clients().values()) for u, h in c.gui._gui_input_handle_from_uuid.items()
-                              if getattr(h._impl.props, "label", "") == "floatsim-address"), None)  # fmt: skip
-                if probe:
-                    break
+    async def visit() -> bool:
+        async with websockets.connect(f"ws://127.0.0.1:{app.port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as watcher:
+            await watcher.send(msgspec.msgpack.encode(CAMERA))
+            await asyncio.sleep(0.3)
+            epoch, t0 = app.sync().epoch, app.sync().frame.t
+            await _visit(app, query)
+            snap = app.sync()
+            return snap.epoch != epoch or snap.frame.t < t0
+
+    return asyncio.run(visit())
+
+
+async def _visit(app, query: str) -> None:
+    async with websockets.connect(f"ws://127.0.0.1:{app.port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as ws:
+        await ws.send(msgspec.msgpack.encode(CAMERA))
+        probe = None
+        for _ in range(40):
+            await asyncio.sleep(0.05)
+            newest = app.server.get_clients().get(max(app.server.get_clients(), default=-1))  # this page, not the watcher
+            probe = newest and next((u for u, h in newest.gui._gui_input_handle_from_uuid.items()
+                                     if getattr(h._impl.props, "label", "") == "floatsim-address"), None)  # fmt: skip
             if probe:
-                await ws.send(msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": probe, "updates": {"value": query}}))
-                await asyncio.sleep(0.3)
-
-    asyncio.run(visit())
+                break
+        if probe:
+            await ws.send(msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": probe, "updates": {"value": query}}))
+            await asyncio.sleep(0.3)
 
 
 def main(args: HostileArgs) -> int:
@@ -266,6 +276,8 @@ def main(args: HostileArgs) -> int:
             _round(app, rng, args, tally)
             print(f"round {k + 1}/{args.rounds}: RSS {rss_mib():.1f} MiB, lockouts {tally.lockouts}, mismatched {tally.mismatched}",
                   file=sys.__stderr__, flush=True)  # fmt: skip
+        app.loop.post("scene", args.scene)  # back to the setup measured before: what stays is what was retained
+        app.sync()
         time.sleep(1.0)
         release_memory()
         grew = rss_mib() - before

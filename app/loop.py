@@ -23,11 +23,13 @@ import numpy as np
 
 import sim
 from sim.body import printable
+from sim.compiling import Compiler
+from sim.compiling import load as load_kernels
 from sim.config import PARAMS, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
-from sim.simulation import initial_state
+from sim.simulation import default_backend, initial_state
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
@@ -108,6 +110,8 @@ class Snapshot(Posed):
     """Steps taken since the loop started."""
     advice: str = ""
     """A standing warning about the running model for this body, a sentence ('' when none): the points model in its bad band."""
+    engine: str = ""
+    """What steps the run when not the compiled kernels ('numpy reference', with the compile's progress), else ''."""
 
     @property
     def params(self):
@@ -142,6 +146,7 @@ class SimLoop:
         resync_after: float = 1.0,
         fp_raise: bool = False,
         scene_options: tuple[str, ...] = (),
+        compiler: Compiler | None = None,
     ):
         self._publish: Callable[[Snapshot], None] | None = None
         self._on_setting: Callable[[str, Any], None] | None = None
@@ -151,6 +156,9 @@ class SimLoop:
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
+        self._compiler = compiler
+        """The kernels compiling in a child process (sim/compiling.py); until it is done the numpy reference runs."""
+        self._backend = "numpy" if compiler is not None else None  # None: the default (compiled where there is a twin)
         self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
         self._queue: queue.Queue = queue.Queue()
@@ -207,6 +215,8 @@ class SimLoop:
 
     def stop(self, timeout: float = 5.0) -> None:
         self._stopping = True
+        if self._compiler is not None:
+            self._compiler.stop()
         self.post("_wake")
         if self._thread is not None:
             self._thread.join(timeout)
@@ -236,6 +246,7 @@ class SimLoop:
                     elif name != "_wake":
                         self._apply(name, value)
                 self._show_used({name for name, _ in commands if name in CONTROLLED})
+                self._take_compiled_kernels()
                 now = time.monotonic()
                 if now >= next_tick:
                     next_tick = now + self.period
@@ -245,6 +256,36 @@ class SimLoop:
                     self._publish_now()
                 for event in barriers:
                     event.set()
+
+    def _take_compiled_kernels(self) -> None:
+        """Once the compiler child is done: load the kernels from the disk cache and step on them from the
+        next step on (the same state vector; only the backend changes), or say why not."""
+        compiler = self._compiler
+        if compiler is None or not compiler.done:
+            return
+        self._compiler = None
+        if not compiler.ok:
+            self._raise_notice(f"The fast kernels did not compile ({compiler.failure()}); the run stays on the numpy reference.")
+            return
+        try:
+            load_kernels()
+        except Exception as e:  # noqa: BLE001 -- the numpy reference runs on
+            self._log("loading the compiled kernels", e)
+            self._raise_notice(f"The fast kernels did not load ({type(e).__name__}); the run stays on the numpy reference.")
+            return
+        self._backend = None
+        self.sim.use_backend(default_backend())
+        self._cost_unknown()
+        self._restart_clock()
+        self._raise_notice(f"The fast kernels are ready (compiled in {compiler.seconds:.0f} s in the background): the run goes on with them.")
+
+    def engine(self) -> str:
+        """What steps the run, for the readouts: '' on the compiled kernels."""
+        if self.sim.compiled:
+            return ""
+        if self._compiler is not None:
+            return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - self._compiler.started:.0f} s so far)"
+        return "numpy reference"
 
     def _guarded(self, what: str, fn: Callable[[], None]) -> None:
         """Run fn; on any error pause the run with a note instead of killing the thread."""
@@ -285,6 +326,7 @@ class SimLoop:
             epoch=self._epoch,
             steps=self._steps,
             advice=advice,
+            engine=self.engine(),
         )
         with self._lock:
             self._latest = snap
@@ -294,9 +336,8 @@ class SimLoop:
             except Exception as e:  # noqa: BLE001
                 self._log("publish", e)
 
-    @staticmethod
-    def _simulation(scene) -> sim.Simulation:
-        out = sim.Simulation(scene)
+    def _simulation(self, scene) -> sim.Simulation:
+        out = sim.Simulation(scene, backend=self._backend)
         out.step_seconds = STEP_SECONDS
         return out
 

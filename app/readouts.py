@@ -105,7 +105,7 @@ def describe(snap: Snapshot) -> str:
         f"|F| = **{np.linalg.norm(f.force_world):.4g} N** · |L| = **{np.linalg.norm(f.L_world):.4g} kg·m²/s**",
         f"E total = **{f.E_total:.6g} J**{_model_energy(f)} · mass {snap.body.mass:.4g} kg · "
         f"inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
-        f"Speed: {state} (asked {s.speed:g}×) · {snap.body.n_samples} samples",
+        f"Speed: {state} (asked {s.speed:g}×){' on the ' + snap.engine if snap.engine else ''} · {snap.body.n_samples} samples",
     ]
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"

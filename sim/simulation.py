@@ -351,6 +351,13 @@ class Simulation:
 
     # Changes between steps (the viewer's commands). Each replaces whole objects, never patches arrays.
 
+    def use_backend(self, backend: str) -> None:
+        """Step on `backend` ('numba' or 'numpy') from the next step on; the state is kept as it is."""
+        self.backend = backend
+        self._frame_key = None
+        self.notes = [n for n in self.notes if "numpy reference" not in n]
+        self._check_backend()
+
     def update(self, **changes) -> None:
         """Change scene parameters by 'section__key' (as `config.with_overrides`), validated, between
         steps: the scene stays the description of what runs. A new geometry rebuilds the body and

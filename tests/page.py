@@ -33,6 +33,8 @@ class Page:
         self.controls: dict[str, dict] = {}
         self._by_uuid: dict[str, dict] = {}
         self.messages: list[dict] = []
+        self.texts: dict[str, str] = {}
+        """Every markdown block's content as the page shows it, by uuid."""
 
     @classmethod
     @contextlib.asynccontextmanager
@@ -77,6 +79,10 @@ class Page:
     def _take(self, m: dict) -> None:
         self.messages.append({k: v for k, v in m.items() if k == "type" or k in ("uuid", "updates", "share_url")})
         kind = m.get("type", "")
+        if kind == "GuiMarkdownMessage" and isinstance(m.get("props"), dict):
+            self.texts[m["uuid"]] = m["props"].get("_markdown", "")  # viser 1.1.1's name for the content
+        elif kind == "GuiUpdateMessage" and m.get("uuid") in self.texts and "_markdown" in m.get("updates", {}):
+            self.texts[m["uuid"]] = m["updates"]["_markdown"]
         if kind.startswith("Gui") and kind != "GuiUpdateMessage" and isinstance(m.get("props"), dict) and "value" in m and "uuid" in m:
             c = {"uuid": m["uuid"], "value": m["value"], "options": m["props"].get("options")}
             self._by_uuid[m["uuid"]] = c
@@ -85,6 +91,10 @@ class Page:
             c = self._by_uuid[m["uuid"]]
             c["value"] = m["updates"].get("value", c["value"])
             c["options"] = m["updates"].get("options", c["options"])
+
+    def text(self, containing: str) -> str:
+        """The markdown block that contains `containing` ('' when none does)."""
+        return next((t for t in self.texts.values() if containing in t), "")
 
     async def give_address(self, query: str) -> None:
         """What the page's script does with its address: put `location.search` into the link probe."""

@@ -38,6 +38,11 @@ class BenchArgs:
     waves: bool = True
     """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea with and without drag) on
     both models, against the direct sum over components and the numpy reference."""
+    startup: bool = False
+    """Instead of the above: how long `python -m sim run --scene NAME --t-end 1` takes in a fresh process from an
+    empty kernel cache (a first run on a machine) and from the cache it left, for each preset (minutes each, cold)."""
+    presets: tuple[str, ...] = ()
+    """With --startup: the presets to time (all when empty)."""
 
 
 def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
@@ -71,6 +76,10 @@ def machine() -> str:
 
 
 def bench(args: BenchArgs) -> int:
+    if args.startup:
+        from .startup import startup
+
+        return startup(args.presets, 1.0)
     from ..ensemble import Ensemble
     from ..kernels import warm_up
 

@@ -100,3 +100,24 @@ def test_switching_backend_between_steps_keeps_the_state():
     scale = np.abs(reference.state.as_vector()).max()
     assert switched.state.t == pytest.approx(reference.state.t, abs=1e-12)
     np.testing.assert_allclose(switched.state.as_vector(), reference.state.as_vector(), rtol=0, atol=1e-9 * scale)
+
+
+def test_a_short_cli_run_on_an_empty_kernel_cache_runs_on_numpy_and_says_so(tmp_path):
+    """`python -m sim run --scene drop --t-end 1` compiled for minutes before its 200 steps; on an empty cache
+    it now runs them on the numpy reference, says so in one note, and prints what the compiled run prints."""
+
+    def run(env: dict, out: Path) -> np.ndarray:
+        done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "drop", "--t-end", "1", "--every", "50", "--out", str(out)],
+                              cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        notes.append(done.stderr)
+        return np.genfromtxt(out, delimiter=",", skip_header=1)
+
+    notes: list[str] = []
+    empty = tmp_path / "cache"
+    cold = run({**os.environ, "NUMBA_CACHE_DIR": str(empty)}, tmp_path / "cold.csv")
+    warm = run(dict(os.environ), tmp_path / "warm.csv")
+    assert "numpy reference" in notes[0] and "compil" not in notes[1]
+    assert not any(empty.rglob("*.nbi")), "nothing was compiled"
+    assert cold.shape == warm.shape and cold.shape[0] == 5
+    np.testing.assert_allclose(cold, warm, rtol=1e-9, atol=1e-9)

@@ -56,18 +56,45 @@ def scene_from_args(args: RunArgs) -> SceneConfig:
                           initial__velocity=args.u0, initial__omega=args.omega0)  # fmt: skip
 
 
-def announce_compile(sim: Simulation) -> None:
-    """The compiled kernels build once per machine (then load from the disk cache): say so when slow."""
+SHORT_RUN_SECONDS = 60.0
+"""A run on an empty kernel cache that the numpy reference finishes within this runs there: a compile takes minutes."""
+
+
+def numpy_seconds(sim: Simulation, n_steps: int) -> float:
+    """The numpy reference's wall time for n_steps of this scene, from a few steps of a copy."""
+    import time
+
+    probe = Simulation(sim.scene, backend="numpy")
+    probe.step(1)
+    started = time.perf_counter()
+    probe.step(3)
+    return (time.perf_counter() - started) / 3 * n_steps
+
+
+def announce_compile(sim: Simulation, n_steps: int) -> None:
+    """The compiled kernels build once per machine (then load from the disk cache): say so before the wait.
+    `sim` was built on the numpy reference when they are not built yet (kernels_ready): a short run stays
+    there, saying so; a longer one moves to the kernels, which compile first."""
+    from ..compiling import kernels_ready
+    from ..simulation import default_backend
+
+    if sim.backend != default_backend() and not kernels_ready():
+        if (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
+            print(f"floatsim: note: the fast kernels are not compiled on this machine yet (minutes, once); this short run takes about "
+                  f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.compiling`, compiles them)",
+                  file=sys.stderr)  # fmt: skip
+            return
+        sim.use_backend(default_backend())
     for note in sim.notes:
         print(f"floatsim: note: {note}", file=sys.stderr)
     if sim.compiled:
         from ..kernels import cached, warm_up
 
         if not cached():  # say so before the wait, not after it
-            print("floatsim: compiling the fast kernels, once for this machine (about 1-2 minutes; cached on disk afterwards)...",
+            print("floatsim: compiling the fast kernels, once for this machine (a few minutes; cached on disk afterwards)...",
                   file=sys.stderr, flush=True)  # fmt: skip
         seconds = warm_up()
-        if seconds > 5.0:  # loading from the cache takes under a second; compiling, about two minutes
+        if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes
             print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
 
 
@@ -123,11 +150,13 @@ def run(args: RunArgs, watch=None) -> int:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
     scene = scene_from_args(args)
-    sim = Simulation(scene)
+    from ..compiling import kernels_ready
+
+    sim = Simulation(scene, backend=None if kernels_ready() else "numpy")  # nothing compiles before we know the run needs it
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
-    announce_compile(sim)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
+    announce_compile(sim, n_steps)
     if (seconds := step_time(sim.body.n_samples, n_steps)) > 600:
         print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.body.n_samples:,} samples x {n_steps:,} steps); "
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip

@@ -73,6 +73,7 @@ def test_every_page_shows_what_the_run_uses_after_bad_values():
         assert app.refusals.count >= 5  # three from the unconnected page, two dropdown values not among the choices
 
 
+@pytest.mark.slow
 def test_with_a_token_only_the_page_opened_with_it_drives_the_run():
     with viewer(token="s3 cret&x") as app:  # a token that needs quoting in the banner's link
         query = app.address().split("/?", 1)[1]
@@ -131,6 +132,7 @@ async def ask_for_a_share_link(port: int) -> Page:
         return page
 
 
+@pytest.mark.slow
 def test_no_page_opens_a_public_share_tunnel(monkeypatch):
     made = fake_tunnels(monkeypatch)
     with viewer() as app:
@@ -163,6 +165,7 @@ def test_pages_from_another_site_cannot_connect():
         assert app.loop.is_alive()
 
 
+@pytest.mark.slow
 def test_link_repeats_and_refused_values_restart_nobody():
     with viewer() as app:
 
@@ -185,6 +188,7 @@ def test_link_repeats_and_refused_values_restart_nobody():
         assert snap.epoch > epoch and snap.density == 500.0  # an accepted setting restarts the run; the refused one is not used
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("query", ["?token=s3cret", "?fixedDpr=0.5"])
 def test_a_link_with_no_setting_restarts_nobody(query):
     with viewer() as app:

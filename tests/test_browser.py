@@ -30,6 +30,7 @@ def control_row(page, label: str):
     return page.get_by_text(label, exact=True).locator("xpath=ancestor::div[.//input][1]")
 
 
+@pytest.mark.slow
 def test_browser_drives_the_simulation(app, browser_page):
     from PIL import Image
 

@@ -38,6 +38,7 @@ def picture(png: bytes) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=float)
 
 
+@pytest.mark.slow
 def test_a_link_sets_the_scene_and_its_parameters_and_restarts_it(app, page):
     time.sleep(1.0)  # the run goes on before anyone watches
     page.goto(app.url + "/?scene=drop&density=500&damping=40&wobble=3&fixedDpr=0.5")
@@ -55,6 +56,7 @@ def test_a_link_sets_the_scene_and_its_parameters_and_restarts_it(app, page):
     assert copied.startswith(app.url + "/?scene=drop") and "density=500" in copied and "damping=40" in copied
 
 
+@pytest.mark.slow
 def test_upload_a_mesh_through_the_page_and_refuse_a_broken_one(app, page, tmp_path):
     time.sleep(2.0)
     before = app.sync()
@@ -85,6 +87,7 @@ def test_upload_a_mesh_through_the_page_and_refuse_a_broken_one(app, page, tmp_p
     page.get_by_text("not watertight", exact=False).first.wait_for()  # the reason is in the panel
 
 
+@pytest.mark.slow
 def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
     page.goto(app.url + "/?fixedDpr=0.5")
     page.get_by_role("button", name="Record").wait_for()
@@ -130,6 +133,7 @@ def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
     assert later.std() > 10.0 and np.abs(later - start).mean() > 0.3  # the body moved
 
 
+@pytest.mark.slow
 def test_export_video_of_the_last_recording(app):
     from app.browser import missing
 
@@ -148,6 +152,7 @@ def test_export_video_of_the_last_recording(app):
     assert not app.recorder.progress.visible and not app.recorder.video.disabled
 
 
+@pytest.mark.slow
 def test_the_banners_link_drives_the_run_and_pages_without_the_token_cannot(browser_page):
     """--token in chromium: the link the banner prints changes density through the page's own slider box;
     the same page opened without the token, or with a wrong one, cannot."""

@@ -156,6 +156,7 @@ def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
     assert cached()
 
 
+@pytest.mark.slow
 def test_compare_says_what_it_does_before_it_starts_and_orders_the_errors(capsys):
     """`compare` announces its runs (it takes a while before any row), then one row per integrator and
     dt; on the damped scene rk4's error falls as dt halves."""

@@ -4,6 +4,8 @@ once, instead of forking `ldconfig -p` each time (ctypes.util.find_library does 
 import ctypes.util
 import subprocess
 
+import pytest
+
 
 def test_heap_trim_forks_no_process_after_the_first(monkeypatch):
     import app.guard as guard
@@ -30,6 +32,7 @@ CAMERA = {"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position
 """What a browser sends first; viser counts a page as connected (and runs our on-connect) only after it."""
 
 
+@pytest.mark.slow
 def test_pages_that_come_and_go_leave_nothing_behind():
     """300 pages connect (speaking viser's protocol), get the scene and the address probe, and leave:
     the server keeps no handle of any of them and its memory does not grow with them."""

@@ -84,6 +84,7 @@ def test_refusal_keeps_only_a_sane_value_of_the_controls_own_type():
     assert refusal(State(1.0), {"value": 1.0, "disabled": True}) and refusal(State(1.0), {"visible": False})
 
 
+@pytest.mark.slow
 def test_bad_gui_updates_leave_the_viewer_working_for_everyone():
     from app.args import ViewArgs
     from app.main import start

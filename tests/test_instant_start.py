@@ -58,6 +58,7 @@ async def _watch(port: int, seconds: float) -> list[tuple[float, bool]]:
     return seen
 
 
+@pytest.mark.slow
 def test_an_empty_kernel_cache_runs_on_numpy_at_once_then_on_the_kernels_without_a_restart(tmp_path):
     from sim.kernels import KERNEL_CACHE, cached
 

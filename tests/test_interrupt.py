@@ -48,6 +48,7 @@ def test_ctrl_c_during_a_run_keeps_whole_rows_and_says_where_it_stopped(tmp_path
     assert f"kept {len(rows)} rows" in done.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["serial", "local"])
 def test_ctrl_c_during_a_sweep_keeps_its_chunks_and_resume_finishes(tmp_path, backend):
     out = tmp_path / "s"
@@ -62,6 +63,7 @@ def test_ctrl_c_during_a_sweep_keeps_its_chunks_and_resume_finishes(tmp_path, ba
     assert finished.returncode == 0 and f"({kept} already done, {6 - kept} to run)" in finished.stdout
 
 
+@pytest.mark.slow
 def test_ctrl_c_in_a_study_command_is_one_line():
     proc = subprocess.Popen([sys.executable, "-m", "studies", "decay", "--scene", "damped", "--duration", "5000"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, cwd=Path(__file__).resolve().parent.parent)  # fmt: skip

@@ -16,6 +16,7 @@ def quick(tmp_path_factory):
     return out, data
 
 
+@pytest.mark.slow
 def test_writes_markdown_and_every_figure_it_references(quick):
     import matplotlib.pyplot as plt
 

@@ -72,6 +72,7 @@ def test_replay_shows_every_recorded_pose_exactly_as_the_csv():
     assert sum(m["type"] == "SetPositionMessage" and m["name"] == "/body" for _, m in messages) == len(take) + 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene", ["damped", "storm"])
 def test_a_minute_of_replay_fits_in_one_and_a_half_megabytes(scene):
     take, _ = record(scene, 60.0)
@@ -121,6 +122,7 @@ def test_markers_sit_at_the_exact_centre_of_buoyancy_and_metacentre():
         assert view.markers.line.visible and np.abs(view.markers.line.points[..., 2]).max() < 1e-5  # waterline on z = 0
 
 
+@pytest.mark.slow
 def test_exported_video_has_the_requested_frames_and_size(tmp_path):
     from conftest import _require
 

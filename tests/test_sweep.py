@@ -38,6 +38,7 @@ def test_grid_is_the_product_of_lists_and_ranges():
         assert len({scenes[i].step.integrator for i in c}) == 1
 
 
+@pytest.mark.slow
 def test_every_backend_and_chunking_gives_the_same_numbers_bit_for_bit(tmp_path):
     assert main(["sweep", *GRID, "--out", str(tmp_path / "serial"), "--chunk", "5"]) == 0
     serial = results(tmp_path / "serial")
@@ -66,6 +67,7 @@ def test_resume_runs_only_the_missing_chunks(tmp_path, capsys):
     assert main(["sweep", *GRID, "--out", str(out), "--chunk", "2"]) == 2  # no --resume: refuses to mix
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
     out = tmp_path / "k"
     args = [sys.executable, "-m", "sim", "sweep", "--param", "density=300:900:8", "--param", "orientation_seed=0:3:4", "--t-end", "300",
@@ -146,6 +148,7 @@ def test_histories_on_request(tmp_path):
     assert len(results(out)) == 2  # the folder read whole skips _history and _manifest.json
 
 
+@pytest.mark.slow
 def test_least_potential_orientation_of_the_cube():
     """The static route alone: face up where it is the classic answer (r = 0.1, 0.9: GM > 0 and lowest),
     corner up (54.7 degrees) in the middle (Erdos, Schibler & Herndon, Am. J. Phys. 60, 335 (1992))."""
@@ -157,6 +160,7 @@ def test_least_potential_orientation_of_the_cube():
     assert energies[0] == pytest.approx(100.0 * 9.81 * (0.5 - 0.05), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_simulation_and_energy_minimisation_agree_on_how_a_cube_floats(tmp_path):
     """Outside narrow bands around the transitions, the lowest rest state the dynamics reach from random
     starts is the static least-potential orientation."""

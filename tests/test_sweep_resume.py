@@ -100,6 +100,7 @@ def test_a_different_sweep_into_a_finished_folder_is_refused(reference, tmp_path
     assert done.returncode == 2 and "holds a different sweep" in done.stderr and done.stderr.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_local_workers_die_with_the_killed_command(tmp_path):
     """SIGKILL leaves the command no time to stop its workers: they must notice on their own."""
     out = tmp_path / "k"

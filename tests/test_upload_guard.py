@@ -98,6 +98,7 @@ def still_running(app, body_name: str) -> None:
     assert not [key for key in app.loop._errors_logged if key.startswith(("publish", "observe", "advance"))]
 
 
+@pytest.mark.slow
 def test_meshes_that_cannot_be_a_body_leave_the_running_one_running(app, tmp_path):
     body = app.sync().body.name
     cases = [("flat.obj", DEGENERATE_OBJ, "encloses no volume"),
@@ -134,6 +135,7 @@ def test_a_body_the_loop_cannot_build_never_replaces_the_running_one(app, monkey
     still_running(app, body)
 
 
+@pytest.mark.slow
 def test_a_transfer_declaring_480_mib_is_refused_before_its_bytes_are_kept(app):
     body = app.sync().body.name
     chunk = os.urandom(PART)

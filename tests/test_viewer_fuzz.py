@@ -13,6 +13,7 @@ import sys
 import time
 
 import msgspec
+import pytest
 import viser
 import websockets
 
@@ -41,6 +42,7 @@ async def attack(port: int, connections: int) -> None:
                 await asyncio.sleep(0.2)
 
 
+@pytest.mark.slow
 def test_malformed_frames_cost_no_lasting_memory_and_one_traceback_per_kind(capfd, monkeypatch):
     from app.args import ViewArgs
     from app.main import TRIM_SECONDS, start

@@ -276,10 +276,13 @@ class Simulation:
             rest = initial_state(self.body, self.scene).q_world_body
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
             self.largest_turn = max(self.largest_turn, turn)
-        energy = self.frame().E_total
-        if energy - self._E_ref > 10.0 * self._E_scale:
+        frame = self.frame()
+        energy = frame.E_total
+        if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
+            # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too
             t, self.state = self.state.t, checked  # back to the last state that passed this check
-            raise SimulationDiverged(self.diagnose(t, f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"))
+            what = f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)" if np.isfinite(energy) else "the state left every finite bound"
+            raise SimulationDiverged(self.diagnose(t, what))
         return self.state
 
     def _advance_numpy(self, n: int) -> State:

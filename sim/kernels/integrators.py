@@ -62,7 +62,10 @@ def exact_modes(K, h):
         lam = np.zeros(6)
         lam[0] = -1.0
         return lam, np.eye(6)
-    return np.linalg.eigh(K)
+    lam, V = np.linalg.eigh(K)
+    # a zero mode (a few wet samples: D has rank 3) can come out at -1e-11: clamped, or lam[0] < 0 would read as
+    # the mild flag above and sum a divergent series (a 1 kg cube at d = 1e7 reached 1e106 m/s in one step)
+    return np.maximum(lam, 0.0), V
 
 
 @njit(inline="always", **JIT)

@@ -26,8 +26,8 @@ SCENES_DIR = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 BODY = (
     Param("body", "shape", "cube", "Body shape: cube (side `size`), box (sides `extents`) or mesh (a watertight file)",
           kind="choice", choices=("cube", "box", "mesh"), name="body shape"),
-    Param("body", "size", 1.0, "Cube side", "m", lo=0.0, lo_open=True, hi=1e3, name="cube size"),
-    Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=0.0, lo_open=True, hi=1e3, kind="vector", size=3,
+    Param("body", "size", 1.0, "Cube side", "m", lo=1e-3, hi=1e3, name="cube size"),
+    Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=1e-3, hi=1e3, kind="vector", size=3,
           name="box extents"),
     Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=1000, kind="int",
           name="points per edge", label="Points per edge", gui=(1, 60, 1), live=(1, 100)),  # 60 000 samples at most in the viewer
@@ -36,9 +36,9 @@ BODY = (
           name="mesh unit"),
     Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
           kind="int", name="mesh samples", label="Samples", gui=(100, 20000, 100), live=(1, 60000)),
-    Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=0.0, lo_open=True,
+    Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=1e-3,
           hi=1e5, live=(1.0, 1e5), kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
-    Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=0.0, lo_open=True, hi=1e12, kind="optional"),
+    Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=1e-6, hi=1e12, kind="optional"),
 )
 FLUID = (
     Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),
@@ -61,7 +61,7 @@ INITIAL = (
 )
 STEP = (
     Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator", gui=()),
-    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=0.0, lo_open=True, hi=1.0, live=(1e-5, 1.0),
+    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=1e-7, hi=1.0, live=(1e-5, 1.0),
           gui=(0.0005, 0.05, 0.0005), label="Time step"),
     Param("step", "t_end", 30.0, "Simulated duration", "s", lo=0.0, hi=1e7),
     Param("step", "rtol", 1e-8, "Relative tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1.0),
@@ -149,6 +149,10 @@ def read_toml(path: Path, what: str) -> dict:
         return tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise ConfigError(f"{path}: not valid TOML: {e}") from None
+    except RecursionError:  # tomllib parses nested arrays and tables recursively
+        raise ConfigError(f"{path}: nested too deeply to be a scene file") from None
+    except (OSError, MemoryError) as e:
+        raise ConfigError(f"{path}: cannot be read as a scene file ({type(e).__name__})") from None
 
 
 def _from_dict(data: dict, where: str) -> SceneConfig:

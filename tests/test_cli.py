@@ -199,3 +199,35 @@ def test_an_output_never_overwrites_the_runs_own_input(tmp_path, capsys):
     other.write_text("# a scene of mine\n")
     assert main(["run", "--scene", "rest", "--out", str(other), "--t-end", "0.1"]) == 2
     assert "is not overwritten" in capsys.readouterr().err and other.read_text() == "# a scene of mine\n"
+
+
+@pytest.mark.parametrize("flags, says", [
+    (["--density", "1e-320"], "density must be >= 0.001"),
+    (["--mass", "1e-320"], "mass must be >= 1e-06"),
+    (["--size", "1e-320"], "cube size must be >= 0.001"),
+    (["--dt", "1e-320"], "dt must be >= 1e-07"),
+    (["--dt", "1e-7", "--t-end", "1e5"], "more than --max-steps 1e+08"),
+    (["--max-steps", "0"], "--max-steps must be >= 1"),
+])  # fmt: skip
+def test_absurd_numbers_are_one_line_each(flags, says):
+    """Issue 23: subnormal sizes, masses and steps gave tracebacks (LinAlgError, OverflowError); a 1e-300 s step
+    ran on after a 600-digit estimate. Now each is refused in one line, exit 2, before any work."""
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "drop", *flags], capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.count("\n") == 1 and says in done.stderr, done.stderr
+
+
+def test_a_scene_file_nested_5000_deep_is_one_line(tmp_path):
+    scene = tmp_path / "deep.toml"
+    scene.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(scene)], capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 2 and "nested too deeply" in done.stderr and done.stderr.count("\n") == 1, done.stderr[-300:]
+
+
+def test_max_steps_lets_a_long_run_go_when_asked(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "rest", "--dt", "0.001", "--t-end", "0.05", "--max-steps", "10"],
+                          capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    assert done.returncode == 2 and "50 steps, more than --max-steps 10" in done.stderr
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "rest", "--dt", "0.001", "--t-end", "0.05", "--max-steps", "50"],
+                          capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    assert done.returncode == 0 and "50 steps in" in done.stdout

@@ -20,6 +20,9 @@ from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .progress import progress_bar
 
+MAX_STEPS = 100_000_000
+"""Most steps `run` takes unless asked for more (about 5 min compiled for the default cube; hours for a fine mesh)."""
+
 
 @dataclass
 class _RunBase:
@@ -41,6 +44,8 @@ class _RunBase:
     """CSV file to write."""
     progress: Annotated[bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")] = None
     """Show a progress bar."""
+    max_steps: int = MAX_STEPS
+    """Refuse a run of more steps than this (t_end / dt): a typo such as --dt 1e-30 would run for ever."""
 
 
 RunArgs = declared_flags("RunArgs", _RunBase, PARAMS.values())
@@ -148,6 +153,8 @@ def run(args: RunArgs, watch=None) -> int:
     and at the start: how the viewer's recorder takes its frames without sim knowing of it."""
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
+    if args.max_steps < 1:
+        raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
     scene = scene_from_args(args)
     from ..compiling import kernels_ready
@@ -156,6 +163,9 @@ def run(args: RunArgs, watch=None) -> int:
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
+    if n_steps > args.max_steps:
+        raise ConfigError(f"t_end / dt = {scene.step.t_end:g} s / {sim.dt:g} s is {n_steps:.3g} steps, more than --max-steps {args.max_steps:.3g} "
+                          f"(about {step_time(sim.body.n_samples, n_steps) / 3600:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
     announce_compile(sim, n_steps)
     if (seconds := step_time(sim.body.n_samples, n_steps)) > 600:
         print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.body.n_samples:,} samples x {n_steps:,} steps); "

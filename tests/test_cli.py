@@ -231,3 +231,29 @@ def test_max_steps_lets_a_long_run_go_when_asked(tmp_path):
     done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "rest", "--dt", "0.001", "--t-end", "0.05", "--max-steps", "50"],
                           capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
     assert done.returncode == 0 and "50 steps in" in done.stdout
+
+
+@pytest.mark.parametrize("integrator", ["rk45", "dop853"])
+def test_a_stiff_adaptive_run_stops_within_its_step_budget_naming_a_better_integrator(integrator):
+    """Issue 23: a 1 kg cube at d = 1e7 kept rk45, dop853 and radau busy for 10 minutes with nothing said: the
+    evaluation cap allowed a minute per step. The CLI gives each output step a wall budget (30 s; here 1 s). (radau
+    now runs this case: 600 steps in 2.5 s.)"""
+    args = ["run", "--scene", "damped", "--density", "1", "--damping", "1e7", "--integrator", integrator, "--t-end", "3", "--step-budget", "1"]
+    done = subprocess.run([sys.executable, "-m", "sim", *args], capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 3, done.stderr
+    assert f"'{integrator}' needed more than" in done.stderr and "use --integrator implicit" in done.stderr
+
+
+def test_a_slow_run_says_how_long_it_will_take_at_its_pace(monkeypatch, capsys):
+    """After 10 s a run that needs more than a minute says so, from its measured pace, and again every 5 min."""
+    from sim.commands import run as run_module
+
+    clock = iter([0.0, 5.0, 12.0, 100.0, 330.0])
+    monkeypatch.setattr(run_module.time, "perf_counter", lambda: next(clock))
+    pace = run_module.Pace(1000)
+    for done in (10, 20, 30, 200):  # at 5 s nothing; at 12 s 20 steps: 588 s left; at 100 s none (within 5 min); at 330 s, 200 steps
+        pace.tell(done)
+    notes = capsys.readouterr().err.strip().splitlines()
+    assert len(notes) == 2
+    assert "20 of 1,000 steps in 12 s" in notes[0] and "about 10 min more" in notes[0]
+    assert "200 of 1,000 steps in 330 s" in notes[1] and "about 22 min more" in notes[1]

@@ -20,6 +20,8 @@ from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .progress import progress_bar
 
+STEP_SECONDS = 30.0
+"""Wall time an adaptive method may spend on one output step before the run stops naming a better integrator."""
 MAX_STEPS = 100_000_000
 """Most steps `run` takes unless asked for more (about 5 min compiled for the default cube; hours for a fine mesh)."""
 
@@ -44,6 +46,8 @@ class _RunBase:
     """CSV file to write."""
     progress: Annotated[bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")] = None
     """Show a progress bar."""
+    step_budget: float = STEP_SECONDS
+    """Wall seconds an adaptive integrator (rk45, dop853, radau) may spend on one output step before the run stops, naming a better one."""
     max_steps: int = MAX_STEPS
     """Refuse a run of more steps than this (t_end / dt): a typo such as --dt 1e-30 would run for ever."""
 
@@ -153,6 +157,8 @@ def run(args: RunArgs, watch=None) -> int:
     and at the start: how the viewer's recorder takes its frames without sim knowing of it."""
     if args.every < 1:
         raise ConfigError(f"--every must be >= 1, got {args.every}")
+    if not args.step_budget > 0:
+        raise ConfigError(f"--step-budget must be > 0 s, got {args.step_budget}")
     if args.max_steps < 1:
         raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
@@ -160,6 +166,7 @@ def run(args: RunArgs, watch=None) -> int:
     from ..compiling import kernels_ready
 
     sim = Simulation(scene, backend=None if kernels_ready() else "numpy")  # nothing compiles before we know the run needs it
+    sim.step_seconds = args.step_budget  # an adaptive method stuck on one step stops with the viewer's message
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
@@ -229,6 +236,31 @@ def run(args: RunArgs, watch=None) -> int:
 INTERRUPTED = "interrupted"
 
 
+class Pace:
+    """An honest estimate of the time left, from the pace so far: said once the run has taken PACE_AFTER
+    seconds and still needs more than a minute, then again every PACE_EVERY seconds (a stiff adaptive
+    run or a 4096-component sea is slow in ways no estimate before the run can know)."""
+
+    PACE_AFTER, PACE_EVERY = 10.0, 300.0
+
+    def __init__(self, n_steps: int):
+        self.n_steps, self.started, self.next = n_steps, time.perf_counter(), self.PACE_AFTER
+
+    def tell(self, done: int) -> None:
+        spent = time.perf_counter() - self.started
+        if spent < self.next or done >= self.n_steps:
+            return
+        self.next = spent + self.PACE_EVERY
+        left = spent / done * (self.n_steps - done)
+        if left > 60.0:
+            print(f"floatsim: note: {done:,} of {self.n_steps:,} steps in {spent:.0f} s: at this pace about {_duration(left)} more; "
+                  "Ctrl-C stops it keeping the rows so far", file=sys.stderr, flush=True)  # fmt: skip
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
 def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, stop=None) -> str | None:
     """Step to n_steps, writing a frame every `every` steps (and calling `watch` every `watch.every`);
     the divergence message if the run blows up, INTERRUPTED after Ctrl-C (checked every CHECK_SECONDS
@@ -236,17 +268,19 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, 
     done = 0
     chunk = every if watch is None else math.gcd(every, watch.every)
     per_step = None  # seconds, measured
+    pace = Pace(n_steps)
     try:
         while done < n_steps:
             if stop is not None and stop.asked:
                 return INTERRUPTED
             k = min(chunk - done % chunk, n_steps - done)
-            k = min(k, 100 if per_step is None else max(1, int(CHECK_SECONDS / per_step)))  # the first chunk measures
+            k = min(k, 1 if per_step is None else max(1, int(CHECK_SECONDS / per_step)))  # the first step measures
             began = time.perf_counter()
             sim.step(k)
             per_step = max((time.perf_counter() - began) / k, 1e-9)
             done += k
             bar.update(k)
+            pace.tell(done)
             if done % every == 0 or done == n_steps:
                 write(sim.frame())
             if stop is not None and stop.asked:

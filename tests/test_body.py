@@ -78,12 +78,12 @@ def test_missing_mesh_file_is_refused(tmp_path):
     "body, message",
     [
         (BodyConfig(points_per_edge=0), "points per edge must be >= 1"),
-        (BodyConfig(size=0.0), "cube size must be > 0"),
-        (BodyConfig(size=-1.0), "cube size must be > 0"),
-        (BodyConfig(mass=0.0), "mass must be > 0"),
-        (BodyConfig(mass=-2.0), "mass must be > 0"),
+        (BodyConfig(size=0.0), "cube size must be >= 0.001"),
+        (BodyConfig(size=-1.0), "cube size must be >= 0.001"),
+        (BodyConfig(mass=0.0), "mass must be >= 1e-06"),
+        (BodyConfig(mass=-2.0), "mass must be >= 1e-06"),
         (BodyConfig(density=float("nan")), "density must be finite"),
-        (BodyConfig(shape="box", extents=(1.0, 0.0, 1.0)), "box extents must be > 0"),
+        (BodyConfig(shape="box", extents=(1.0, 0.0, 1.0)), "box extents must be >= 0.001"),
         (BodyConfig(shape="sphere"), "body shape must be"),
     ],
 )

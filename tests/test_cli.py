@@ -57,11 +57,11 @@ def test_flags_override_the_scene(tmp_path):
         (["--scene", "nope"], "unknown scene 'nope'"),
         (["--scene", "missing.toml"], "scene file not found"),
         (["--integrator", "leapfrog"], "unknown integrator 'leapfrog'"),
-        (["--density", "-900"], "density must be > 0"),
+        (["--density", "-900"], "density must be >= 0.001"),
         (["--density", "nan"], "density must be finite"),
         (["--damping", "-1"], "damping must be >= 0"),
-        (["--dt", "0"], "dt must be > 0"),
-        (["--dt", "-0.1"], "dt must be > 0"),
+        (["--dt", "0"], "dt must be >= 1e-07"),
+        (["--dt", "-0.1"], "dt must be >= 1e-07"),
         (["--dt", "inf"], "dt must be finite"),
         (["--t-end", "nan"], "t_end must be finite"),
         (["--points-per-edge", "0"], "points per edge must be >= 1"),
@@ -152,7 +152,7 @@ def test_python_dash_m_sim_and_console_script_exit_codes():
     assert ok.returncode == 0 and "z = -0.400000 m" in ok.stdout
     assert ok.stderr == ""  # no progress bar when not on a terminal
     bad = subprocess.run([sys.executable, "-m", "app.cli", "run", "--density", "-1"], capture_output=True, text=True)
-    assert bad.returncode == 2 and bad.stderr.strip() == "floatsim: error: density must be > 0, got -1.0"
+    assert bad.returncode == 2 and bad.stderr.strip() == "floatsim: error: density must be >= 0.001, got -1.0"
 
 
 def test_tyro_panels_become_one_line_in_both_renderings():

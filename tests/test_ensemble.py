@@ -80,4 +80,4 @@ def test_density_sweep_settles_each_cube_at_its_archimedes_draft(tmp_path):
 def test_sweep_bad_input_is_one_line(capsys, tmp_path):
     assert main(["sweep", "--param", "density=900,-5", "--scene", "rest", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "density must be > 0" in err
+    assert err.count("\n") == 1 and "density must be >= 0.001" in err

@@ -94,7 +94,7 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
         (["--param", "wobble=1:2:3"], "--param wobble: unknown parameter"),
         (["--param", "density=1:2:0"], "the range is empty"),
         (["--param", "density=abc"], "values must be numbers"),
-        (["--param", "density=-5,300"], "density must be > 0"),
+        (["--param", "density=-5,300"], "density must be >= 0.001"),
         (["--scene", "damped"], "nothing to sweep"),
         (["--param", "density=300", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:9"),
         (["--param", "density=300", "--scheduler", "foo", "--timeout", "1"], "cannot reach the Dask scheduler at foo"),

@@ -1,7 +1,7 @@
 """`floatsim stability` (or `python -m studies stability`): how a cube floats, against its density
 ratio r = rho_body / rho_water, two independent ways.
 
-- Dynamic: a sweep (sim/grid.py, run on any backend) of r from 0.02 to 0.98, each from random initial
+- Dynamic: a sweep (sim/sweeps/grid.py, run on any backend) of r from 0.02 to 0.98, each from random initial
   orientations, on the exact panel model with damping, run until at rest; the final tilt of the face
   normal nearest the vertical (0: face up, 45: edge up, 54.7: corner up).
 - Static: at each r, the orientation of least potential U = M g (z_G - z_B) over all orientations
@@ -70,7 +70,7 @@ def static_tilts(ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     from sim.body import make_box
     from sim.hydrostatics import lowest_orientation
     from sim.rotation import matrix_to_quat
-    from sim.sweeping import nearest_face_tilt
+    from sim.sweeps.chunk import nearest_face_tilt
 
     fluid = FluidConfig()
     tilts, energies = [], []

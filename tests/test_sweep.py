@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from sim.commands import main
-from sim.grid import Sweep, case_scene, chunks, parse_param
+from sim.sweeps.grid import Sweep, case_scene, chunks, parse_param
 
 GRID = ["--param", "density=300:900:4", "--param", "orientation_seed=0:2:3", "--settle", "--t-end", "40", "--scene", "damped"]
 

@@ -16,10 +16,10 @@ from typing import Annotated, Literal
 
 import tyro
 
-from ..backends import WorkerLost, run
 from ..errors import ConfigError
-from ..grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
+from ..sweeps.backends import WorkerLost, run
+from ..sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 from .interrupt import EXIT, Interrupted, StopOnCtrlC
 from .progress import progress_bar
 

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from .ensemble import Ensemble
+from ..ensemble import Ensemble
+from ..rotation import quat_to_matrix
 from .grid import Sweep, case_scene
-from .rotation import quat_to_matrix
 
 SAMPLE = 0.1
 """Seconds between the samples of z a case's period is measured from."""

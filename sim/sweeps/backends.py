@@ -12,7 +12,7 @@ import logging
 import os
 from collections.abc import Callable, Iterable
 
-from .errors import ConfigError
+from ..errors import ConfigError
 from .grid import Sweep
 
 BACKENDS = ("serial", "local", "dask")
@@ -23,28 +23,29 @@ class WorkerLost(RuntimeError):
     """A worker process died; the chunks finished before are kept."""
 
 
-_warmed = False
+def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
+    """Load (or compile, once per machine) the kernels of the cases `indices` of `sweep` (those of one chunk:
+    the cases of a sweep share their scheme, force model and water)."""
+    from ..simulation import default_backend
 
+    if sweep is None or not indices or default_backend() != "numba":
+        return
+    from ..ensemble import Ensemble
+    from ..kernels import warm_up
+    from .chunk import case_scene
 
-def _warm() -> None:
-    """Load the compiled kernels, once per process."""
-    global _warmed
-    from .simulation import default_backend
-
-    if not _warmed and default_backend() == "numba":
-        _warmed = True
-        from .kernels import warm_up
-
-        warm_up()
+    base = sweep.base()
+    ensemble = Ensemble([case_scene(base, sweep.case(i)) for i in indices])
+    if ensemble.sims[0].compiled:
+        warm_up(ensemble.spec())
 
 
 def _task(sweep: Sweep, indices: list[int], stop=None):
     """One chunk on a worker: (rows, history, seconds of compute)."""
     import time
 
-    from .sweeping import run_chunk
+    from .chunk import run_chunk
 
-    _warm()  # once per process in effect: the kernels come from the disk cache, then stay loaded
     started = time.perf_counter()
     rows, history = run_chunk(sweep, indices, stop)
     return rows, history, time.perf_counter() - started
@@ -95,7 +96,6 @@ def _start_worker(parent: int) -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _die_with(parent)
-    _warm()
 
 
 def _die_with(parent: int) -> None:
@@ -127,7 +127,7 @@ def _die_with(parent: int) -> None:
 
 def _check(stop) -> None:
     if stop is not None and stop.asked:
-        from .commands.interrupt import Interrupted
+        from ..commands.interrupt import Interrupted
 
         raise Interrupted
 
@@ -139,8 +139,7 @@ def _run_local(sweep, todo, done, n, stop=None) -> None:
 
     # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    if method == "fork":
-        _warm()
+    _warm(sweep, todo[0][1] if todo else None)  # here first: forked workers start with them, spawned ones load them from the disk cache
     pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_start_worker,
                                initargs=(os.getpid(),))
     try:
@@ -164,6 +163,8 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
         from distributed import Client, LocalCluster, wait
     except ImportError:
         raise ConfigError("the dask backend needs dask.distributed: pip install -e '.[dask]'") from None
+    first = todo[0][1] if todo else None
+    _warm(sweep, first)  # compiled here once, not by every worker at the same time
     cluster = None
     try:
         if scheduler:
@@ -175,7 +176,7 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         with client:
-            client.run(_warm)
+            client.run(_warm, sweep, first)  # from the disk cache this process filled, on this machine
             futures = [client.submit(_task, sweep, indices, key=f"floatsim-chunk-{sweep.key()}-{cid}", retries=2) for cid, indices in todo]
             ids = {f.key: cid for f, (cid, _) in zip(futures, todo)}
             pending = set(futures)

@@ -17,7 +17,8 @@ from sim.parameters import Param
 
 from .loop import CONTROLLED, SPEED, Settings
 
-FOLDERS = {"body": "Body", "fluid": "Water", "waves": "Waves", "initial": "Start", "step": "Integration"}
+FOLDERS = {"Body": ("body",), "Water": ("fluid", "water"), "Waves": ("waves",), "Start": ("initial",), "Integration": ("step",)}
+"""The folders of controls, each holding the scene sections named."""
 VECTOR_STEP = 0.1
 
 
@@ -38,8 +39,8 @@ class Controls:
             self.reset = gui.add_button("Reset", hint="Back to the scene's initial state, keeping these parameters")
             self.speed = _control(gui, SPEED, settings.speed)
             self.scene = gui.add_dropdown("Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters")
-        for section, title in FOLDERS.items():
-            params = [p for p in CONTROLLED.values() if p.section == section]
+        for title, sections in FOLDERS.items():
+            params = [p for p in CONTROLLED.values() if p.section in sections]
             if params:
                 with gui.add_folder(title):
                     for p in params:
@@ -98,12 +99,13 @@ class Controls:
 
 
 def _control(gui, p: Param, value):
-    """The control a declaration asks for: a dropdown for a choice, three numbers for a vector, else a
+    """The control a declaration asks for: a dropdown for a choice, two or three numbers for a vector, else a
     slider whose range also holds `value` (a scene may start outside the usual range)."""
     if p.kind == "choice":
         return gui.add_dropdown(p.title, p.choices, initial_value=value, hint=p.help)
     if p.kind == "vector":
-        return gui.add_vector3(p.title, value, step=VECTOR_STEP, hint=p.help)
+        add = gui.add_vector2 if p.size == 2 else gui.add_vector3
+        return add(p.title, value, step=VECTOR_STEP, hint=p.help)
     lo, hi, step = p.gui
     kind = int if p.kind == "int" else float
     lo, hi = min(lo, value), max(hi, value)

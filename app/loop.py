@@ -23,7 +23,7 @@ import numpy as np
 
 import sim
 from sim.body import printable
-from sim.compiling import Compiler
+from sim.compiling import Compiler, kernels_ready
 from sim.compiling import load as load_kernels
 from sim.config import PARAMS, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
@@ -146,7 +146,7 @@ class SimLoop:
         resync_after: float = 1.0,
         fp_raise: bool = False,
         scene_options: tuple[str, ...] = (),
-        compiler: Compiler | None = None,
+        background_compile: bool = False,
     ):
         self._publish: Callable[[Snapshot], None] | None = None
         self._on_setting: Callable[[str, Any], None] | None = None
@@ -156,9 +156,13 @@ class SimLoop:
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
-        self._compiler = compiler
+        self._background = background_compile and default_backend() == "numba"
+        """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""
+        self._compiler: Compiler | None = None
         """The kernels compiling in a child process (sim/compiling.py); until it is done the numpy reference runs."""
-        self._backend = "numpy" if compiler is not None else None  # None: the default (compiled where there is a twin)
+        self._loaded: set = set()  # the kernels.Spec this process has loaded
+        self._failed: set = set()  # and those that did not compile: not tried again
+        self._backend = "numpy" if self._background else None  # None: the default (compiled where there is a twin)
         self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
         self._queue: queue.Queue = queue.Queue()
@@ -177,6 +181,7 @@ class SimLoop:
         self._notice, self._notice_id, self._notice_until = "", 0, 0.0
         self._advice_key, self._advice_text = None, ""
         self._errors_logged: set[str] = set()
+        self._ensure_kernels()
         self._publish_now()
 
     def attach(self, publish: Callable[[Snapshot], None] | None, on_setting: Callable[[str, Any], None] | None = None) -> None:
@@ -246,7 +251,7 @@ class SimLoop:
                     elif name != "_wake":
                         self._apply(name, value)
                 self._show_used({name for name, _ in commands if name in CONTROLLED})
-                self._take_compiled_kernels()
+                self._ensure_kernels()
                 now = time.monotonic()
                 if now >= next_tick:
                     next_tick = now + self.period
@@ -257,33 +262,47 @@ class SimLoop:
                 for event in barriers:
                     event.set()
 
-    def _take_compiled_kernels(self) -> None:
-        """Once the compiler child is done: load the kernels from the disk cache and step on them from the
-        next step on (the same state vector; only the backend changes), or say why not."""
+    def _ensure_kernels(self) -> None:
+        """Between two steps: run the scene on its compiled kernels where this machine has them (loaded from the
+        disk cache), else on the numpy reference while a child compiles them; switch when it is done (the same
+        state vector; only the backend changes). A scene change may need other kernels: the same again."""
+        if not self._background or not self.sim.has_twin:
+            return
+        spec = self.sim.spec
         compiler = self._compiler
-        if compiler is None or not compiler.done:
-            return
-        self._compiler = None
-        if not compiler.ok:
-            self._raise_notice(f"The fast kernels did not compile ({compiler.failure()}); the run stays on the numpy reference.")
-            return
-        try:
-            load_kernels()
-        except Exception as e:  # noqa: BLE001 -- the numpy reference runs on
-            self._log("loading the compiled kernels", e)
-            self._raise_notice(f"The fast kernels did not load ({type(e).__name__}); the run stays on the numpy reference.")
-            return
-        self._backend = None
-        self.sim.use_backend(default_backend())
-        self._cost_unknown()
-        self._restart_clock()
-        self._raise_notice(f"The fast kernels are ready (compiled in {compiler.seconds:.0f} s in the background): the run goes on with them.")
+        if compiler is not None and compiler.done:
+            self._compiler = None
+            if not compiler.ok:
+                self._failed.add(compiler.spec)
+                self._raise_notice(f"The fast kernels did not compile ({compiler.failure()}); the run stays on the numpy reference.")
+            elif compiler.spec == spec:
+                self._raise_notice(f"The fast kernels are ready (compiled in {compiler.seconds:.0f} s in the background): the run goes on with them.")
+        if spec not in self._loaded and spec not in self._failed and (self._compiler is None or self._compiler.spec != spec):
+            if kernels_ready(spec):
+                try:
+                    load_kernels(spec)
+                    self._loaded.add(spec)
+                except Exception as e:  # noqa: BLE001 -- the numpy reference runs on
+                    self._failed.add(spec)
+                    self._log("loading the compiled kernels", e)
+                    self._raise_notice(f"The fast kernels did not load ({type(e).__name__}); the run stays on the numpy reference.")
+            else:
+                if self._compiler is not None:
+                    self._compiler.stop()  # compiling kernels the scene no longer needs
+                self._compiler = Compiler(spec)
+                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
+                      "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
+        self._backend = default_backend() if spec in self._loaded else "numpy"
+        if self.sim.backend != self._backend:
+            self.sim.use_backend(self._backend)
+            self._cost_unknown()
+            self._restart_clock()
 
     def engine(self) -> str:
         """What steps the run, for the readouts: '' on the compiled kernels."""
         if self.sim.compiled:
             return ""
-        if self._compiler is not None:
+        if self._compiler is not None and self._compiler.spec == self.sim.spec:
             return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - self._compiler.started:.0f} s so far)"
         return "numpy reference"
 

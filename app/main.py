@@ -13,8 +13,6 @@ from urllib.parse import parse_qsl, quote
 
 import viser
 
-from sim.compiling import Compiler, kernels_ready
-from sim.compiling import load as load_kernels
 from sim.config import ConfigError, available_scenes, load_scene
 from sim.hydrostatics import describe_rest
 
@@ -58,7 +56,7 @@ class ViewerApp:
         with server.gui.add_folder("Share a link"):
             self.link = server.gui.add_html(copy_button_html(link_query(snap.settings)))
             self.link_text = server.gui.add_markdown("")
-        self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.is_still)
+        self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.flat)
         self._notice_id = snap.notice_id
         self._query, self._link_time = None, -1e9
         self._described = None
@@ -195,22 +193,6 @@ def check_address(host: str, port: int) -> int:
     raise ConfigError(f"port {port} is busy and so is every port up to {min(port + 100, 65535)}: give another --port (0: any free one)")
 
 
-def warm_kernels() -> Compiler | None:
-    """Load the physics kernels from the disk cache before the simulation thread needs them; on a first run on
-    this machine start compiling them in a child process instead (returned), and say so: the viewer runs on the
-    numpy reference until they are ready, so nobody waits for the compiler."""
-    from sim.simulation import default_backend
-
-    if default_backend() != "numba":
-        return None
-    if kernels_ready():
-        load_kernels()
-        return None
-    print("floatsim: first run on this machine: the fast kernels compile in the background (a few minutes, once); "
-          "until then the viewer runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
-    return Compiler()
-
-
 def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> ViewerApp:
     """Load the scene (a bad one raises ConfigError before any server starts), start server and simulation thread.
 
@@ -222,12 +204,11 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
 
         load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
     port = check_address(args.host, args.port)
-    compiler = warm_kernels()
     presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     quiet_repeated_tracebacks()
     big_blocks_go_back()
-    loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, compiler=compiler)
+    loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)

@@ -49,7 +49,7 @@ class MarkersView:
         h = snap.hydrostatics
         P = (body.mesh_vertices @ R.T + frame.x_world)[body.mesh_faces]
         water = snap.water
-        heights = None if water.is_still else water.height_above_surface(P.reshape(-1, 3), frame.t).reshape(P.shape[:2])
+        heights = None if water.flat else water.height_above_surface(P.reshape(-1, 3), frame.t).reshape(P.shape[:2])
         segments = waterline(P, heights)
         self._show_nodes(h is not None, len(segments) > 0)
         if h is not None:

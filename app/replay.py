@@ -53,7 +53,7 @@ def private_server():
 def stage(server: viser.ViserServer, take: Take, layers: FixedLayers | None = None) -> SceneView:
     """The take's scene at its first shot, on `server`."""
     first = take[0]
-    view = SceneView(server, layers or FixedLayers.of(), first.body, waves=not first.water.is_still, replay=True)
+    view = SceneView(server, layers or FixedLayers.of(), first.body, waves=not first.water.flat, replay=True)
     view.show(first, now=0.0)
     return view
 

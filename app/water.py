@@ -59,7 +59,7 @@ class WaterView:
 
     def show(self, water, t: float, centre: np.ndarray, visible: bool, now: float | None = None) -> None:
         """The flat sheet for still water; otherwise the surface around `centre` (x, y) at time t, throttled."""
-        still = water.is_still
+        still = water.flat
         if self.calm.visible != (visible and still):
             self.calm.visible = visible and still
         if self.surface.visible != (visible and not still):

@@ -1,9 +1,9 @@
 """The compiled kernels without the wait: a child process fills their disk cache while the numpy reference runs.
 
-A first run on a machine compiles the kernels for minutes. A compiler thread in the running process would
-hold the GIL against the simulation thread for most of that time, so `Compiler` runs `python -m
-sim.compiling` instead: a child that compiles every kernel into the disk cache (sim/kernels/__init__.py)
-and exits. The caller keeps stepping on the numpy reference, polls `done`, then loads the kernels from
+A scene's kernels (sim.kernels.specialised: its scheme, force model, terms and water) compile once per
+machine, in 20 s to a minute. A compiler thread in the running process would hold the GIL against the
+simulation thread for most of that time, so `Compiler` runs `python -m sim.compiling` instead: a child
+that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps stepping on the numpy reference, polls `done`, then loads the kernels from
 the cache (a second or two) and switches between two steps: the state is the same vector either way.
 
 `FLOATSIM_COMPILER` replaces the child's command (tests fill the cache by copying a warm one).
@@ -21,22 +21,37 @@ import time
 COMMAND_ENV = "FLOATSIM_COMPILER"
 
 
-def kernels_ready() -> bool:
-    """Whether the compiled kernels can be used at once: numba is the backend and this machine compiled them before."""
+def kernels_ready(spec) -> bool:
+    """Whether the compiled kernels for `spec` (kernels.Spec) can be used at once: numba is the backend and
+    this machine compiled them before."""
     from .simulation import default_backend
 
     if default_backend() != "numba":
         return False
     from .kernels import cached
 
-    return cached()
+    return cached(spec)
+
+
+def spec_argument(spec) -> str:
+    """A kernels.Spec as one command-line word (for the child)."""
+    return ",".join([spec.scheme, spec.model, "+".join(spec.terms), str(int(spec.waves)), str(int(spec.radiating)), str(int(spec.current))])
+
+
+def parse_spec(word: str):
+    from .kernels import Spec
+
+    scheme, model, terms, waves, radiating, current = word.split(",")
+    return Spec(scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1")
 
 
 class Compiler:
-    """A child process that compiles the kernels into the disk cache; it dies with this process."""
+    """A child process that compiles the kernels of `spec` into the disk cache; it dies with this process."""
 
-    def __init__(self):
+    def __init__(self, spec):
+        self.spec = spec
         command = shlex.split(os.environ.get(COMMAND_ENV, "")) or [sys.executable, "-m", "sim.compiling", str(os.getpid())]
+        command.append(spec_argument(spec))
         self.log = tempfile.TemporaryFile()  # its output, for the note when it fails
         self.started = time.monotonic()
         self.seconds: float | None = None
@@ -68,21 +83,36 @@ class Compiler:
             self._child.wait()
 
 
-def load() -> float:
-    """Load the kernels from the disk cache into this process (compiling what is missing); seconds taken."""
+def load(spec) -> float:
+    """Load the kernels of `spec` from the disk cache into this process (compiling what is missing); seconds taken."""
     from .kernels import warm_up
 
-    return warm_up()
+    return warm_up(spec)
 
 
-def _main(parent: int) -> int:
-    from .backends import _die_with
+def preset_specs() -> list:
+    """The kernels.Spec of every preset scene, as shipped."""
+    from .config import available_scenes, load_scene
+    from .simulation import Simulation
+
+    specs = []
+    for name in available_scenes():
+        sim = Simulation(load_scene(name), backend="numpy")
+        if sim.spec not in specs:
+            specs.append(sim.spec)
+    return specs
+
+
+def _main(parent: int, specs: list[str]) -> int:
+    """Compile the kernels of each spec given (spec_argument), or of every preset scene."""
+    from .sweeps.backends import _die_with
 
     _die_with(parent)  # a viewer stopped by SIGKILL leaves no compiler behind
-    seconds = load()
-    print(f"floatsim: compiled the kernels in {seconds:.1f} s", flush=True)
+    for spec in [parse_spec(word) for word in specs] or preset_specs():
+        seconds = load(spec)
+        print(f"floatsim: compiled the kernels for the {spec.describe()} in {seconds:.1f} s", flush=True)
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(_main(int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid()))
+    raise SystemExit(_main(int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid(), sys.argv[2:]))

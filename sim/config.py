@@ -85,7 +85,11 @@ WAVES = (
     Param("waves", "depth", None, "Water depth h (unset: deep water)", "m", lo=0.0, lo_open=True, hi=1e5, kind="optional"),
     Param("waves", "spreading", 0.0, "JONSWAP: directional spreading exponent s of cos^(2s) (0: long-crested)", lo=0.0, hi=100.0),
 )
-SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES}
+WATER = (
+    Param("water", "current", (0.0, 0.0), "Uniform current (u, v), world frame: the water and its waves move with it", "m/s", lo=-20.0,
+          hi=20.0, kind="vector", size=2, name="current", label="Current (u, v)", gui=()),
+)
+SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
 """Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
 assert len({p.key for p in PARAMS.values()}) == len(PARAMS), "a parameter key is declared in two sections"
@@ -104,7 +108,8 @@ FluidConfig = _section("FluidConfig", FLUID)
 InitialConfig = _section("InitialConfig", INITIAL)
 StepConfig = _section("StepConfig", STEP)
 WavesConfig = _section("WavesConfig", WAVES)
-SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig}
+WaterConfig = _section("WaterConfig", WATER)
+SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig, "water": WaterConfig}
 
 
 @dataclass(frozen=True)
@@ -116,6 +121,7 @@ class SceneConfig:
     initial: InitialConfig = field(default_factory=InitialConfig)
     step: StepConfig = field(default_factory=StepConfig)
     waves: WavesConfig = field(default_factory=WavesConfig)
+    water: WaterConfig = field(default_factory=WaterConfig)
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -192,6 +198,9 @@ def validate(scene: SceneConfig) -> SceneConfig:
     samples, flag = (b.samples, "--samples ([body] samples)") if b.shape == "mesh" else (6 * b.points_per_edge**2, "--points-per-edge")
     check_samples(samples, flag)  # before any array is made
     _check_steepness(checked["waves"], checked["fluid"].g)
+    if checked["fluid"].radiation != "none" and any(checked["water"].current):
+        raise ConfigError("a current with radiation is not modelled (the radiation memory assumes water at rest): "
+                          "set [water] current = [0, 0] or [fluid] radiation = \"none\"")
     norm = math.sqrt(sum(c * c for c in i.orientation))
     if abs(norm - 1.0) > QUATERNION_SLACK:
         raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "

@@ -58,7 +58,7 @@ class Ensemble:
         if not live:
             return
         first = self.sims[live[0]]
-        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].state.t == first.state.t and self.sims[i].model.radiation is None
+        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].scene.water == first.scene.water and self.sims[i].state.t == first.state.t and self.sims[i].model.radiation is None
                       for i in live)  # fmt: skip
         if self.backend == "numba" and first.compiled and one_sea:
             self._step_compiled(live, n, check_energy)
@@ -69,6 +69,14 @@ class Ensemble:
             except SimulationDiverged as e:
                 self.diverged[i] = str(e)
 
+    def spec(self, live: list[int] | None = None):
+        """The kernels.Spec that steps the bodies `live` together (default: all): every term any of them uses
+        (a term some body leaves out has a zero coefficient there: it adds nothing)."""
+        from .kernels import compiled_terms
+
+        sims = self.sims if live is None else [self.sims[i] for i in live]
+        return sims[0].spec._replace(terms=compiled_terms({name for s in sims for name in s.model.term_names}))
+
     def _step_compiled(self, live: list[int], n: int, check_energy: bool = True) -> None:
         from . import kernels
 
@@ -76,15 +84,10 @@ class Ensemble:
         Y = np.array([s.state.as_vector() for s in sims])
         masses = np.array([s.body.mass for s in sims])
         inertias = np.array([s.body.inertia for s in sims])
-        packed = [kernels.pack(s.model) for s in sims]
-        terms = 0
-        for mask, _ in packed:  # a term some body leaves out has a zero coefficient there: it adds nothing
-            terms |= mask
-        coefs = np.array([coef for _, coef in packed])
-        scheme = kernels.SCHEMES[sims[0].integrator.name]
+        coefs = np.array([kernels.pack(s.model)[1] for s in sims])
         sea = kernels.sea_pack(sims[0].model.water, self.shape)
-        Y, done = kernels.advance_many(Y, sims[0].state.t, n, self.dt, scheme, kernels.MODELS[sims[0].params.forces], self.shape.packed, masses,
-                                       inertias, terms, coefs, sea, kernels.NO_RADIATION)  # fmt: skip
+        Y, done = kernels.specialised(self.spec(live)).schemes.advance_many(Y, sims[0].state.t, n, self.dt, self.shape.packed, masses, inertias, coefs, sea,
+                                                         kernels.NO_RADIATION)  # fmt: skip
         for i, s, y, k in zip(live, sims, Y, done):
             before = s.state
             s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])  # the ensemble steps bodies without radiation

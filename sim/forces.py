@@ -80,7 +80,7 @@ def damping_matrix(fluid, wet: WetSurface) -> np.ndarray:
 def damping(body, water, fluid, wet, twist, t) -> Load:
     """Linear viscous damping: the integral of -d v_rel dA, linear in the twist."""
     D = damping_matrix(fluid, wet)
-    affine = np.zeros(6) if water.is_still else _wrench(wet, fluid.damping * wet.weight[:, None] * wet.flow)
+    affine = np.zeros(6) if water.at_rest else _wrench(wet, fluid.damping * wet.weight[:, None] * wet.flow)
     load = affine - D @ twist
     return Load(load[:3], load[3:], D, affine)
 
@@ -180,7 +180,7 @@ class Model:
     def wetted(self, x: np.ndarray, R: np.ndarray, t: float = 0.0) -> WetSurface:
         if not self.needs_wet:
             return empty_surface(x)
-        key = (x.tobytes(), R.tobytes(), t if not self.water.is_still else 0.0)
+        key = (x.tobytes(), R.tobytes(), t if not self.water.flat else 0.0)
         if key != self._cache_key:
             self._cache, self._cache_key = self._wet_surface(self.body, self.water, x, R, t), key
         return self._cache

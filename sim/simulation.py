@@ -78,9 +78,10 @@ class Frame:
                 self.E_hyd_of_model]  # fmt: skip
 
 
-def observe(model: Model, state: State, compiled: bool = False, expand: bool = True) -> Frame:
-    """All diagnostics of a state, from one wet surface (with compiled=True, from the compiled twin:
-    the same numbers to round-off, or to the bound of its sea expansion; expand=False: the direct sum)."""
+def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
+    """All diagnostics of a state, from one wet surface (with `kernels`, a kernels.specialised copy for the
+    model, from the compiled twin: the same numbers to round-off, or to the bound of its sea expansion;
+    expand=False: the direct sum)."""
     body, water = model.body, model.water
     R = state.R_world_body
     omega = angular_velocity(body, R, state.L_world)
@@ -92,14 +93,14 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
             - 0.5 * float(omega @ state.L_world)
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
-    if compiled and compiled_model(model):
-        from .kernels import MODELS, pack, sea_pack
-        from .kernels.simulation import observe as observe_kernel
+    if kernels is not None:
+        from .kernels import Model as Packed
+        from .kernels import pack, sea_pack
 
         wet = np.empty(body.n_samples, dtype=bool)
-        terms, coef = pack(model)
-        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[model.fluid.forces], state.x_world, R, state.t, state.u_world, omega, body.packed,
-                                                   body.mass, terms, coef, sea_pack(water, body, expand), wet)  # fmt: skip
+        packed = Packed(body.packed, body.mass, body.inertia, pack(model)[1])
+        F, T, e_hyd, a_sub, v_sub = kernels.simulation.observe(state.x_world, R, state.t, state.u_world, omega, packed, sea_pack(water, body, expand),
+                                                               wet)  # fmt: skip
         wet_index = np.flatnonzero(wet)
     else:
         wet = model.wetted(state.x_world, R, state.t)
@@ -109,24 +110,22 @@ def observe(model: Model, state: State, compiled: bool = False, expand: bool = T
     if model.radiation is not None:
         f = model.radiation.force(R, state.memory)
         F, T = F + f[:3], T + f[3:]
-    exact = e_hyd if model.fluid.forces == "panels" else physical_hydrostatic_energy(model, state.x_world, R, state.t, compiled)
+    exact = e_hyd if model.fluid.forces == "panels" else physical_hydrostatic_energy(model, state.x_world, R, state.t, kernels)
     return Frame(**common, force_world=F, torque_world=T, E_hyd=exact, submerged_area=a_sub, submerged_volume=v_sub, wet_index=wet_index,
                  E_hyd_model=None if model.fluid.forces == "panels" else e_hyd)  # fmt: skip
 
 
 def compiled_model(model: Model) -> bool:
     """Whether the kernels have the model's force model for its water (cells: still water only)."""
-    return model.fluid.forces != "cells" or model.water.is_still
+    return model.fluid.forces != "cells" or model.water.flat
 
 
-def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: float, compiled: bool = False) -> float:
+def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: float, kernels=None) -> float:
     """rho g * integral of (-z) dV over the body's mesh clipped at the water surface, J (0 without pressure)."""
     if not model.has("pressure"):
         return 0.0
-    if compiled and model.water.is_still:
-        from .kernels.simulation import exact_hydrostatic_energy
-
-        return float(exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
+    if kernels is not None and model.water.flat:
+        return float(kernels.simulation.exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
     return hydrostatic_energy(model.water, wet_panels(model.body, model.water, x, R, t))
 
 
@@ -227,7 +226,7 @@ class Simulation:
             from .radiation import make_radiation
 
             radiation = make_radiation(body, fluid, initial_state(body, self.scene).R_world_body)
-        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g), fluid, radiation)
+        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current), fluid, radiation)
 
     @property
     def body(self) -> Body:
@@ -246,22 +245,42 @@ class Simulation:
         """Diagnostics of the current state (computed once per state and model)."""
         key = (self.state, self.model)
         if self._frame_key != key:
-            self._frame, self._frame_key = observe(self.model, self.state, self.backend == "numba", self.expand_waves), key
+            self._frame, self._frame_key = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves), key
         return self._frame
 
     @property
     def compiled(self) -> bool:
         """Whether steps run in the compiled kernels (a fixed-step integrator with a compiled twin)."""
-        from .kernels.layout import SCHEMES
+        return self.backend == "numba" and self.has_twin
 
-        return self.backend == "numba" and self.integrator.name in SCHEMES and compiled_model(self.model)
+    @property
+    def has_twin(self) -> bool:
+        """Whether the scene has a compiled twin: a fixed-step integrator with one, a force model it covers in this water, every term compiled."""
+        from .kernels import SCHEMES, missing_terms
+
+        return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model)
+
+    @property
+    def spec(self):
+        """What the compiled kernels specialise on for this scene (kernels.Spec)."""
+        from .kernels import spec_of
+
+        return spec_of(self.model, self.integrator.name)
+
+    def kernels(self):
+        """The compiled kernels for this scene (kernels.specialised: loaded from the disk cache, or compiled now)."""
+        from .kernels import specialised
+
+        return specialised(self.spec)
 
     def _check_backend(self) -> None:
-        from .kernels.layout import SCHEMES
+        from .kernels import SCHEMES, missing_terms
 
         integ = self.integrator
         note = None
-        if self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
+        if self.backend == "numba" and missing_terms(self.model):
+            note = f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)"
+        elif self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
         elif self.backend == "numba" and not compiled_model(self.model):
             note = "the cells force model has no compiled twin in waves: it runs on the numpy reference (slower)"
@@ -307,14 +326,13 @@ class Simulation:
         from . import kernels
 
         body = self.body
-        terms, coef = kernels.pack(self.model)
+        _, coef = kernels.pack(self.model)
         if self._sea[0] != (self.model, self.expand_waves):
             self._sea = ((self.model, self.expand_waves), kernels.sea_pack(self.model.water, body, self.expand_waves))
         if self._rad[0] != (self.model, self.dt):
             self._rad = ((self.model, self.dt), kernels.radiation_pack(self.model.radiation, body, self.dt))
-        y, done = kernels.advance(self.state.as_vector(), self.state.t, n, self.dt, kernels.SCHEMES[self.integrator.name],
-                                  kernels.MODELS[self.params.forces], body.packed, body.mass, body.inertia, terms, coef, self._sea[1],
-                                  self._rad[1])  # fmt: skip
+        y, done = self.kernels().schemes.advance(self.state.as_vector(), self.state.t, n, self.dt, kernels.Model(body.packed, body.mass, body.inertia, coef),
+                                                 self._sea[1], self._rad[1])  # fmt: skip
         extra = (y[13:-1].copy(), float(y[-1])) if len(y) > 13 else ()  # radiation: the memory and E_rad
         state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13], *extra)
         if done < n:
@@ -385,7 +403,7 @@ class Simulation:
             omega = angular_velocity(body, R, self.state.L_world)
             self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
-        elif old.fluid != scene.fluid or old.waves != scene.waves or (self.model.radiation is not None and old.initial != scene.initial):
+        elif old.fluid != scene.fluid or old.waves != scene.waves or old.water != scene.water or (self.model.radiation is not None and old.initial != scene.initial):
             self.model = self._model(body)  # (radiation is linear about the scene's starting orientation)
             self._check_backend()
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):

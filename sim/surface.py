@@ -105,7 +105,7 @@ def empty_surface(x: np.ndarray) -> WetSurface:
 
 def wet_points(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface:
     """The samples under the water surface, each a node weighted by its area."""
-    if water.is_still:  # a flat surface at rest: the samples' heights alone decide
+    if water.flat:  # a flat surface: the samples' heights alone decide
         wet = np.flatnonzero(x[2] + body.r_body @ R[2] < water.elevation(x[:2], t))
     else:
         wet = np.flatnonzero(water.height_above_surface(x + body.r_body @ R.T, t) < 0.0)
@@ -118,7 +118,7 @@ def wet_cells(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurface
     (as in 'points'); a cell the surface crosses is one node at the centroid of its wet part,
     weighted by that part's area (the surface between corners taken linear, exact for still water)."""
     corners = body.cell_corners @ R.T  # (n, 4, 3) levers
-    if water.is_still:
+    if water.flat:
         h = x[2] + corners[..., 2] - water.elevation(x[:2], t)
     else:
         h = water.height_above_surface(x + corners.reshape(-1, 3), t).reshape(-1, 4)
@@ -187,7 +187,7 @@ def wet_panels(body, water, x: np.ndarray, R: np.ndarray, t: float) -> WetSurfac
         return empty_surface(x)
     normal = body.face_normals[owner] @ R.T
     area = triangle_areas(T, normal)
-    if water.is_still:
+    if water.flat:
         nodes, weights = 0.5 * (T + T[:, [1, 2, 0]]), np.full(3, 1 / 3)  # edge midpoints (k, 3, 3)
     else:
         nodes, weights = np.einsum("qv,kvi->kqi", DUNAVANT4, T), DUNAVANT4_WEIGHTS

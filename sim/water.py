@@ -2,10 +2,17 @@
 
 Every wet test and every force term asks a `Water`, never the plane z = 0 itself. Still water is
 the first kind; waves plug in as further kinds with the same three questions. World frame, SI units.
+
+Two properties say what a kind can skip: `flat` (the surface is z = 0 at all times and the pressure
+hydrostatic: the kernels' closed forms hold) and `at_rest` (the water does not move: damping and drag
+act on the body's own velocity). A uniform current U = (u, v, 0) is a property of the water, not a force
+term: the whole water moves with it (its waves too, as seen from the seabed: Galilean invariance), so
+the velocity everywhere gains U and a wave component's phase advances at omega + k . U.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -23,9 +30,15 @@ class StillWater:
     """Water density, kg/m^3."""
     g: float = 9.81
     """Gravitational acceleration, m/s^2."""
+    current: tuple[float, float] = (0.0, 0.0)
+    """Uniform current (u, v), m/s, world frame."""
 
     kind = "still"
-    is_still = True
+    flat = True
+
+    @property
+    def at_rest(self) -> bool:
+        return self.current == (0.0, 0.0)
 
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
         """Surface height eta(x, y, t) at (..., 2) horizontal positions, m."""
@@ -33,7 +46,7 @@ class StillWater:
 
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         """Fluid velocity at (..., 3) points under the surface, m/s."""
-        return np.zeros(np.shape(points))
+        return np.broadcast_to(np.array([*self.current, 0.0]), np.shape(points)).copy()
 
     def pressure(self, points: np.ndarray, t: float) -> np.ndarray:
         """Gauge pressure at (..., 3) points under the surface, Pa (zero on the surface)."""
@@ -72,15 +85,18 @@ class Waves:
     """(n,) phases phi_i, rad."""
     depth: float = math.inf
     """Water depth h, m (inf: deep water)."""
+    current: tuple[float, float] = (0.0, 0.0)
+    """Uniform current (u, v), m/s: the waves above are those seen moving with it."""
 
     kind = "waves"
-    is_still = False
+    flat = False
+    at_rest = False
 
     def _psi(self, xy: np.ndarray, t: float) -> np.ndarray:
-        """(..., n) phases k_i . x - omega_i t + phi_i."""
+        """(..., n) phases k_i . (x - U t) - omega_i t + phi_i: the waves carried by the current U."""
         kx = self.k * np.cos(self.direction)
         ky = self.k * np.sin(self.direction)
-        return xy[..., :1] * kx + xy[..., 1:2] * ky - self.omega * t + self.phase
+        return xy[..., :1] * kx + xy[..., 1:2] * ky - (self.omega + kx * self.current[0] + ky * self.current[1]) * t + self.phase
 
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
         return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
@@ -127,6 +143,8 @@ class Waves:
         velocity[..., 0] = horizontal @ np.cos(self.direction)
         velocity[..., 1] = horizontal @ np.sin(self.direction)
         velocity[..., 2] = (self._decay(zs, "sinh/sinh") * sin) @ aw
+        velocity[..., 0] += self.current[0]
+        velocity[..., 1] += self.current[1]
         return pressure, velocity
 
 
@@ -186,11 +204,13 @@ def jonswap_waves(rho: float, g: float, hs: float, tp: float, gamma: float = 3.3
     return Waves(rho, g, amplitude, omega, wavenumber(omega, g, depth), theta, phase, depth)
 
 
-def make_water(waves, rho: float, g: float):
-    """The water a scene's [waves] table and [fluid] rho, g describe."""
+def make_water(waves, rho: float, g: float, current=(0.0, 0.0)):
+    """The water a scene's [waves] table, [water] current and [fluid] rho, g describe."""
     depth = math.inf if waves.depth is None else float(waves.depth)
+    current = (float(current[0]), float(current[1]))
     if waves.kind == "regular":
-        return regular_waves(rho, g, waves.height, waves.period, waves.direction, depth)
+        return dataclasses.replace(regular_waves(rho, g, waves.height, waves.period, waves.direction, depth), current=current)
     if waves.kind == "jonswap":
-        return jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
-    return StillWater(rho, g)
+        sea = jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
+        return dataclasses.replace(sea, current=current)
+    return StillWater(rho, g, current)

@@ -9,13 +9,30 @@ import pytest
 
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_kernels():
-    """Compile (fresh clone) or load the numba kernels once, before any test times anything."""
+    """Compile (fresh clone) or load the presets' numba kernels once, before any test times anything: in two
+    child processes at once (this machine's two cores), once for all pytest-xdist workers (a file lock).
+    Other specialisations compile where a test first needs them."""
     from sim.simulation import default_backend
 
-    if default_backend() == "numba":
-        from sim.kernels import warm_up
+    if default_backend() != "numba":
+        return
+    import fcntl
+    import subprocess
+    import sys
 
-        warm_up()
+    from sim.compiling import preset_specs, spec_argument
+    from sim.kernels import KERNEL_CACHE, cached, warm_up
+
+    specs = preset_specs()
+    os.makedirs(KERNEL_CACHE, exist_ok=True)
+    with open(os.path.join(KERNEL_CACHE, ".tests.lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        todo = [spec_argument(spec) for spec in specs if not cached(spec)]
+        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]]) for i in range(2) if todo[i::2]]
+        for child in children:
+            assert child.wait() == 0, "the presets' kernels did not compile"
+    for spec in specs:
+        warm_up(spec)  # from the disk cache
 
 
 @pytest.fixture(autouse=True)

@@ -206,6 +206,27 @@ def test_density_and_damping_keep_velocities(make_app):
     assert app.latest().params.damping == 321.0
 
 
+def test_current_control_carries_the_body_downstream_and_bad_values_are_clamped(make_app):
+    """The Water folder's current (u, v): the running water changes at once, the state is kept, and the
+    damped cube, at rest, starts moving with the water; a current past the declared range is clamped with a notice."""
+    app = make_app("rest", paused=True)
+    c = app.controls
+    c.damping.value = 200.0
+    before = app.sync().frame
+    c.current.value = (0.4, -0.2)
+    snap = app.sync()
+    assert snap.settings.current == (0.4, -0.2) and app.loop.sim.model.water.current == (0.4, -0.2)
+    np.testing.assert_array_equal(snap.frame.x_world, before.x_world)  # a water property: the pose is kept
+    c.paused.value = False
+    snap = wait_for(app, lambda s: s.frame.t > before.t + 3.0, what="three seconds in the current")
+    u = snap.frame.u_world
+    assert u[0] > 0.05 and u[1] < -0.025 and abs(u[1] / u[0] + 0.5) < 0.05  # pushed along the current, towards its speed
+    c.current.value = (100.0, 0.0)
+    snap = app.sync()
+    assert snap.settings.current == (20.0, 0.0) and c.current.value == (20.0, 0.0)
+    assert snap.notice.startswith("Current")
+
+
 def test_dt_integrator_and_step(make_app):
     app = make_app("drop", paused=True)
     c = app.controls
@@ -455,7 +476,7 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     app.controls.kind.value = "regular"
     app.controls.height.value = 0.6
     snap = app.sync()
-    assert not snap.water.is_still and snap.settings.config.waves.kind == "regular"
+    assert not snap.water.flat and snap.settings.config.waves.kind == "regular"
     started, before = time.monotonic(), water.updates
     wait_for(app, lambda s: water.updates >= before + 5, what="wave surfaces")
     elapsed = time.monotonic() - started

@@ -7,12 +7,9 @@ from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, Simulation, SimulationDiverged, State, StillWater, load_scene, make_integrator, with_overrides
 from sim.body import make_box, make_mesh_body
-from sim.kernels import NO_RADIATION, SCHEMES, advance, pack, sea_pack
-from sim.kernels.forces import linearised, pose_loads, twist_loads
-from sim.kernels.layout import MODELS
-from sim.kernels.simulation import observe as observe_kernel
-from sim.kernels.surface import wet_integrals, workspace
-from sim.kernels.water import elevations, fields, prepare
+from sim.kernels import NO_RADIATION, SCHEMES, Spec, pack, sea_pack, spec_of, specialised
+from sim.kernels.layout import Model as Packed
+from sim.kernels.layout import Scratch
 from sim.water import jonswap_waves, regular_waves
 
 CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
@@ -93,6 +90,14 @@ def model_of(body_name: str, forces: str, damping: float = 40.0, drag_coefficien
     return Model(BODIES[body_name](), WATERS[water](), fluid)
 
 
+def kernels_of(model: Model, scheme: str = "implicit"):
+    """The compiled kernels specialised for this model (and scheme)."""
+    return specialised(spec_of(model, scheme))
+
+
+WAVE_KERNELS = Spec("implicit", "points", ("gravity", "pressure", "damping"), True, False)
+
+
 def close(a, b, scale=1.0, tol=1e-12):
     np.testing.assert_allclose(a, b, rtol=0, atol=tol * max(1.0, scale, np.abs(b).max()))
 
@@ -103,11 +108,12 @@ def test_stage_wet_integrals(body_name, forces):
     """The kernel's running wet-set sums (points, carried from pose to pose) and closed-form clipped
     panels against the reference's quadrature nodes: area, z nu, (z r) x nu, r and r r^T integrals."""
     model = model_of(body_name, forces)
-    flags, acc, ws = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34), workspace(model.body.packed)
+    k = kernels_of(model)
+    flags, acc, ws = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34), k.surface.workspace(model.body.packed)
     for q, z in POSES:
         x, R = np.array([0.05, -0.1, z]), Rotation.from_quat(q, scalar_first=True).as_matrix()
         wet = model.wetted(x, R)
-        zn, zt, A, S, rr = wet_integrals(MODELS[forces], x, R, model.body.packed, True, flags, acc, ws)
+        zn, zt, A, S, rr = k.wet.wet_integrals(x, R, model.body.packed, True, flags, acc, ws)
         wz = wet.weight * wet.point[:, 2]
         close(A, wet.submerged_area)
         close(zn, wz @ wet.normal)
@@ -126,7 +132,9 @@ def test_stage_loads_and_linearisation(body_name, forces, water):
     model = model_of(body_name, forces, water=water)
     terms, coef = pack(model)
     assert terms == 0b1111  # gravity, pressure, damping, drag
-    flags, acc, ws = np.zeros(model.body.n_samples, dtype=bool), np.zeros(34), workspace(model.body.packed)
+    k = kernels_of(model)
+    s = Scratch(np.zeros(model.body.n_samples, dtype=bool), np.zeros(34), k.surface.workspace(model.body.packed))
+    body = Packed(model.body.packed, model.body.mass, model.body.inertia, coef)
     sea = sea_pack(model.water, model.body)
     weight = model.body.mass * 9.81
     tol = 1e-10 if water == "jonswap" else 1e-12  # the expansion's truncation bound is 1e-13 of the amplitudes
@@ -135,13 +143,13 @@ def test_stage_loads_and_linearisation(body_name, forces, water):
         x, R = np.array([0.0, 0.2, z]), Rotation.from_quat(q, scalar_first=True).as_matrix()
         wet = model.wetted(x, R, t)
         u, w = twist[:3], twist[3:]
-        F, T, D, is_wet = pose_loads(MODELS[forces], x, R, t, model.body.packed, model.body.mass, terms, coef, sea, flags, acc, ws)
+        F, T, D, is_wet = k.forces.pose_loads(x, R, t, body, s, sea)
         Fv, Tv = F.copy(), T.copy()
-        twist_loads(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, D, is_wet, flags, Fv, Tv, ws)
+        k.forces.twist_loads(x, R, u, w, body, D, is_wet, s, Fv, Tv)
         F_ref, T_ref = model.loads(wet, u, w, t)
         close(Fv, F_ref, weight, tol)
         close(Tv, T_ref, weight, tol)
-        f, Dt = linearised(MODELS[forces], x, R, u, w, model.body.packed, coef, terms, F, T, D, is_wet, flags, ws)
+        f, Dt = k.forces.linearised(x, R, u, w, body, F, T, D, is_wet, s)
         f_ref, D_ref = model.linearised(wet, twist, t)
         close(f, f_ref, weight, tol)
         assert is_wet == (D_ref is not None)  # a wave trough can leave the body dry
@@ -153,16 +161,17 @@ def test_stage_loads_and_linearisation(body_name, forces, water):
 @pytest.mark.parametrize("scheme", list(SCHEMES))
 def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
     model = model_of(body_name, forces, water=water)
-    terms, coef = pack(model)
+    _, coef = pack(model)
     sea = sea_pack(model.water, model.body)
     integrator = make_integrator(scheme)
+    schemes = kernels_of(model, scheme).schemes
     t = 0.0 if water == "still" else T_WAVES
     for (q, z), twist in zip(POSES[:3], TWISTS):
         R = Rotation.from_quat(q, scalar_first=True).as_matrix()
         state = State(t, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
         ref = integrator.step(model, state, 0.01).as_vector()
-        y, done = advance(state.as_vector(), t, 1, 0.01, SCHEMES[scheme], MODELS[forces], model.body.packed, model.body.mass, model.body.inertia,
-                          terms, coef, sea, NO_RADIATION)  # fmt: skip
+        y, done = schemes.advance(state.as_vector(), t, 1, 0.01, Packed(model.body.packed, model.body.mass, model.body.inertia, coef), sea,
+                                  NO_RADIATION)  # fmt: skip
         assert done == 1
         close(y, ref, np.abs(ref).max(), 1e-10 if water == "jonswap" else 1e-12)
 
@@ -171,7 +180,9 @@ def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
 @pytest.mark.parametrize("forces, water", FORCES_WATERS)
 def test_stage_frame_with_every_term(body_name, forces, water):
     model = model_of(body_name, forces, water=water)
-    terms, coef = pack(model)
+    _, coef = pack(model)
+    observe_kernel = kernels_of(model).simulation.observe
+    body = Packed(model.body.packed, model.body.mass, model.body.inertia, coef)
     sea = sea_pack(model.water, model.body)
     t = 0.0 if water == "still" else T_WAVES
     tol = 1e-10 if water == "jonswap" else 1e-12
@@ -179,8 +190,7 @@ def test_stage_frame_with_every_term(body_name, forces, water):
         R = Rotation.from_quat(q, scalar_first=True).as_matrix()
         x = np.array([0.0, 0.0, z])
         wet = np.empty(model.body.n_samples, dtype=bool)
-        F, T, e_hyd, a_sub, v_sub = observe_kernel(MODELS[forces], x, R, t, twist[:3], twist[3:], model.body.packed, model.body.mass, terms, coef,
-                                                   sea, wet)  # fmt: skip
+        F, T, e_hyd, a_sub, v_sub = observe_kernel(x, R, t, twist[:3], twist[3:], body, sea, wet)
         ref = model.wetted(x, R, t)
         F_ref, T_ref = model.loads(ref, twist[:3], twist[3:], t)
         close(F, F_ref, model.body.mass * 9.81, tol)
@@ -205,9 +215,9 @@ def test_compiled_path_matches_numpy_with_drag(integrator, forces):
 
 def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(monkeypatch):
     """A new fixed-step scheme that has no compiled twin yet runs on the reference, and says so."""
-    import sim.kernels.layout as layout
+    import sim.kernels
 
-    monkeypatch.setattr(layout, "SCHEMES", {k: v for k, v in layout.SCHEMES.items() if k != "rk4"})
+    monkeypatch.setattr(sim.kernels, "SCHEMES", {k: v for k, v in sim.kernels.SCHEMES.items() if k != "rk4"})
     config = with_overrides(load_scene("damped"), step__integrator="rk4")
     sim = Simulation(config, backend="numba")
     assert not sim.compiled and any("rk4" in note and "numpy" in note for note in sim.notes)
@@ -243,6 +253,7 @@ def test_local_expansion_of_the_sea_matches_the_direct_sum():
     x = np.array([3.0, -2.0, -0.4])
     pts = x + np.random.default_rng(5).uniform(-1, 1, (400, 3)) * body.radius / np.sqrt(3)
     results = []
+    prepare, elevations, fields = (getattr(specialised(WAVE_KERNELS).water, f) for f in ("prepare", "elevations", "fields"))
     for expand in (True, False):
         sea = sea_pack(water, body, expand)
         ex = prepare(sea, T_WAVES, x)
@@ -263,6 +274,7 @@ def test_a_body_large_against_the_waves_falls_back_to_the_direct_sum():
     """A 300 m barge in a sea whose short waves are 14 m long: no expansion degree meets the bound."""
     body = make_box((300.0, 60.0, 20.0), 2, 1.0e8)
     water = jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1)
+    prepare = specialised(WAVE_KERNELS).water.prepare
     assert prepare(sea_pack(water, body), 0.0, np.zeros(3))[0] == -1
     assert prepare(sea_pack(water, BODIES["cube"]()), 0.0, np.zeros(3))[0] > 0
 

@@ -49,7 +49,7 @@ def test_each_term_parameter_is_a_scene_key_a_flag_a_control_and_a_kernel_slot(t
 class RaisedWater(StillWater):
     """Calm water whose surface stands at z = 0.3 m instead of 0."""
 
-    is_still = False  # not the kernels' plane z = 0
+    flat = False  # not the kernels' plane z = 0
 
     def elevation(self, xy, t):
         return np.full(np.shape(xy)[:-1], 0.3)

@@ -67,7 +67,7 @@ def test_zero_amplitude_is_still_water(forces, integrator):
     base = with_overrides(load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.5, step__integrator=integrator, step__dt=0.01)
     still = Simulation(base, backend="numpy")
     flat = Simulation(with_overrides(base, waves__kind="regular", waves__height=0.0), backend="numpy")
-    assert not flat.model.water.is_still
+    assert not flat.model.water.flat
     still.step(150)
     flat.step(150)
     a = still.state.as_vector()

@@ -83,7 +83,7 @@ def bench(args: BenchArgs) -> int:
     from ..ensemble import Ensemble
     from ..kernels import warm_up
 
-    compile_s = warm_up()
+    compile_s = 0.0
     base = load_scene(args.scene)
     cells = ([("points", n, name) for n in args.sizes for name in args.integrators] + [("cells", n, "implicit") for n in args.sizes]
              + [("panels", 0, name) for name in args.integrators])  # fmt: skip
@@ -93,6 +93,7 @@ def bench(args: BenchArgs) -> int:
         scene = with_overrides(base, fluid__forces=forces, step__integrator=name, body__points_per_edge=n or base.body.points_per_edge)
         fast = Simulation(scene, backend="numba")
         ref = Simulation(scene, backend="numpy")
+        compile_s += warm_up(fast.spec) if fast.compiled else 0.0
         t_fast = _median_step_seconds(fast, args.repeats, args.budget)
         t_ref = _median_step_seconds(ref, max(1, args.repeats // 2), args.budget)
         samples = fast.body.n_samples
@@ -141,8 +142,8 @@ def bench(args: BenchArgs) -> int:
 
 def _sweep_rows(cases: int) -> list[tuple[str, ...]]:
     """One sweep on each backend: throughput, its ratio to one core, and the share of wall time lost to scheduling."""
-    from ..backends import run
-    from ..grid import Sweep, case_scene, chunks, parse_param
+    from ..sweeps.backends import run
+    from ..sweeps.grid import Sweep, case_scene, chunks, parse_param
 
     side = max(1, round(cases**0.5))
     spec = Sweep("damped", (parse_param(f"density=300:1500:{side}"), parse_param(f"orientation_seed=0:{max(0, cases // side - 1)}:{cases // side}")),

@@ -15,7 +15,7 @@ import tyro
 from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
 from ..hydrostatics import describe_rest
 from ..limits import step_time
-from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged
+from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged, default_backend
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .progress import progress_bar
@@ -74,9 +74,13 @@ def numpy_seconds(sim: Simulation, n_steps: int) -> float:
     import time
 
     probe = Simulation(sim.scene, backend="numpy")
-    probe.step(1)
-    started = time.perf_counter()
-    probe.step(3)
+    probe.step_seconds = sim.step_seconds
+    try:
+        probe.step(1)
+        started = time.perf_counter()
+        probe.step(3)
+    except SimulationDiverged:  # the run stops as soon: no compile is worth it
+        return 0.0
     return (time.perf_counter() - started) / 3 * n_steps
 
 
@@ -85,11 +89,10 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
     `sim` was built on the numpy reference when they are not built yet (kernels_ready): a short run stays
     there, saying so; a longer one moves to the kernels, which compile first."""
     from ..compiling import kernels_ready
-    from ..simulation import default_backend
 
-    if sim.backend != default_backend() and not kernels_ready():
+    if sim.has_twin and sim.backend != default_backend() and not kernels_ready(sim.spec):
         if (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
-            print(f"floatsim: note: the fast kernels are not compiled on this machine yet (minutes, once); this short run takes about "
+            print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (under a minute, once); this short run takes about "
                   f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.compiling`, compiles them)",
                   file=sys.stderr)  # fmt: skip
             return
@@ -99,10 +102,10 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
     if sim.compiled:
         from ..kernels import cached, warm_up
 
-        if not cached():  # say so before the wait, not after it
-            print("floatsim: compiling the fast kernels, once for this machine (a few minutes; cached on disk afterwards)...",
-                  file=sys.stderr, flush=True)  # fmt: skip
-        seconds = warm_up()
+        if not cached(sim.spec):  # say so before the wait, not after it
+            print(f"floatsim: compiling the fast kernels for this scene ({sim.spec.describe()}), once for this machine (under a minute; "
+                  "cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
+        seconds = warm_up(sim.spec)
         if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes
             print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
 
@@ -165,7 +168,9 @@ def run(args: RunArgs, watch=None) -> int:
     scene = scene_from_args(args)
     from ..compiling import kernels_ready
 
-    sim = Simulation(scene, backend=None if kernels_ready() else "numpy")  # nothing compiles before we know the run needs it
+    sim = Simulation(scene, backend="numpy")  # nothing compiles before we know the run needs it
+    if kernels_ready(sim.spec):
+        sim.use_backend(default_backend())
     sim.step_seconds = args.step_budget  # an adaptive method stuck on one step stops with the viewer's message
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)

@@ -1,19 +1,30 @@
 """The compiled twin of the numpy reference (numba): one module per reference module, same function
-names, sharing the array contract in layout.py. Compiled once and cached on disk.
+names, sharing the array contract in layout.py. Compiled per scene, once, and cached on disk.
+
+A scene compiles only what it uses: `specialised(spec)` imports this folder's modules afresh under a
+name of their own (sim.kernels_<spec>), whose spec.py holds the scheme, force model, terms, water
+kind and radiation as constants that numba folds before it compiles (a still-water drop: one
+scheme, two terms). Each copy caches its own compiled code.
 
 numba checks a cached kernel against its own file only, not the files of the kernels it calls, so
-the cache lives in a folder named after a hash of every kernel source, of the term registry and of the integrators' constants:
-any change to them compiles afresh instead of running stale code.
+the cache lives in a folder named after a hash of every kernel source, of the term registry and of the
+integrators' constants: any change to them compiles afresh instead of running stale code.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib
 import os
+import sys
+import threading
+import types
 from pathlib import Path
+from typing import NamedTuple
 
 import numba
-from numba import njit
+
+from .layout import COMPILED_TERMS, MODELS, NO_RADIATION, SCHEMES, Model, pack, radiation_pack, sea_pack
 
 _HERE = Path(__file__).resolve().parent
 
@@ -25,21 +36,124 @@ def _cache_dir() -> str:
     return os.path.join(root, f"kernels-{digest}")
 
 
-def cached() -> bool:
-    """Whether these kernels were compiled on this machine before (their disk cache has entries)."""
-    return any(name.endswith(".nbi") for _, _, names in os.walk(KERNEL_CACHE) for name in names)
-
-
-JIT = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
-
-_users_cache_dir = numba.config.CACHE_DIR
 KERNEL_CACHE = _cache_dir()
-numba.config.CACHE_DIR = KERNEL_CACHE  # read by numba as each kernel below is decorated; others' code keeps the user's
-try:
-    from .integrators import advance, advance_many, warm_up  # noqa: E402
-    from .layout import MODELS, NO_RADIATION, SCHEMES, pack, radiation_pack, sea_pack  # noqa: E402
-    from .simulation import observe  # noqa: E402, F401
-finally:
-    numba.config.CACHE_DIR = _users_cache_dir
 
-__all__ = ["cached", "JIT", "njit", "advance", "advance_many", "warm_up", "MODELS", "NO_RADIATION", "SCHEMES", "pack", "radiation_pack", "sea_pack"]
+
+class Spec(NamedTuple):
+    """What a scene needs compiled: its scheme, force model, terms (registry order), waves or still water,
+    radiation, and whether still water flows in a current (in waves the current costs no code of its own)."""
+
+    scheme: str
+    model: str
+    terms: tuple[str, ...]
+    waves: bool
+    radiating: bool
+    current: bool = False
+
+    @property
+    def key(self) -> str:
+        """A name for this specialisation, usable in a module name."""
+        mask = sum(1 << i for i, name in enumerate(COMPILED_TERMS) if name in self.terms)
+        return f"{self.scheme}_{self.model}_t{mask:x}_{self._water}{'_rad' if self.radiating else ''}"
+
+    @property
+    def _water(self) -> str:
+        return "waves" if self.waves else "current" if self.current else "still"
+
+    def describe(self) -> str:
+        terms = " + ".join(self.terms) or "no forces"
+        water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
+        return f"{self.scheme} scheme, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}"
+
+
+def spec_of(model, scheme: str) -> Spec:
+    """The specialisation a forces.Model stepped by `scheme` needs. Terms linear in the twist are cheap to
+    compile and vanish exactly with their coefficient, so they are always in: a scene whose damping goes
+    from 0 to 100 keeps its kernels; a nonlinear one (drag) is compiled only where used."""
+    water = model.water
+    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names), not water.flat, model.radiation is not None, water.flat and not water.at_rest)
+
+
+def compiled_terms(used) -> tuple[str, ...]:
+    """The terms kernels compile for a scene using the terms `used`: every linear one, and the nonlinear ones used."""
+    from ..forces import TERMS
+
+    return tuple(t.name for t in TERMS if t.name in COMPILED_TERMS and (t.linear or t.name in used))
+
+
+def missing_terms(model) -> tuple[str, ...]:
+    """Terms of the model without a compiled twin (such a scene runs on the numpy reference)."""
+    return tuple(name for name in model.term_names if name not in COMPILED_TERMS)
+
+
+SHARED = ("jit", "layout", "rotation", "state", "surface", "water", "radiation")
+"""The kernel modules that read no spec (spec.py): one compiled copy serves every specialisation."""
+_instances: dict[Spec, types.ModuleType] = {}
+_lock = threading.Lock()
+
+
+def specialised(spec: Spec) -> types.ModuleType:
+    """The kernels compiled for `spec` (loaded from the disk cache, or compiled on first call): a
+    package whose `integrators`, `simulation`, `forces`, ... are this folder's modules with spec.py's constants."""
+    with _lock:
+        if spec in _instances:
+            return _instances[spec]
+        name = f"{__name__}_{spec.key}"
+        package = types.ModuleType(name, f"floatsim kernels for {spec.describe()}")
+        package.__path__, package.__package__, package.SPEC = [str(_HERE)], name, spec
+        sys.modules[name] = package
+        users = numba.config.CACHE_DIR
+        try:
+            # the modules that read no spec are compiled once for all (_import_shared): each copy imports them as they are.
+            # CACHE_DIR is read as each kernel is decorated; others' code keeps the user's.
+            for module in SHARED:
+                sys.modules[f"{name}.{module}"] = sys.modules[f"{__name__}.{module}"]
+            # a folder per spec: numba names a cached kernel after its file and function, not its module, so
+            # copies sharing one folder would load each other's code
+            numba.config.CACHE_DIR = _spec_cache(spec)
+            for module in ("schemes", "simulation", "forces", "terms", "wet", "surface", "water"):
+                setattr(package, module, importlib.import_module(f"{name}.{module}"))
+        except BaseException:
+            for module in [m for m in sys.modules if m == name or m.startswith(name + ".")]:
+                sys.modules.pop(module)
+            raise
+        finally:
+            numba.config.CACHE_DIR = users
+        _instances[spec] = package
+        return package
+
+
+def _spec_cache(spec: Spec) -> str:
+    return os.path.join(KERNEL_CACHE, spec.key)
+
+
+def _import_shared() -> None:
+    users = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = os.path.join(KERNEL_CACHE, "shared")  # read as each kernel is decorated
+    try:
+        for module in SHARED:
+            importlib.import_module(f"{__name__}.{module}")
+    finally:
+        numba.config.CACHE_DIR = users
+
+
+_import_shared()
+
+
+def cached(spec: Spec) -> bool:
+    """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
+    found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
+    return {"schemes.advance", "simulation.observe"} <= found
+
+
+def warm_up(spec: Spec) -> float:
+    """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken."""
+    import time
+
+    start = time.perf_counter()
+    specialised(spec).schemes.warm_up()
+    return time.perf_counter() - start
+
+
+__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
+           "sea_pack", "spec_of", "specialised", "warm_up"]  # fmt: skip

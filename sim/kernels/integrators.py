@@ -1,4 +1,4 @@
-"""Compiled twin of integrators.py: K steps of euler, splitting, implicit or rk4 in one call, GIL released.
+"""Compiled twin of integrators.py: the flows, kicks and derivative the schemes (schemes.py) are built of.
 
 The same arithmetic as the reference written as plain loops, so the two agree to round-off
 (tests compare them stage by stage and step by step).
@@ -11,14 +11,13 @@ import math
 import numpy as np
 
 from ..integrators import RELINEARISE, RELINEARISE_TOL
-from . import JIT, njit
-from .forces import NONLINEAR, linearised, pose_loads, twist_loads
-from .layout import COEF_BASE, TERM_PARAMS
-from .radiation import derivative_extra, drift_memory, frames, from_scaled, general_modes, memory_load, to_scaled
+from .forces import linearised, pose_loads, twist_loads
+from .jit import JIT, njit
+from .radiation import derivative_extra, frames, from_scaled, general_modes, memory_load, to_scaled
 from .radiation import kick as rad_kick
-from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix, rotation_quat
+from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix
+from .spec import HAS_NONLINEAR
 from .state import angular_velocity
-from .surface import workspace
 
 
 @njit(**JIT)
@@ -119,14 +118,15 @@ def damped_kick(K, WS, R, u, L, F, T, h, inertia, damping_first):
 
 
 @njit(**JIT)
-def general_twist_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, D, flags, ws, rad):
+def general_twist_flow(x, R, u, L, h, model, D, s, rad):
     """integrators.twist_flow with nonlinear twist terms, in waves or with radiation: explicit midpoint
     on the twist terms, pose frozen."""
+    mass, inertia = model.mass, model.inertia
     F, T = np.zeros(3), np.zeros(3)
-    twist_loads(kind, x, R, u, angular_velocity(R, L, inertia), geom, coef, terms, D, True, flags, F, T, ws)
+    twist_loads(x, R, u, angular_velocity(R, L, inertia), model, D, True, s, F, T)
     u_mid, L_mid = kick(rad, R, u, L, F, T, 0.5 * h, mass, inertia)
     F[:], T[:] = 0.0, 0.0
-    twist_loads(kind, x, R, u_mid, angular_velocity(R, L_mid, inertia), geom, coef, terms, D, True, flags, F, T, ws)
+    twist_loads(x, R, u_mid, angular_velocity(R, L_mid, inertia), model, D, True, s, F, T)
     return kick(rad, R, u, L, F, T, h, mass, inertia)
 
 
@@ -195,9 +195,10 @@ def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
 
 
 @njit(**JIT)
-def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad):
+def _flow_about(x, R, u, L, uc, Lc, h, model, F, T, D, wet, s, rad):
     """(u, L) after h under the loads linearised about the twist (uc, omega(Lc)), exactly."""
-    f, Dt = linearised(kind, x, R, uc, angular_velocity(R, Lc, inertia), geom, coef, terms, F, T, D, wet, flags, ws)
+    mass, inertia = model.mass, model.inertia
+    f, Dt = linearised(x, R, uc, angular_velocity(R, Lc, inertia), model, F, T, D, wet, s)
     lam, V = np.zeros(6), np.eye(6)
     K = np.zeros((6, 6))
     WS = frames(rad, R)
@@ -208,15 +209,16 @@ def _flow_about(kind, x, R, u, L, uc, Lc, h, geom, mass, inertia, coef, terms, F
 
 
 @njit(**JIT)
-def relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad):
+def relinearised_flow(x, R, u, L, h, model, F, T, D, wet, s, rad):
     """integrators.linear_flow with nonlinear twist terms (drag): linearised about the end twist of the
     half step, found by fixed-point iteration from the start twist."""
-    un, Ln = _flow_about(kind, x, R, u, L, u, L, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad)
-    if not (wet and terms & NONLINEAR):
+    un, Ln = _flow_about(x, R, u, L, u, L, h, model, F, T, D, wet, s, rad)
+    if not HAS_NONLINEAR or not wet:
         return un, Ln
-    scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / mass)
+    inertia = model.inertia
+    scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / model.mass)
     for _ in range(RELINEARISE):
-        u2, L2 = _flow_about(kind, x, R, u, L, un, Ln, h, geom, mass, inertia, coef, terms, F, T, D, wet, flags, ws, rad)
+        u2, L2 = _flow_about(x, R, u, L, un, Ln, h, model, F, T, D, wet, s, rad)
         dw = angular_velocity(R, L2 - Ln, inertia)
         w2 = angular_velocity(R, L2, inertia)
         change = max(np.abs(u2 - un).max(), scale * np.abs(dw).max())
@@ -250,13 +252,14 @@ def free_rotation(q, L, h, inertia):
 
 
 @njit(**JIT)
-def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad):
+def derivative(y, t, model, s, sea, rad):
     """d/dt of the state vector (integrators.derivative); with radiation also of the memory and E_rad."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
+    mass, inertia = model.mass, model.inertia
     R = quat_to_matrix(q)
     w = angular_velocity(R, L, inertia)
-    F, T, D, wet = pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)
-    twist_loads(kind, x, R, u, w, geom, coef, terms, D, wet, flags, F, T, ws)
+    F, T, D, wet = pose_loads(x, R, t, model, s, sea)
+    twist_loads(x, R, u, w, model, D, wet, s, F, T)
     out = np.empty(y.shape[0])
     out[0:3] = u
     out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
@@ -269,177 +272,10 @@ def derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws
     return out
 
 
-@njit(**JIT)
-def _finite(y):
-    for v in y:
-        if not math.isfinite(v):
-            return False
-    return True
-
-
 @njit(inline="always", **JIT)
-def _with_memory(rad, R, F, T, x):
+def with_memory(rad, R, F, T, x):
     """The loads plus the radiation memory's force (integrators.with_memory)."""
     if rad is None:
         return F, T
     Fm, Tm = memory_load(rad, R, x)
     return F + Fm, T + Tm
-
-
-@njit(**JIT)
-def advance(y0, t0, n_steps, dt, scheme, kind, geom, mass, inertia, terms, coef, sea, rad):
-    """Advance the state vector (layout.py; with radiation followed by the memory and E_rad) at time t0
-    by up to n_steps in the water `sea` (layout.sea_pack) with the radiation `rad` (layout.radiation_pack,
-    empty without); stop before the first non-finite state. Returns (state, steps done)."""
-    y = y0.copy()
-    flags = np.zeros(geom[0].shape[0], dtype=np.bool_)  # which samples are wet; the sums start afresh
-    acc = np.zeros(34)
-    ws = workspace(geom)
-    x, q, u, L = y[0:3].copy(), y[3:7].copy(), y[7:10].copy(), y[10:13].copy()
-    mem, e_rad = (np.zeros(0), 0.0) if rad is None else (y[13:-1].copy(), y[-1])
-    h = 0.5 * dt
-    nonlinear = (terms & NONLINEAR) != 0  # drag: relinearised at every half step
-    # the water's motion makes damping affine, d u_water - D v (u_water . ws[4]): splitting's twist flow takes the general path
-    waves = sea[0].shape[0] > 0
-    general = nonlinear or waves
-    affine = ws[4]
-    R = quat_to_matrix(q)
-    WS = frames(rad, R)
-    F, T, D, wet = pose_loads(kind, x, R, t0, geom, mass, terms, coef, sea, flags, acc, ws)
-    K = modes(D, R, mass, inertia, rad, WS)
-    lam, V = np.zeros(6), np.eye(6)
-    if wet and scheme == 2 and not nonlinear:
-        lam, V = exact_modes(K, h)
-    for step in range(n_steps):
-        t = t0 + step * dt
-        memn, e_radn = mem, e_rad
-        if scheme == 0:  # euler: drift, exact rotation, forces at the new pose, kick
-            w = angular_velocity(R, L, inertia)
-            xn = x + dt * u
-            qn = normalized(quat_multiply(rotation_quat(dt * w), q))
-            Rn = quat_to_matrix(qn)
-            if rad is not None:
-                memn, e_radn = drift_memory(rad, R, Rn, u, L, mem, e_rad, dt, inertia)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
-            twist_loads(kind, xn, Rn, u, angular_velocity(Rn, L, inertia), geom, coef, terms, Dn, wetn, flags, Fc, Tc, ws)  # euler carries no loads over
-            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
-            un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
-        elif scheme == 1:  # splitting: B(h) A(h) C(dt) A(h) B(h), loads carried over
-            un, Ln = u, L
-            if rad is None:  # a literal test on the argument: numba compiles each case apart
-                if wet and general:
-                    un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
-                elif wet:
-                    un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
-                un, Ln = kick(rad, R, un, Ln, F, T, h, mass, inertia)
-            else:
-                Fk, Tk = _with_memory(rad, R, F, T, mem)
-                if wet and not general:
-                    un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
-                else:
-                    if wet:
-                        un, Ln = general_twist_flow(kind, x, R, un, Ln, h, geom, mass, inertia, coef, terms, D, flags, ws, rad)
-                    un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
-            xn = x + dt * un
-            qn = free_rotation(q, Ln, dt, inertia)
-            Rn = quat_to_matrix(qn)
-            if rad is not None:  # the new pose's mass frames, and the memory over the drift
-                WS = frames(rad, Rn)
-                memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
-            if rad is None:
-                un, Ln = kick(rad, Rn, un, Ln, Fc, Tc, h, mass, inertia)
-                if wetn and general:
-                    un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
-                elif wetn:
-                    K = modes(Dn, Rn, mass, inertia, rad, WS)
-                    un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
-            else:
-                Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
-                if wetn and not general:
-                    K = modes(Dn, Rn, mass, inertia, rad, WS)
-                    un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
-                else:
-                    un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
-                    if wetn:
-                        un, Ln = general_twist_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Dn, flags, ws, rad)
-        elif scheme == 2:  # implicit: P(h) C(dt) P(h), P = every load linearised and solved exactly
-            Fk, Tk = _with_memory(rad, R, F, T, mem)
-            if nonlinear:
-                un, Ln = relinearised_flow(kind, x, R, u, L, h, geom, mass, inertia, coef, terms, Fk, Tk, D, wet, flags, ws, rad)
-            else:
-                Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
-                un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
-            xn = x + dt * un
-            qn = free_rotation(q, Ln, dt, inertia)
-            Rn = quat_to_matrix(qn)
-            if rad is not None:  # the new pose's mass frames, and the memory over the drift
-                WS = frames(rad, Rn)
-                memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
-            Fc, Tc, Dn, wetn = pose_loads(kind, xn, Rn, t + dt, geom, mass, terms, coef, sea, flags, acc, ws)
-            Fk, Tk = _with_memory(rad, Rn, Fc, Tc, memn)
-            if nonlinear:
-                un, Ln = relinearised_flow(kind, xn, Rn, un, Ln, h, geom, mass, inertia, coef, terms, Fk, Tk, Dn, wetn, flags, ws, rad)
-            else:
-                if wetn:  # the same modes serve the next step's first half, at this pose
-                    K = modes(Dn, Rn, mass, inertia, rad, WS)
-                    lam, V = exact_modes(K, h)
-                Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if waves else (Fk, Tk)
-                un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn, rad, WS)
-        else:  # rk4 on (x, q, u, L[, memory, E_rad]), q renormalised
-            k1 = derivative(kind, y, t, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
-            k2 = derivative(kind, y + 0.5 * dt * k1, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
-            k3 = derivative(kind, y + 0.5 * dt * k2, t + 0.5 * dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
-            k4 = derivative(kind, y + dt * k3, t + dt, geom, mass, inertia, terms, coef, sea, flags, acc, ws, rad)
-            yr = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            xn, qn, un, Ln = yr[0:3].copy(), normalized(yr[3:7]), yr[7:10].copy(), yr[10:13].copy()
-            if rad is not None:
-                memn, e_radn = yr[13:-1].copy(), yr[-1]
-            Rn = quat_to_matrix(qn)
-            Fc, Tc, Dn, wetn = F, T, D, wet  # unused by rk4
-        yn = np.empty(y.shape[0])
-        yn[0:3], yn[3:7], yn[7:10], yn[10:13] = xn, qn, un, Ln
-        if rad is not None:
-            yn[13:-1], yn[-1] = memn, e_radn
-        if not _finite(yn):
-            return y, step
-        y, x, q, u, L, R, mem, e_rad = yn, xn, qn, un, Ln, Rn, memn, e_radn
-        if scheme != 3:
-            F, T, D, wet = Fc, Tc, Dn, wetn
-    return y, n_steps
-
-
-@njit(**JIT)
-def advance_many(Y, t0, n_steps, dt, scheme, kind, geom, masses, inertias, terms, coefs, sea, rad):
-    """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
-    Returns the new states and each body's steps done (< n_steps where it diverged)."""
-    out = np.empty_like(Y)
-    done = np.empty(Y.shape[0], dtype=np.int64)
-    for b in range(Y.shape[0]):
-        out[b], done[b] = advance(Y[b], t0, n_steps, dt, scheme, kind, geom, masses[b], inertias[b], terms, coefs[b], sea, rad)
-    return out, done
-
-
-def warm_up() -> float:
-    """Compile (first run ever) or load from the disk cache every kernel; returns the seconds taken."""
-    import time
-
-    from ..body import make_box
-    from ..water import StillWater
-    from .layout import NO_RADIATION, sea_pack
-    from .simulation import observe
-
-    start = time.perf_counter()
-    body = make_box((1.0, 1.0, 1.0), 1, 1.0)
-    y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-    coef = np.ones(COEF_BASE + len(TERM_PARAMS))
-    sea = sea_pack(StillWater(), body)
-    eye, one = np.eye(6), np.ones((1, 1))
-    index, zero = np.zeros(1, dtype=np.int64), np.zeros(1)
-    radiating = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3))  # the types only
-    for rad in (NO_RADIATION, radiating):
-        for kind in (0, 1):
-            advance(np.concatenate([y, np.zeros(2)]) if rad else y, 0.0, 1, 0.01, 2, kind, body.packed, body.mass, body.inertia, 15, coef, sea, rad)
-    for kind in (0, 1):
-        observe(kind, y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], body.packed, body.mass, 15, coef, sea, np.empty(body.n_samples, dtype=np.bool_))
-    return time.perf_counter() - start

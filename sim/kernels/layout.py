@@ -12,7 +12,7 @@ a c r^T row-major (9), with c = r x n.
 
 Sea `sea_pack(water, body)`: (components (n, 8): a, omega, k_x, k_y, k, phase, cos and sin of the
 direction; depth (inf: deep); long-crested (one direction for all); the body's radius about its
-centre of mass, m). Still water has no components.
+centre of mass, m; the uniform current (3,) (u, v, 0), m/s). Still water has no components.
 
 Coefficients `coef`, (COEF_BASE + number of term parameters,) float64: rho, g, then every force
 term's parameters in `forces.TERMS` order. Terms mask `terms`: bit i set when `forces.TERMS[i]` is
@@ -22,6 +22,7 @@ used by the scene. So a new term gets its bit and its slots from its registry li
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
@@ -36,6 +37,9 @@ SCHEMES = {"euler": 0, "splitting": 1, "implicit": 2, "rk4": 3}
 MODELS = {"points": 0, "panels": 1, "cells": 2}
 """Force models (`surface.FORCE_MODELS`) by their number in the kernels."""
 TERM_PARAMS = [p.key for term in TERMS for p in term.params]
+COMPILED_TERMS = ("gravity", "pressure", "damping", "drag")
+"""The terms kernels/terms.py compiles, in registry order: a scene with any other runs on the numpy
+reference, with a note (a test checks this list against forces.TERMS)."""
 
 
 def bit(term: str) -> int:
@@ -60,7 +64,7 @@ def pack(model) -> tuple[int, np.ndarray]:
     return mask, coefficients(model.fluid)
 
 
-def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float]:
+def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float, np.ndarray]:
     """The water as the kernels take it (kernels/water.py), for this body. expand=False keeps the
     kernels on the direct sum over components (for benchmarks and checks of the expansion)."""
     reach = float(max(body.radius, np.linalg.norm(body.mesh_vertices, axis=1).max()))
@@ -68,12 +72,13 @@ def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool,
 
 
 @lru_cache(maxsize=256)  # asked at every frame, by every body of an ensemble; the water is immutable
-def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, float]:
-    if water.is_still:
-        return np.zeros((0, 8)), float("inf"), True, radius
+def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, float, np.ndarray]:
+    current = np.array([*water.current, 0.0])
+    if water.flat:
+        return np.zeros((0, 8)), float("inf"), True, radius, current
     beta = water.direction
     comps = np.column_stack([water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)])
-    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius
+    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius, current
 
 
 NO_RADIATION = None
@@ -87,3 +92,36 @@ def radiation_pack(radiation, body, dt: float) -> tuple:
     if radiation is None:
         return NO_RADIATION
     return radiation.kernel_arrays(body, dt)
+
+
+class Model(NamedTuple):
+    """A body as the kernels take it: geometry (`Body.packed`), mass (kg), principal inertia (3,) and coefficients (`coef`)."""
+
+    geom: tuple
+    mass: float
+    inertia: np.ndarray
+    coef: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """What one pose's loads leave for the next evaluation: which samples are wet and the running sums over
+    them (the sampled model), and the workspace for the twist terms (surface.workspace)."""
+
+    flags: np.ndarray
+    acc: np.ndarray
+    ws: tuple
+
+
+class Wet(NamedTuple):
+    """The wet surface's integrals at a pose (kernels/wet.py), which the force terms read."""
+
+    pressure: np.ndarray
+    """(6,) the integral of -p nu dA and its torque about the centre of mass, N and N m."""
+    area: float
+    """The wet area, m^2."""
+    first: np.ndarray
+    """(3,) the integral of r dA, r the lever from the centre of mass, m^3."""
+    second: np.ndarray
+    """(3, 3) the integral of r r^T dA, m^4."""
+    flow: np.ndarray
+    """(6,) the integral of the water's velocity dA and its torque (zero in still water)."""

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import JIT, njit
+from .jit import JIT, njit
 from .rotation import mtv, mv
 
 

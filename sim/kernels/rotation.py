@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from . import JIT, njit
+from .jit import JIT, njit
 
 
 @njit(**JIT)

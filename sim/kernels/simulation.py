@@ -4,44 +4,49 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import JIT, njit
-from .forces import C_DAMPING, DAMPING, GRAVITY, NONLINEAR, PRESSURE, WET_TERMS, nonlinear_loads, pose_loads, twist_loads
-from .layout import RHO, G
+from .forces import nonlinear_loads, pose_loads, twist_loads
+from .jit import JIT, njit
+from .layout import RHO, G, Scratch
+from .spec import CELLS, CURRENT, DAMPING, GRAVITY, HAS_NONLINEAR, MODEL, POINTS, PRESSURE, USED, WAVES, WET_TERMS
 from .surface import cell_node, clip, vertex_levers, workspace
+from .terms import C_DAMPING
 from .water import elevations, prepare
 
 
 @njit(**JIT)
-def observe(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
+def observe(x, R, t, u, w, model, sea, wet):
     """(force, torque, hydrostatic energy, wet area, submerged volume) at a state and time, every
     used term included; marks the wet samples in `wet` (for either model: the viewer colours samples)."""
-    if sea[0].shape[0] > 0:
-        return observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet)
-    if kind == 0:
-        return observe_points(x, R, u, w, geom, mass, terms, coef, wet)
-    if kind == 2:
-        return observe_cells(x, R, u, w, geom, mass, terms, coef, wet)
-    return observe_panels(x, R, u, w, geom, mass, terms, coef, wet)
+    if WAVES:
+        return observe_waves(x, R, t, u, w, model, sea, wet)
+    if CURRENT:  # flat water in a uniform current U: every load depends on the body's velocity relative to it
+        u = u - sea[4]
+    if MODEL == POINTS:
+        return observe_points(x, R, u, w, model, wet)
+    if MODEL == CELLS:
+        return observe_cells(x, R, u, w, model, wet)
+    return observe_panels(x, R, u, w, model, wet)
 
 
 @njit(**JIT)
-def observe_panels(x, R, u, w, geom, mass, terms, coef, wet):
+def observe_panels(x, R, u, w, model, wet):
+    geom, coef = model.geom, model.coef
     r = geom[0]
-    F, T = _loads(1, x, R, u, w, geom, mass, terms, coef)
+    F, T = _loads(x, R, u, w, model)
     for k in range(r.shape[0]):
         wet[k] = x[2] + R[2, 0] * r[k, 0] + R[2, 1] * r[k, 1] + R[2, 2] * r[k, 2] < 0.0
     a_sub, v_sub, z2n = mesh_integrals(x, R, geom)
-    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if USED & PRESSURE else 0.0
     return F, T, e_hyd, a_sub, v_sub
 
 
 @njit(**JIT)
-def _loads(kind, x, R, u, w, geom, mass, terms, coef):
+def _loads(x, R, u, w, model):
     """Force and torque of every used term at a state in still water, as the integrators see them."""
-    flags, acc, ws = np.zeros(geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
-    still = (np.zeros((0, 8)), np.inf, True, 0.0)
-    F, T, D, is_wet = pose_loads(kind, x, R, 0.0, geom, mass, terms, coef, still, flags, acc, ws)
-    twist_loads(kind, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
+    s = Scratch(np.zeros(model.geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(model.geom))
+    still = (np.zeros((0, 8)), np.inf, True, 0.0, np.zeros(3))
+    F, T, D, is_wet = pose_loads(x, R, 0.0, model, s, still)
+    twist_loads(x, R, u, w, model, D, is_wet, s, F, T)
     return F, T
 
 
@@ -84,11 +89,12 @@ def exact_hydrostatic_energy(x, R, geom, rho_g):
 
 
 @njit(**JIT)
-def observe_cells(x, R, u, w, geom, mass, terms, coef, wet):
+def observe_cells(x, R, u, w, model, wet):
     """observe for the cells model: the loads as the integrators see them, then the frame's
     integrals over its nodes (whole wet cells at their samples, cut cells at their wet centroids)."""
+    geom, coef = model.geom, model.coef
     r, nrm, cells = geom[0], geom[1], geom[7]
-    F, T = _loads(2, x, R, u, w, geom, mass, terms, coef)
+    F, T = _loads(x, R, u, w, model)
     node, P, h, parts = np.empty(4), np.empty((3, 3)), np.empty(3), np.empty((2, 3, 3))
     z2n = a_sub = v_sub = 0.0
     for k in range(r.shape[0]):
@@ -100,21 +106,22 @@ def observe_cells(x, R, u, w, geom, mass, terms, coef, wet):
             a_sub += node[0]
             v_sub += node[0] * z * nz
             z2n += node[0] * z * z * nz
-    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if USED & PRESSURE else 0.0
     return F, T, e_hyd, a_sub, v_sub
 
 
 @njit(**JIT)
-def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
+def observe_points(x, R, u, w, model, wet):
     """Total force and torque (every used term at (u, w)), hydrostatic energy, wet area and
     submerged volume of the sampled model; marks the wet samples in `wet`. One scalar loop for the
     terms linear in the pose and twist, then the nonlinear ones."""
+    geom, mass, coef = model.geom, model.mass, model.coef
     r, nrm, area = geom[0], geom[1], geom[2]
     R00, R01, R02, R10, R11, R12, R20, R21, R22 = R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2]
     F0 = F1 = T0 = T1 = T2 = e_hyd = a_sub = v_sub = 0.0
-    F2 = -mass * coef[G] if terms & GRAVITY else 0.0
-    rg = coef[RHO] * coef[G] if terms & WET_TERMS else 0.0
-    d = coef[C_DAMPING] if terms & DAMPING else 0.0
+    F2 = -mass * coef[G] if USED & GRAVITY else 0.0
+    rg = coef[RHO] * coef[G] if USED & WET_TERMS else 0.0
+    d = coef[C_DAMPING] if USED & DAMPING else 0.0
     for k in range(r.shape[0]):
         a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
         lz = R20 * a0 + R21 * a1 + R22 * a2
@@ -143,24 +150,26 @@ def observe_points(x, R, u, w, geom, mass, terms, coef, wet):
             e_hyd += -0.5 * rg * z * z * a * nz
             a_sub += a
             v_sub += z * a * nz
-    if not terms & PRESSURE:
+    if not USED & PRESSURE:
         e_hyd = 0.0
     F, T = np.array([F0, F1, F2]), np.array([T0, T1, T2])
-    if terms & NONLINEAR:  # their own pass over the wet samples just marked
-        Fn, Tn, _ = nonlinear_loads(0, x, R, u, w, geom, coef, terms, wet, False, workspace(geom))  # still water: no flow
+    if HAS_NONLINEAR:  # their own pass over the wet samples just marked
+        Fn, Tn, _ = nonlinear_loads(x, R, u, w, model, Scratch(wet, np.zeros(34), workspace(model.geom)), False)  # still water: no flow
         F += Fn
         T += Tn
     return F, T, e_hyd, a_sub, v_sub
 
 
 @njit(**JIT)
-def observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
+def observe_waves(x, R, t, u, w, model, sea, wet):
     """observe in waves: the loads as the integrators see them, the integrals over the model's wet
     nodes, and the samples under the wave surface."""
+    geom, coef = model.geom, model.coef
     r = geom[0]
-    flags, acc, ws = np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34), workspace(geom)
-    F, T, D, is_wet = pose_loads(kind, x, R, t, geom, mass, terms, coef, sea, flags, acc, ws)  # leaves the nodes' integrals in ws[5]
-    twist_loads(kind, x, R, u, w, geom, coef, terms, D, is_wet, flags, F, T, ws)
+    s = Scratch(np.zeros(r.shape[0], dtype=np.bool_), np.zeros(34), workspace(geom))
+    ws = s.ws
+    F, T, D, is_wet = pose_loads(x, R, t, model, s, sea)  # leaves the nodes' integrals in ws[5]
+    twist_loads(x, R, u, w, model, D, is_wet, s, F, T)
     a_sub, v_sub, z2n = ws[5][0], ws[5][1], ws[5][2]
     pts = np.empty((r.shape[0], 3))
     for k in range(r.shape[0]):
@@ -170,5 +179,5 @@ def observe_waves(kind, x, R, t, u, w, geom, mass, terms, coef, sea, wet):
     elevations(sea, prepare(sea, t, x), pts, r.shape[0], eta)
     for k in range(r.shape[0]):
         wet[k] = pts[k, 2] - eta[k] < 0.0
-    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if terms & PRESSURE else 0.0
+    e_hyd = -0.5 * coef[RHO] * coef[G] * z2n if USED & PRESSURE else 0.0
     return F, T, e_hyd, a_sub, v_sub

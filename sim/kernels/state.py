@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import JIT, njit
+from .jit import JIT, njit
 from .rotation import mtv, mv
 
 

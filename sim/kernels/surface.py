@@ -10,8 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import JIT, njit
+from .jit import JIT, njit
 from .rotation import mv, rotate_tensor
+
+DUNAVANT4 = np.array([[0.108103018168070, 0.445948490915965, 0.445948490915965], [0.445948490915965, 0.108103018168070, 0.445948490915965],
+                      [0.445948490915965, 0.445948490915965, 0.108103018168070], [0.816847572980459, 0.091576213509771, 0.091576213509771],
+                      [0.091576213509771, 0.816847572980459, 0.091576213509771], [0.091576213509771, 0.091576213509771, 0.816847572980459]])  # fmt: skip
+DUNAVANT4_WEIGHTS = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+"""Dunavant's degree-4 rule on a triangle: barycentric nodes and weights (surface.DUNAVANT4)."""
 
 
 @njit(inline="always", **JIT)
@@ -176,12 +182,14 @@ def world_normal(R, fnormals, f):
 
 
 @njit(**JIT)
-def wet_triangles(x, R, verts, faces, fnormals, ws):
+def wet_triangles(x, R, verts, faces, fnormals, ws, current):
     """Store the mesh's triangles clipped at the still water line in the workspace (layout.workspace),
-    with the water at rest at their vertices, for the terms that integrate over them (drag)."""
+    with the water's velocity (the uniform current) at their vertices, for the terms that integrate over them (drag)."""
     tris, tnormals, count = ws[1], ws[2], ws[3]
     lev = vertex_levers(R, verts)
     P = np.zeros((3, 6))
+    for v in range(3):
+        P[v, 3], P[v, 4] = current[0], current[1]
     h = np.empty(3)
     m = 0
     for f in range(faces.shape[0]):
@@ -300,17 +308,6 @@ def wet_cells(x, R, r, nrm, cells, reach, need_rr, moments, flags, acc, nodes):
                 for j in range(3):
                     rr[i, j] += a * lev[i] * lev[j]
     return zn, zt, A, S, rr
-
-
-@njit(**JIT)
-def wet_integrals(kind, x, R, geom, need_rr, flags, acc, ws):
-    """(zn, zt, A, S, rr) of the model `kind` (layout.MODELS); S and rr only when need_rr."""
-    r, nrm, verts, faces, fnormals, moments = geom[0], geom[1], geom[3], geom[4], geom[5], geom[6]
-    if kind == 0:
-        return wet_points(x, R, r, need_rr, moments, flags, acc)
-    if kind == 2:
-        return wet_cells(x, R, r, nrm, geom[7], geom[8], need_rr, moments, flags, acc, ws[6])
-    return wet_panels(x, R, verts, faces, fnormals, need_rr)
 
 
 @njit(**JIT)

@@ -1,6 +1,6 @@
 """Compiled twin of water.Waves: the surface elevation, pressure and flow at points, for the kernels.
 
-The sea is `layout.sea_pack`'s tuple (components, depth, long_crested, radius). At each pose the
+The sea is `layout.sea_pack`'s tuple (components, depth, long_crested, radius, current). At each pose the
 kernels call `prepare` once, then ask `elevations` and `fields` at batches of nodes. Two ways to answer:
 
 - the direct sum over components, the same arithmetic as the reference (a sine, a cosine and an
@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from . import JIT, njit
+from .jit import JIT, njit
 
 A, OMEGA, KX, KY, K, PHASE, COS, SIN = range(8)
 """Columns of the components array."""
@@ -57,12 +57,13 @@ def _moments(comps, weight, P, k_scale):
 @njit(**JIT)
 def prepare(sea, t, x):
     """What `elevations` and `fields` need at time t for a body centred at x: each component's phase
-    offset phi_j - omega_j t, and (when the expansion serves) its centre, scale and moments."""
-    comps, depth, long_crested, radius = sea
+    offset phi_j - (omega_j + k_j . U) t (U the current, which carries the waves), and (when the
+    expansion serves) its centre, scale and moments."""
+    comps, depth, long_crested, radius, current = sea
     n = comps.shape[0]
     offset = np.empty(n)
     for j in range(n):
-        offset[j] = comps[j, PHASE] - comps[j, OMEGA] * t
+        offset[j] = comps[j, PHASE] - (comps[j, OMEGA] + comps[j, KX] * current[0] + comps[j, KY] * current[1]) * t
     empty = np.zeros(0, dtype=np.complex128)
     none = (-1, offset, 0.0, 0.0, 0.0, 1.0, empty, empty, empty)
     if not long_crested or n < 4 or not math.isinf(depth):
@@ -123,9 +124,9 @@ def elevations(sea, ex, points, m, out):
 @njit(**JIT)
 def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
     """out[i] = (pressure, flow x, y, z) at points[i], i < m: water.Waves.field, with Wheeler's
-    stretching. known: eta[i] holds the elevation there; else it is computed here and stored (on
-    the direct sum sharing each component's cosine between elevation and pressure)."""
-    comps, depth = sea[0], sea[1]
+    stretching, the current added to the flow. known: eta[i] holds the elevation there; else it is computed
+    here and stored (on the direct sum sharing each component's cosine between elevation and pressure)."""
+    comps, depth, U = sea[0], sea[1], sea[4]
     P, offset, cx, cy, z0, k_scale, Me, Mp, Mv = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[6], ex[7], ex[8]
     deep = math.isinf(depth)
     cb, sb = comps[0, COS], comps[0, SIN]
@@ -170,4 +171,4 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
                     ux += dh * c * aw * comps[j, COS]
                     uy += dh * c * aw * comps[j, SIN]
                     uz += dv * math.sin(psi) * aw
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rho * g * (p - Z), ux, uy, uz
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rho * g * (p - Z), ux + U[0], uy + U[1], uz

@@ -1,0 +1,249 @@
+"""Compiled twin of the fixed-step schemes: one step function per scheme and `advance`, only the loop.
+
+This copy of the kernels is compiled for one scheme (spec.SCHEME): `step` keeps that scheme's branch
+and numba drops the others before it compiles. A step maps the state vector y and the carry (what the
+last step left that the next one reuses: the pose's rotation, loads and damping modes) to the new ones.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .forces import pose_loads, twist_loads
+from .integrators import (
+    damped_kick,
+    derivative,
+    exact_modes,
+    free_rotation,
+    general_twist_flow,
+    kick,
+    linear_flow,
+    modes,
+    relinearised_flow,
+    twist_flow,  # fmt: skip
+    with_memory,
+)
+from .jit import JIT, njit
+from .layout import Model, Scratch
+from .radiation import drift_memory, frames
+from .rotation import normalized, quat_multiply, quat_to_matrix, rotation_quat
+from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, IMPLICIT, MOVING, SCHEME, SPLITTING, WAVES
+from .state import angular_velocity
+from .surface import workspace
+
+
+@njit(**JIT)
+def scratch(geom):
+    return Scratch(np.zeros(geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(geom))
+
+
+@njit(inline="always", **JIT)
+def _state(y, xn, qn, un, Ln, memn, e_radn, rad):
+    yn = np.empty(y.shape[0])
+    yn[0:3], yn[3:7], yn[7:10], yn[10:13] = xn, qn, un, Ln
+    if rad is not None:
+        yn[13:-1], yn[-1] = memn, e_radn
+    return yn
+
+
+@njit(**JIT)
+def start(y, t, dt, model, s, sea, rad):
+    """The carry at the first step: (R, F, T, D, wet, K, lam, V, WS) at y's pose."""
+    R = quat_to_matrix(y[3:7])
+    WS = frames(rad, R)
+    F, T, D, wet = pose_loads(y[0:3], R, t, model, s, sea)
+    K = modes(D, R, model.mass, model.inertia, rad, WS)
+    lam, V = np.zeros(6), np.eye(6)
+    if wet and SCHEME == IMPLICIT and not HAS_NONLINEAR:
+        lam, V = exact_modes(K, 0.5 * dt)
+    return R, F, T, D, wet, K, lam, V, WS
+
+
+@njit(**JIT)
+def euler_step(y, t, dt, carry, model, s, sea, rad):
+    """Drift, exact rotation, every load at the new pose, kick (integrators.SymplecticEuler)."""
+    x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
+    R, F, T, D, wet, K, lam, V, WS = carry
+    mass, inertia = model.mass, model.inertia
+    mem, e_rad = (y[13:-1], y[-1]) if rad is not None else (y[:0], 0.0)
+    w = angular_velocity(R, L, inertia)
+    xn = x + dt * u
+    qn = normalized(quat_multiply(rotation_quat(dt * w), q))
+    Rn = quat_to_matrix(qn)
+    memn, e_radn = mem, e_rad
+    if rad is not None:
+        memn, e_radn = drift_memory(rad, R, Rn, u, L, mem, e_rad, dt, inertia)
+    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    twist_loads(xn, Rn, u, angular_velocity(Rn, L, inertia), model, Dn, wetn, s, Fc, Tc)  # euler carries no loads over
+    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn)
+    un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
+    return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
+
+
+@njit(**JIT)
+def splitting_step(y, t, dt, carry, model, s, sea, rad):
+    """B(h) A(h) C(dt) A(h) B(h), loads carried over (integrators.Splitting)."""
+    x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
+    R, F, T, D, wet, K, lam, V, WS = carry
+    mass, inertia = model.mass, model.inertia
+    mem, e_rad = (y[13:-1], y[-1]) if rad is not None else (y[:0], 0.0)
+    h = 0.5 * dt
+    un, Ln = u, L
+    if rad is None:  # a literal test on the argument: numba compiles each case apart
+        if wet and GENERAL_TWIST:
+            un, Ln = general_twist_flow(x, R, un, Ln, h, model, D, s, rad)
+        elif wet:
+            un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
+        un, Ln = kick(rad, R, un, Ln, F, T, h, mass, inertia)
+    else:
+        Fk, Tk = with_memory(rad, R, F, T, mem)
+        if wet and not GENERAL_TWIST:
+            un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
+        else:
+            if wet:
+                un, Ln = general_twist_flow(x, R, un, Ln, h, model, D, s, rad)
+            un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
+    xn = x + dt * un
+    qn = free_rotation(q, Ln, dt, inertia)
+    Rn = quat_to_matrix(qn)
+    memn, e_radn = mem, e_rad
+    if rad is not None:  # the new pose's mass frames, and the memory over the drift
+        WS = frames(rad, Rn)
+        memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
+    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    if rad is None:
+        un, Ln = kick(rad, Rn, un, Ln, Fc, Tc, h, mass, inertia)
+        if wetn and GENERAL_TWIST:
+            un, Ln = general_twist_flow(xn, Rn, un, Ln, h, model, Dn, s, rad)
+        elif wetn:
+            K = modes(Dn, Rn, mass, inertia, rad, WS)
+            un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
+    else:
+        Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn)
+        if wetn and not GENERAL_TWIST:
+            K = modes(Dn, Rn, mass, inertia, rad, WS)
+            un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
+        else:
+            un, Ln = kick(rad, Rn, un, Ln, Fk, Tk, h, mass, inertia)
+            if wetn:
+                un, Ln = general_twist_flow(xn, Rn, un, Ln, h, model, Dn, s, rad)
+    return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
+
+
+@njit(**JIT)
+def implicit_step(y, t, dt, carry, model, s, sea, rad):
+    """P(h) C(dt) P(h), P = every load linearised and solved exactly (integrators.Implicit); the
+    water's motion makes damping affine: its part d u_water (ws[4]) joins the loads."""
+    x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
+    R, F, T, D, wet, K, lam, V, WS = carry
+    mass, inertia = model.mass, model.inertia
+    mem, e_rad = (y[13:-1], y[-1]) if rad is not None else (y[:0], 0.0)
+    h = 0.5 * dt
+    affine = s.ws[4]
+    Fk, Tk = with_memory(rad, R, F, T, mem)
+    if HAS_NONLINEAR:
+        un, Ln = relinearised_flow(x, R, u, L, h, model, Fk, Tk, D, wet, s, rad)
+    else:
+        Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if MOVING else (Fk, Tk)
+        un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
+    xn = x + dt * un
+    qn = free_rotation(q, Ln, dt, inertia)
+    Rn = quat_to_matrix(qn)
+    memn, e_radn = mem, e_rad
+    if rad is not None:  # the new pose's mass frames, and the memory over the drift
+        WS = frames(rad, Rn)
+        memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
+    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn)
+    if HAS_NONLINEAR:
+        un, Ln = relinearised_flow(xn, Rn, un, Ln, h, model, Fk, Tk, Dn, wetn, s, rad)
+    else:
+        if wetn:  # the same modes serve the next step's first half, at this pose
+            K = modes(Dn, Rn, mass, inertia, rad, WS)
+            lam, V = exact_modes(K, h)
+        Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if MOVING else (Fk, Tk)
+        un, Ln = linear_flow(K, lam, V, Rn, un, Ln, Fa, Ta, h, mass, inertia, wetn, rad, WS)
+    return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
+
+
+@njit(**JIT)
+def rk4_step(y, t, dt, carry, model, s, sea, rad):
+    """Classical Runge-Kutta on (x, q, u, L[, memory, E_rad]), q renormalised (integrators.RK4)."""
+    k1 = derivative(y, t, model, s, sea, rad)
+    k2 = derivative(y + 0.5 * dt * k1, t + 0.5 * dt, model, s, sea, rad)
+    k3 = derivative(y + 0.5 * dt * k2, t + 0.5 * dt, model, s, sea, rad)
+    k4 = derivative(y + dt * k3, t + dt, model, s, sea, rad)
+    yn = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    yn[3:7] = normalized(yn[3:7])
+    return yn, carry  # rk4 uses no carry
+
+
+@njit(inline="always", **JIT)
+def step(y, t, dt, carry, model, s, sea, rad):
+    """One step of this copy's scheme (the others are dropped before compiling)."""
+    if SCHEME == EULER:
+        return euler_step(y, t, dt, carry, model, s, sea, rad)
+    if SCHEME == SPLITTING:
+        return splitting_step(y, t, dt, carry, model, s, sea, rad)
+    if SCHEME == IMPLICIT:
+        return implicit_step(y, t, dt, carry, model, s, sea, rad)
+    return rk4_step(y, t, dt, carry, model, s, sea, rad)
+
+
+@njit(**JIT)
+def _finite(y):
+    for v in y:
+        if not math.isfinite(v):
+            return False
+    return True
+
+
+@njit(**JIT)
+def advance(y0, t0, n_steps, dt, model, sea, rad):
+    """Advance the state vector (layout.py; with radiation followed by the memory and E_rad) at time t0
+    by up to n_steps in the water `sea` (layout.sea_pack) with the radiation `rad` (layout.radiation_pack,
+    None without); stop before the first non-finite state. Returns (state, steps done)."""
+    s = scratch(model.geom)  # the wet flags and sums start afresh
+    y = y0.copy()
+    carry = start(y, t0, dt, model, s, sea, rad)
+    for i in range(n_steps):
+        yn, carry = step(y, t0 + i * dt, dt, carry, model, s, sea, rad)
+        if not _finite(yn):
+            return y, i
+        y = yn
+    return y, n_steps
+
+
+@njit(**JIT)
+def advance_many(Y, t0, n_steps, dt, geom, masses, inertias, coefs, sea, rad):
+    """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
+    Returns the new states and each body's steps done (< n_steps where it diverged)."""
+    out = np.empty_like(Y)
+    done = np.empty(Y.shape[0], dtype=np.int64)
+    for b in range(Y.shape[0]):
+        out[b], done[b] = advance(Y[b], t0, n_steps, dt, Model(geom, masses[b], inertias[b], coefs[b]), sea, rad)
+    return out, done
+
+
+def warm_up() -> None:
+    """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
+    from ..body import make_box
+    from .layout import COEF_BASE, TERM_PARAMS
+    from .simulation import observe
+    from .spec import RADIATING
+
+    body = make_box((1.0, 1.0, 1.0), 1, 1.0)
+    y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    coef = np.ones(COEF_BASE + len(TERM_PARAMS))
+    comps = np.zeros((1 if WAVES else 0, 8))
+    sea = (comps, math.inf, True, 1.0, np.zeros(3))
+    rad = None
+    if RADIATING:  # the types only
+        eye, one, index, zero = np.eye(6), np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1)
+        rad = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3))
+        y = np.concatenate([y, np.zeros(2)])
+    model = Model(body.packed, body.mass, body.inertia, coef)
+    advance(y, 0.0, 1, 0.01, model, sea, rad)
+    observe(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea, np.empty(body.n_samples, dtype=np.bool_))

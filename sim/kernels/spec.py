@@ -1,0 +1,44 @@
+"""The constants one copy of the kernels is compiled for (sim.kernels.specialised).
+
+numba treats module globals as compile-time constants and drops a branch on one before it compiles,
+so `if USED & DRAG:` costs nothing where the scene has no drag: a still-water drop compiles one scheme,
+one force model and two terms, not every combination. The term bits and masks come from the registry
+(forces.TERMS), never by hand.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from ..forces import TERMS
+from .layout import MODELS, SCHEMES, bit
+
+SPEC = getattr(sys.modules[__package__], "SPEC", None)
+if SPEC is None:
+    raise ImportError("compiled kernels are specialised: import them through sim.kernels.specialised(spec)")
+
+SCHEME = SCHEMES[SPEC.scheme]
+"""0 euler, 1 splitting, 2 implicit, 3 rk4 (layout.SCHEMES)."""
+EULER, SPLITTING, IMPLICIT, RK4 = SCHEMES["euler"], SCHEMES["splitting"], SCHEMES["implicit"], SCHEMES["rk4"]
+MODEL = MODELS[SPEC.model]
+"""0 points, 1 panels, 2 cells (layout.MODELS)."""
+POINTS, PANELS, CELLS = MODELS["points"], MODELS["panels"], MODELS["cells"]
+WAVES = bool(SPEC.waves)
+"""Whether the water surface moves (else still water: no sea components at all)."""
+CURRENT = bool(SPEC.current)
+"""Whether still water flows in a uniform current (sea_pack's last item): damping and drag act on the velocity relative to it."""
+MOVING = WAVES or CURRENT
+"""Whether the water moves: damping gains an affine part d u_water."""
+RADIATING = bool(SPEC.radiating)
+"""Whether the body radiates (the kernels also drop that code by testing their `rad` argument against None)."""
+
+GRAVITY, PRESSURE, DAMPING, DRAG = bit("gravity"), bit("pressure"), bit("damping"), bit("drag")
+USED = sum(bit(name) for name in SPEC.terms)
+"""The scene's terms (bit i: forces.TERMS[i])."""
+TWIST_TERMS = sum(bit(t.name) for t in TERMS if t.twist)
+WET_TERMS = sum(bit(t.name) for t in TERMS if t.name != "gravity")  # as forces.Model.needs_wet
+NONLINEAR = sum(bit(t.name) for t in TERMS if t.twist and not t.linear)
+"""Twist terms whose load is not affine in the twist: relinearised by the implicit scheme."""
+HAS_NONLINEAR = bool(USED & NONLINEAR)
+GENERAL_TWIST = MOVING or HAS_NONLINEAR
+"""Whether splitting's twist flow takes the general path: the water's motion makes damping affine, drag is nonlinear."""

@@ -1,0 +1,234 @@
+"""The wet surface's integrals at a pose and time, which the force terms (kernels/terms.py) read: the twin of
+the reference's wet surface (surface.py), summed in place instead of handed out as quadrature nodes.
+
+Still water: the closed forms of kernels/surface.py (the pressure is rho g times the depth). Waves: the
+water (kernels/water.py) asked at the wet nodes, its pressure and velocity integrated there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .jit import JIT, njit
+from .layout import RHO, G, Wet
+from .rotation import mv, rotate_tensor
+from .spec import CELLS, CURRENT, DAMPING, DRAG, MODEL, PANELS, POINTS, PRESSURE, TWIST_TERMS, USED, WAVES
+from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, clip, vertex_levers, wet_cells, wet_panels, wet_points, wet_triangles, world_normal
+from .water import elevations, fields, prepare
+
+
+@njit(**JIT)
+def wet_integrals(x, R, geom, need_rr, flags, acc, ws):
+    """(zn, zt, A, S, rr) of the scene's force model (spec.MODEL); S and rr only when need_rr."""
+    r, nrm, verts, faces, fnormals, moments = geom[0], geom[1], geom[3], geom[4], geom[5], geom[6]
+    if MODEL == POINTS:
+        return wet_points(x, R, r, need_rr, moments, flags, acc)
+    if MODEL == CELLS:
+        return wet_cells(x, R, r, nrm, geom[7], geom[8], need_rr, moments, flags, acc, ws[6])
+    return wet_panels(x, R, verts, faces, fnormals, need_rr)
+
+
+@njit(**JIT)
+def wet_surface(x, R, t, model, s, sea):
+    """The wet surface's integrals (layout.Wet) at a pose and time. Leaves in the scratch `s` what the twist
+    terms of this pose need (surface.workspace): the wet samples' flags, the wet triangles (for drag) and, in
+    waves, the water's velocity at the wet nodes and the frame's integrals. The sampled model's running wet
+    sums belong to one sea: waves keep only the first 10, so start them afresh (as advance and observe do)
+    when the water changes."""
+    geom, coef = model.geom, model.coef
+    if WAVES:
+        ex = prepare(sea, t, x)
+        load = np.zeros((2, 6))
+        if MODEL == POINTS:
+            A, S, rr = wave_points(x, R, sea, ex, geom, coef, s.flags, s.acc, s.ws, load)
+        else:
+            A, S, rr = wave_panels(x, R, sea, ex, geom, coef, s.ws, load)
+        return Wet(load[0].copy(), A, S, rr, load[1].copy())
+    zn, zt, A, S, rr = wet_integrals(x, R, geom, True, s.flags, s.acc, s.ws)
+    rg = coef[RHO] * coef[G]
+    p = np.empty(6)
+    p[:3] = rg * zn
+    p[3:] = rg * zt
+    flow = np.zeros(6)
+    U = sea[4]
+    if CURRENT:  # the integral of the uniform current over the wet surface, and its torque S x U
+        flow[0], flow[1] = A * U[0], A * U[1]
+        flow[3], flow[4], flow[5] = -S[2] * U[1], S[2] * U[0], S[0] * U[1] - S[1] * U[0]
+        if USED & DRAG and MODEL != PANELS:  # drag reads the water's velocity at each sample
+            s.ws[0][:, 0], s.ws[0][:, 1] = U[0], U[1]
+    if MODEL == PANELS and USED & DRAG and A > 0.0:
+        wet_triangles(x, R, geom[3], geom[4], geom[5], s.ws, U)
+    return Wet(p, A, S, rr, flow)
+
+
+@njit(inline="always", **JIT)
+def _node_load(lx, ly, lz, nx, ny, nz, a, p, d, ux, uy, uz, load):
+    """Add one wet node's pressure force -p a n to load[0] and d a u_water (d = 1 where damping needs
+    the water's motion, else 0) to load[1] (each force and torque, (6,))."""
+    for row, fx, fy, fz in ((0, -p * a * nx, -p * a * ny, -p * a * nz), (1, d * a * ux, d * a * uy, d * a * uz)):
+        load[row, 0] += fx
+        load[row, 1] += fy
+        load[row, 2] += fz
+        load[row, 3] += ly * fz - lz * fy
+        load[row, 4] += lz * fx - lx * fz
+        load[row, 5] += lx * fy - ly * fx
+
+
+@njit(inline="always", **JIT)
+def _diagnostics(diag, a, z, nz):
+    """Add a wet node's share of the frame's integrals: area, volume (z nu_z, divergence theorem) and z^2 nu_z."""
+    diag[0] += a
+    diag[1] += a * z * nz
+    diag[2] += a * z * z * nz
+
+
+@njit(**JIT)
+def _water_at(sea, ex, points, m, rho, g, need_flow):
+    """[pressure, flow] (m, 4) at the first m points, in one call."""
+    out = np.empty((m, 4))
+    fields(sea, ex, points, np.empty(m), m, rho, g, need_flow, out, False)
+    return out
+
+
+@njit(**JIT)
+def wave_points(x, R, sea, ex, geom, coef, flags, acc, ws, load):
+    """The pressure on the samples below the wave surface and the water's velocity there (for damping),
+    each integrated over them into load (2, 6); the samples' water velocity into ws. Returns the wet area and its moments
+    (A, S, rr), kept as running sums like in still water (they depend only on which samples are wet)."""
+    r, nrm, area, moments = geom[0], geom[1], geom[2], geom[6]
+    n = r.shape[0]
+    d = 1.0 if USED & DAMPING else 0.0  # the integral of u_water dA, for damping
+    pressure_on = (USED & PRESSURE) != 0
+    pts = np.empty((n, 3))
+    for k in range(n):
+        for i in range(3):
+            pts[k, i] = x[i] + R[i, 0] * r[k, 0] + R[i, 1] * r[k, 1] + R[i, 2] * r[k, 2]
+    eta = np.empty(n)
+    elevations(sea, ex, pts, n, eta)
+    wet = np.empty(n, dtype=np.int64)
+    m = 0
+    for k in range(n):
+        w = pts[k, 2] - eta[k] < 0.0
+        if w != flags[k]:
+            flags[k] = w
+            sign = 1.0 if w else -1.0
+            for j in range(10):  # a, a r, a r r^T: the damping matrix's moments
+                acc[j] += sign * moments[k, j]
+        if w:
+            pts[m, 0], pts[m, 1], pts[m, 2], eta[m], wet[m] = pts[k, 0], pts[k, 1], pts[k, 2], eta[k], k  # gathered in place: m <= k
+            m += 1
+    if m == 0:  # all dry: restart the running sums (no round-off residue says "wet")
+        acc[:] = 0.0
+    out = np.empty((m, 4))
+    fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (USED & TWIST_TERMS) != 0, out, True)
+    flow = ws[0]
+    fp0 = fp1 = fp2 = tp0 = tp1 = tp2 = fd0 = fd1 = fd2 = td0 = td1 = td2 = a_sub = v_sub = z2n = 0.0  # pressure, damping's flow part, frame integrals
+    for i in range(m):
+        k = wet[i]
+        p, ux, uy, uz = out[i, 0] if pressure_on else 0.0, out[i, 1], out[i, 2], out[i, 3]
+        flow[k, 0], flow[k, 1], flow[k, 2] = ux, uy, uz
+        nx, ny, nz = world_normal(R, nrm, k)
+        lx, ly, lz = pts[i, 0] - x[0], pts[i, 1] - x[1], pts[i, 2] - x[2]
+        a = area[k]
+        fx, fy, fz = -p * a * nx, -p * a * ny, -p * a * nz
+        fp0, fp1, fp2 = fp0 + fx, fp1 + fy, fp2 + fz
+        tp0, tp1, tp2 = tp0 + ly * fz - lz * fy, tp1 + lz * fx - lx * fz, tp2 + lx * fy - ly * fx
+        if d != 0.0:
+            fx, fy, fz = d * a * ux, d * a * uy, d * a * uz
+            fd0, fd1, fd2 = fd0 + fx, fd1 + fy, fd2 + fz
+            td0, td1, td2 = td0 + ly * fz - lz * fy, td1 + lz * fx - lx * fz, td2 + lx * fy - ly * fx
+        z = pts[i, 2]
+        a_sub += a
+        v_sub += a * z * nz
+        z2n += a * z * z * nz
+    load[0, 0], load[0, 1], load[0, 2], load[0, 3], load[0, 4], load[0, 5] = fp0, fp1, fp2, tp0, tp1, tp2
+    load[1, 0], load[1, 1], load[1, 2], load[1, 3], load[1, 4], load[1, 5] = fd0, fd1, fd2, td0, td1, td2
+    ws[5][0], ws[5][1], ws[5][2] = a_sub, v_sub, z2n
+    Q = np.array([[acc[4], acc[5], acc[6]], [acc[5], acc[7], acc[8]], [acc[6], acc[8], acc[9]]])
+    return acc[0], mv(R, acc[1:4].copy()), rotate_tensor(R, Q)
+
+
+@njit(**JIT)
+def wave_panels(x, R, sea, ex, geom, coef, ws, load):
+    """The pressure and the water's velocity (for damping) on the mesh clipped at the wave surface (the
+    plane through the surface points above each triangle's vertices), by Dunavant's rule, integrated into
+    load (2, 6); the wet triangles with the water's velocity at their vertices into ws when drag needs
+    them. Returns the wet area and its moments (A, S, rr), exact for the clipped triangles."""
+    verts, faces, fnormals = geom[3], geom[4], geom[5]
+    rho, g = coef[RHO], coef[G]
+    d = 1.0 if USED & DAMPING else 0.0  # the integral of u_water dA, for damping
+    pressure_on = (USED & PRESSURE) != 0
+    lev = vertex_levers(R, verts)
+    nv = verts.shape[0]
+    pv = np.empty((nv, 3))
+    for v in range(nv):
+        for i in range(3):
+            pv[v, i] = x[i] + lev[v, i]
+    hv = np.empty(nv)
+    elevations(sea, ex, pv, nv, hv)
+    for v in range(nv):
+        hv[v] = pv[v, 2] - hv[v]
+    P = np.zeros((3, 3))
+    h = np.empty(3)
+    nf = faces.shape[0]
+    subs = np.empty((2 * nf, 3, 3))
+    normals = np.empty((2 * nf, 3))
+    m = 0
+    for f in range(nf):
+        for v in range(3):
+            for i in range(3):
+                P[v, i] = lev[faces[f, v], i]
+            h[v] = hv[faces[f, v]]
+        c = clip(P, h, subs[m:])
+        nx, ny, nz = world_normal(R, fnormals, f)
+        for k in range(m, m + c):
+            normals[k, 0], normals[k, 1], normals[k, 2] = nx, ny, nz
+        m += c
+    nodes = np.empty((6 * m, 3))
+    for k in range(m):
+        t = subs[k]
+        for q in range(6):
+            b = DUNAVANT4[q]
+            for i in range(3):
+                nodes[6 * k + q, i] = x[i] + b[0] * t[0, i] + b[1] * t[1, i] + b[2] * t[2, i]
+    out = _water_at(sea, ex, nodes, 6 * m, rho, g, (USED & TWIST_TERMS) != 0)
+    A = 0.0
+    S = np.zeros(3)
+    rr = np.zeros((3, 3))
+    ws[5][:] = 0.0
+    for k in range(m):
+        t = subs[k]
+        nx, ny, nz = normals[k, 0], normals[k, 1], normals[k, 2]
+        e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
+        e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
+        area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
+        A += area
+        s0, s1, s2 = t[0, 0] + t[1, 0] + t[2, 0], t[0, 1] + t[1, 1] + t[2, 1], t[0, 2] + t[1, 2] + t[2, 2]
+        S[0] += area * s0 / 3.0
+        S[1] += area * s1 / 3.0
+        S[2] += area * s2 / 3.0
+        for i in range(3):
+            for j in range(3):
+                rr[i, j] += area / 12.0 * (t[0, i] * t[0, j] + t[1, i] * t[1, j] + t[2, i] * t[2, j] + (s0, s1, s2)[i] * (s0, s1, s2)[j])
+        for q in range(6):
+            o = out[6 * k + q]
+            nd = nodes[6 * k + q]
+            _diagnostics(ws[5], area * DUNAVANT4_WEIGHTS[q], nd[2], nz)
+            _node_load(nd[0] - x[0], nd[1] - x[1], nd[2] - x[2], nx, ny, nz, area * DUNAVANT4_WEIGHTS[q], o[0] if pressure_on else 0.0, d,
+                       o[1], o[2], o[3], load)  # fmt: skip
+    if USED & DRAG:  # the wet triangles and the water's velocity at their vertices
+        corners = np.empty((3 * m, 3))
+        for k in range(m):
+            for v in range(3):
+                for i in range(3):
+                    corners[3 * k + v, i] = x[i] + subs[k, v, i]
+        flow = _water_at(sea, ex, corners, 3 * m, rho, g, True)
+        tris, tnormals = ws[1], ws[2]
+        for k in range(m):
+            for v in range(3):
+                for i in range(3):
+                    tris[k, v, i] = subs[k, v, i]
+                    tris[k, v, 3 + i] = flow[3 * k + v, 1 + i]
+            tnormals[k] = normals[k]
+        ws[3][0] = m
+    return A, S, rr

@@ -70,3 +70,11 @@ def test_a_floating_body_released_at_rest_drifts_with_the_current(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "damped", "--current", "0.5"], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)  # fmt: skip
     assert bad.returncode != 0 and "Traceback" not in bad.stderr and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+
+
+def test_a_current_with_radiation_is_refused_in_one_line():
+    """The radiation memory (Cummins) assumes water at rest: a current with it is not modelled, so not run."""
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "sphere", "--current", "0.5", "0"], cwd=ROOT, capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and "current with radiation" in done.stderr, done.stderr

@@ -231,7 +231,7 @@ def warm_up() -> None:
     """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
     from ..body import make_box
     from .layout import COEF_BASE, TERM_PARAMS
-    from .simulation import observe
+    from .simulation import exact_hydrostatic_energy, observe
     from .spec import RADIATING
 
     body = make_box((1.0, 1.0, 1.0), 1, 1.0)
@@ -247,3 +247,4 @@ def warm_up() -> None:
     model = Model(body.packed, body.mass, body.inertia, coef)
     advance(y, 0.0, 1, 0.01, model, sea, rad)
     observe(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea, np.empty(body.n_samples, dtype=np.bool_))
+    exact_hydrostatic_energy(y[0:3].copy(), np.eye(3), body.packed, 1.0)  # the energy check of every frame

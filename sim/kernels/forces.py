@@ -35,7 +35,7 @@ def pose_loads(x, R, t, model, s, sea):
         if is_wet and USED & DAMPING:
             D, affine = damping(model, wet)
             s.ws[4][:] = affine
-    return load[:3].copy(), load[3:].copy(), D, is_wet
+    return load[:3], load[3:], D, is_wet
 
 
 @njit(**JIT)

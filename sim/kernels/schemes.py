@@ -61,7 +61,7 @@ def start(y, t, dt, model, s, sea, rad):
     return R, F, T, D, wet, K, lam, V, WS
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # into advance's loop: no call passing some 30 arrays each step
 def euler_step(y, t, dt, carry, model, s, sea, rad):
     """Drift, exact rotation, every load at the new pose, kick (integrators.SymplecticEuler)."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
@@ -82,7 +82,7 @@ def euler_step(y, t, dt, carry, model, s, sea, rad):
     return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # into advance's loop: no call passing some 30 arrays each step
 def splitting_step(y, t, dt, carry, model, s, sea, rad):
     """B(h) A(h) C(dt) A(h) B(h), loads carried over (integrators.Splitting)."""
     x, q, u, L = y[0:3], y[3:7], y[7:10], y[10:13]
@@ -132,7 +132,7 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
     return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # into advance's loop: no call passing some 30 arrays each step
 def implicit_step(y, t, dt, carry, model, s, sea, rad):
     """P(h) C(dt) P(h), P = every load linearised and solved exactly (integrators.Implicit); the
     water's motion makes damping affine: its part d u_water (ws[4]) joins the loads."""
@@ -168,7 +168,7 @@ def implicit_step(y, t, dt, carry, model, s, sea, rad):
     return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # into advance's loop: no call passing some 30 arrays each step
 def rk4_step(y, t, dt, carry, model, s, sea, rad):
     """Classical Runge-Kutta on (x, q, u, L[, memory, E_rad]), q renormalised (integrators.RK4)."""
     k1 = derivative(y, t, model, s, sea, rad)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .jit import JIT, njit
 from .layout import RHO, G, slot
-from .spec import CELLS, MODEL, PANELS
+from .spec import CELLS, MODEL, MOVING, PANELS
 from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, clip, world_normal
 
 C_DAMPING, C_DRAG = slot("damping"), slot("drag_coefficient")
@@ -52,7 +52,7 @@ def damping_matrix(d, A, S, rr):
 def damping(model, wet):
     """Linear viscous damping, -d (v - u_water) per unit wet area: (D, affine), load = affine - D (u, omega)."""
     d = model.coef[C_DAMPING]
-    return damping_matrix(d, wet.area, wet.first, wet.second), d * wet.flow
+    return damping_matrix(d, wet.area, wet.first, wet.second), d * wet.flow if MOVING else wet.flow  # water at rest: flow is zero
 
 
 @njit(**JIT)

@@ -28,7 +28,7 @@ def wet_integrals(x, R, geom, need_rr, flags, acc, ws):
     return wet_panels(x, R, verts, faces, fnormals, need_rr)
 
 
-@njit(**JIT)
+@njit(inline="always", **JIT)  # once per pose: no call passing the body's and scratch's arrays
 def wet_surface(x, R, t, model, s, sea):
     """The wet surface's integrals (layout.Wet) at a pose and time. Leaves in the scratch `s` what the twist
     terms of this pose need (surface.workspace): the wet samples' flags, the wet triangles (for drag) and, in
@@ -44,7 +44,7 @@ def wet_surface(x, R, t, model, s, sea):
         else:
             A, S, rr = wave_panels(x, R, sea, ex, geom, coef, s.ws, load)
         return Wet(load[0].copy(), A, S, rr, load[1].copy())
-    zn, zt, A, S, rr = wet_integrals(x, R, geom, True, s.flags, s.acc, s.ws)
+    zn, zt, A, S, rr = wet_integrals(x, R, geom, (USED & DAMPING) != 0, s.flags, s.acc, s.ws)  # rr: damping's alone
     rg = coef[RHO] * coef[G]
     p = np.empty(6)
     p[:3] = rg * zn

@@ -82,6 +82,21 @@ def euler_step(y, t, dt, carry, model, s, sea, rad):
     return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
 
 
+@njit(inline="always", **JIT)
+def _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS):
+    """C(dt) of the splitting and implicit schemes: the free drift and exact rotation, the radiation memory
+    over it and the new pose's mass frames, then the loads at the new pose."""
+    xn = x + dt * un
+    qn = free_rotation(q, Ln, dt, model.inertia)
+    Rn = quat_to_matrix(qn)
+    memn, e_radn = mem, e_rad
+    if rad is not None:
+        WS = frames(rad, Rn)
+        memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, model.inertia)
+    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    return xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn
+
+
 @njit(inline="always", **JIT)  # into advance's loop: no call passing some 30 arrays each step
 def splitting_step(y, t, dt, carry, model, s, sea, rad):
     """B(h) A(h) C(dt) A(h) B(h), loads carried over (integrators.Splitting)."""
@@ -105,14 +120,7 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
             if wet:
                 un, Ln = general_twist_flow(x, R, un, Ln, h, model, D, s, rad)
             un, Ln = kick(rad, R, un, Ln, Fk, Tk, h, mass, inertia)
-    xn = x + dt * un
-    qn = free_rotation(q, Ln, dt, inertia)
-    Rn = quat_to_matrix(qn)
-    memn, e_radn = mem, e_rad
-    if rad is not None:  # the new pose's mass frames, and the memory over the drift
-        WS = frames(rad, Rn)
-        memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
-    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn = _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS)
     if rad is None:
         un, Ln = kick(rad, Rn, un, Ln, Fc, Tc, h, mass, inertia)
         if wetn and GENERAL_TWIST:
@@ -148,14 +156,7 @@ def implicit_step(y, t, dt, carry, model, s, sea, rad):
     else:
         Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if MOVING else (Fk, Tk)
         un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
-    xn = x + dt * un
-    qn = free_rotation(q, Ln, dt, inertia)
-    Rn = quat_to_matrix(qn)
-    memn, e_radn = mem, e_rad
-    if rad is not None:  # the new pose's mass frames, and the memory over the drift
-        WS = frames(rad, Rn)
-        memn, e_radn = drift_memory(rad, R, Rn, un, Ln, mem, e_rad, dt, inertia)
-    Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
+    xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn = _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS)
     Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn)
     if HAS_NONLINEAR:
         un, Ln = relinearised_flow(xn, Rn, un, Ln, h, model, Fk, Tk, Dn, wetn, s, rad)

@@ -23,8 +23,7 @@ import numpy as np
 
 import sim
 from sim.body import printable
-from sim.compiling import Compiler, kernels_ready
-from sim.compiling import load as load_kernels
+from sim.compiling import Compiler, Loader, kernels_ready
 from sim.config import PARAMS, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
@@ -147,6 +146,7 @@ class SimLoop:
         fp_raise: bool = False,
         scene_options: tuple[str, ...] = (),
         background_compile: bool = False,
+        compile_kernels: bool = True,
     ):
         self._publish: Callable[[Snapshot], None] | None = None
         self._on_setting: Callable[[str, Any], None] | None = None
@@ -158,8 +158,12 @@ class SimLoop:
 
         self._background = background_compile and default_backend() == "numba"
         """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""
+        self._compile = compile_kernels
+        """Whether a child may compile kernels this machine lacks (else those scenes stay on the numpy reference)."""
         self._compiler: Compiler | None = None
         """The kernels compiling in a child process (sim/compiling.py); until it is done the numpy reference runs."""
+        self._loader: Loader | None = None
+        """The kernels loading from the disk cache on a thread."""
         self._loaded: set = set()  # the kernels.Spec this process has loaded
         self._failed: set = set()  # and those that did not compile: not tried again
         self._backend = "numpy" if self._background else None  # None: the default (compiled where there is a twin)
@@ -264,39 +268,56 @@ class SimLoop:
 
     def _ensure_kernels(self) -> None:
         """Between two steps: run the scene on its compiled kernels where this machine has them (loaded from the
-        disk cache), else on the numpy reference while a child compiles them; switch when it is done (the same
-        state vector; only the backend changes). A scene change may need other kernels: the same again."""
+        disk cache on a thread), else on the numpy reference while a child compiles them; switch when they are
+        loaded (the same state vector; only the backend changes). A scene change may need other kernels: the same again.
+        Nothing here waits for numba: the simulation thread must answer Pause, Reset and the tests' sync at once."""
         if not self._background or not self.sim.has_twin:
             return
         spec = self.sim.spec
+        self._collect_kernels(spec)
+        busy = {job.spec for job in (self._compiler, self._loader) if job is not None}
+        if spec not in self._loaded and spec not in self._failed and spec not in busy:
+            if kernels_ready(spec):
+                if self._loader is None:  # one load at a time; the next check starts this one
+                    self._loader = Loader(spec)
+            else:
+                if self._compiler is not None:
+                    self._compiler.stop()  # compiling kernels the scene no longer needs
+                self._compiler = Compiler(spec) if self._compile else None
+                if self._compiler is not None:
+                    print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
+                          "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
+                else:
+                    self._failed.add(spec)  # this loop does not compile: the numpy reference runs the scene
+        self._backend = default_backend() if spec in self._loaded else "numpy"
+        if self.sim.backend != self._backend:
+            self.sim.use_backend(self._backend)
+            self._cost_unknown()
+            self._restart_clock()
+
+    def _collect_kernels(self, spec) -> None:
+        """Take the result of a compile or a load that ended: a compile is followed by a load of its kernels."""
         compiler = self._compiler
         if compiler is not None and compiler.done:
             self._compiler = None
             if not compiler.ok:
                 self._failed.add(compiler.spec)
                 self._raise_notice(f"The fast kernels did not compile ({compiler.failure()}); the run stays on the numpy reference.")
-            elif compiler.spec == spec:
-                self._raise_notice(f"The fast kernels are ready (compiled in {compiler.seconds:.0f} s in the background): the run goes on with them.")
-        if spec not in self._loaded and spec not in self._failed and (self._compiler is None or self._compiler.spec != spec):
-            if kernels_ready(spec):
-                try:
-                    load_kernels(spec)
-                    self._loaded.add(spec)
-                except Exception as e:  # noqa: BLE001 -- the numpy reference runs on
-                    self._failed.add(spec)
-                    self._log("loading the compiled kernels", e)
-                    self._raise_notice(f"The fast kernels did not load ({type(e).__name__}); the run stays on the numpy reference.")
+            elif self._loader is None:
+                self._loader = Loader(compiler.spec, compiled_in=compiler.seconds)
             else:
-                if self._compiler is not None:
-                    self._compiler.stop()  # compiling kernels the scene no longer needs
-                self._compiler = Compiler(spec)
-                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
-                      "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
-        self._backend = default_backend() if spec in self._loaded else "numpy"
-        if self.sim.backend != self._backend:
-            self.sim.use_backend(self._backend)
-            self._cost_unknown()
-            self._restart_clock()
+                self._compiler = compiler  # collected again once the load under way ends
+        loader = self._loader
+        if loader is not None and loader.done:
+            self._loader = None
+            if not loader.ok:
+                self._failed.add(loader.spec)
+                self._log("loading the compiled kernels", loader.error)
+                self._raise_notice(f"The fast kernels did not load ({loader.failure()}); the run stays on the numpy reference.")
+                return
+            self._loaded.add(loader.spec)
+            if loader.compiled_in is not None and loader.spec == spec:
+                self._raise_notice(f"The fast kernels are ready (compiled in {loader.compiled_in:.0f} s in the background): the run goes on with them.")
 
     def engine(self) -> str:
         """What steps the run, for the readouts: '' on the compiled kernels."""
@@ -304,6 +325,8 @@ class SimLoop:
             return ""
         if self._compiler is not None and self._compiler.spec == self.sim.spec:
             return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - self._compiler.started:.0f} s so far)"
+        if self._loader is not None and self._loader.spec == self.sim.spec:
+            return "numpy reference (loading the fast kernels)"
         return "numpy reference"
 
     def _guarded(self, what: str, fn: Callable[[], None]) -> None:

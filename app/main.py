@@ -193,10 +193,12 @@ def check_address(host: str, port: int) -> int:
     raise ConfigError(f"port {port} is busy and so is every port up to {min(port + 100, 65535)}: give another --port (0: any free one)")
 
 
-def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> ViewerApp:
+def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, compile_kernels: bool = True) -> ViewerApp:
     """Load the scene (a bad one raises ConfigError before any server starts), start server and simulation thread.
 
     strict=True runs the physics under np.errstate(all="raise") (tests): a NaN pauses the run with a note.
+    compile_kernels=False: scenes whose kernels this machine has not compiled stay on the numpy reference
+    (tests of the controls, which would otherwise start a compile each and kill it at once).
     """
     scene = load_scene(args.scene)
     if args.mesh is not None:
@@ -208,7 +210,8 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False) -> 
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     quiet_repeated_tracebacks()
     big_blocks_go_back()
-    loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True)
+    loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True,
+                   compile_kernels=compile_kernels)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)

@@ -16,6 +16,7 @@ import shlex
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 COMMAND_ENV = "FLOATSIM_COMPILER"
@@ -81,6 +82,38 @@ class Compiler:
         if self._child.poll() is None:
             self._child.kill()
             self._child.wait()
+
+
+class Loader:
+    """Loads the kernels of `spec` from the disk cache on a thread of this process (a second or two, or longer
+    when another process is still writing them): the simulation thread keeps answering meanwhile. The same
+    `done` / `ok` / `seconds` / `failure()` as Compiler."""
+
+    def __init__(self, spec, compiled_in: float | None = None):
+        self.spec = spec
+        self.compiled_in = compiled_in
+        """Seconds the child took to compile these kernels just before (None: they were on disk already)."""
+        self.seconds: float | None = None
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._load, name="floatsim-kernels", daemon=True)
+        self._thread.start()
+
+    def _load(self) -> None:
+        try:
+            self.seconds = load(self.spec)
+        except BaseException as e:  # noqa: BLE001 -- reported by failure(); the numpy reference runs on
+            self.error = e
+
+    @property
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+    @property
+    def ok(self) -> bool:
+        return self.done and self.error is None
+
+    def failure(self) -> str:
+        return f"{type(self.error).__name__}: {self.error}"[:200]
 
 
 def load(spec) -> float:

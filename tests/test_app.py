@@ -14,6 +14,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import urllib.request
 from pathlib import Path
@@ -37,7 +38,7 @@ def make_app():
     apps = []
 
     def make(scene="damped", paused=False, **kwargs):
-        app = start(ViewArgs(scene=scene, port=0), strict=True, **kwargs)
+        app = start(ViewArgs(scene=scene, port=0), strict=True, compile_kernels=False, **kwargs)
         apps.append(app)
         if paused:
             app.controls.paused.value = True
@@ -67,7 +68,7 @@ def test_busy_port_moves_to_the_next(make_app):
         s.bind(("127.0.0.1", 0))
         s.listen()
         busy = s.getsockname()[1]
-        app = start(ViewArgs(scene="rest", port=busy), strict=True)
+        app = start(ViewArgs(scene="rest", port=busy), compile_kernels=False, strict=True)
         try:
             assert app.port > busy
             assert app.url.endswith(f":{app.port}")
@@ -77,7 +78,7 @@ def test_busy_port_moves_to_the_next(make_app):
 
 def test_bad_scene_is_a_config_error_before_any_server():
     with pytest.raises(sim.ConfigError, match="unknown scene 'nope'"):
-        start(ViewArgs(scene="nope", port=0))
+        start(ViewArgs(scene="nope", port=0), compile_kernels=False)
 
 
 @pytest.mark.parametrize("argv", [["-m", "app", "--scene", "nope"], ["-m", "app.cli", "view", "--scene", "nope"]])
@@ -316,6 +317,40 @@ def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, use
     assert app.loop.is_alive()
     snap = wait_for(app, lambda s, n=snap.steps: s.steps > n + 10, what="the run to go on")
     assert not snap.diverged and np.isfinite(snap.frame.x_world).all()
+
+
+def test_loading_kernels_never_holds_up_the_simulation_thread(make_app, monkeypatch):
+    """A cold CI run: a new drag term needed kernels another process had just compiled, the simulation thread
+    loaded them in-line, and a sync waited over 10 s. Now a thread loads them: the run answers and steps on
+    numpy meanwhile, says so, and a load that fails leaves it on numpy with a note."""
+    import app.loop
+    import sim.compiling
+
+    if sim.simulation.default_backend() != "numba":
+        pytest.skip("no compiled backend here")
+    release, asked = threading.Event(), []
+
+    def slow_load(spec):
+        asked.append(spec)
+        release.wait(60)
+        raise OSError("cache unreadable")
+
+    monkeypatch.setattr(sim.compiling, "load", slow_load)
+    monkeypatch.setattr(app.loop, "kernels_ready", lambda spec: True)
+    viewer = make_app("damped")
+    snap = viewer.sync()
+    assert snap.engine == "numpy reference (loading the fast kernels)"
+    wait_for(viewer, lambda s: s.frame.t > snap.frame.t + 0.2, what="the run to go on while the kernels load")
+    started = time.monotonic()
+    viewer.controls.drag_coefficient.value = 1.0  # a new term: kernels of another spec, loaded after the first
+    snap = viewer.sync()
+    assert time.monotonic() - started < 2.0 and snap.settings.drag_coefficient == 1.0
+    release.set()
+    snap = wait_for(viewer, lambda s: "did not load" in s.notice, what="the failed load's note")
+    assert "OSError: cache unreadable" in snap.notice and snap.engine.startswith("numpy reference")
+    wait_for(viewer, lambda s: len(asked) == 2 and s.engine == "numpy reference", what="the second spec's load, failed too")
+    assert asked[0] != asked[1] and "drag" in asked[1].terms
+    assert not viewer.loop.sim.compiled and viewer.loop.is_alive()
 
 
 def test_wrong_kinds_of_input_are_refused(make_app):

@@ -125,7 +125,7 @@ def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: f
     if not model.has("pressure"):
         return 0.0
     if kernels is not None and model.water.flat:
-        return float(kernels.simulation.exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
+        return float(kernels.surface.exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
     return hydrostatic_energy(model.water, wet_panels(model.body, model.water, x, R, t))
 
 

@@ -232,8 +232,9 @@ def warm_up() -> None:
     """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
     from ..body import make_box
     from .layout import COEF_BASE, TERM_PARAMS
-    from .simulation import exact_hydrostatic_energy, observe
+    from .simulation import observe
     from .spec import RADIATING
+    from .surface import exact_hydrostatic_energy
 
     body = make_box((1.0, 1.0, 1.0), 1, 1.0)
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])

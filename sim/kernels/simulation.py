@@ -8,7 +8,7 @@ from .forces import nonlinear_loads, pose_loads, twist_loads
 from .jit import JIT, njit
 from .layout import RHO, G, Scratch
 from .spec import CELLS, CURRENT, DAMPING, GRAVITY, HAS_NONLINEAR, MODEL, POINTS, PRESSURE, USED, WAVES, WET_TERMS
-from .surface import cell_node, clip, vertex_levers, workspace
+from .surface import cell_node, mesh_integrals, workspace
 from .terms import C_DAMPING
 from .water import elevations, prepare
 
@@ -48,44 +48,6 @@ def _loads(x, R, u, w, model):
     F, T, D, is_wet = pose_loads(x, R, 0.0, model, s, still)
     twist_loads(x, R, u, w, model, D, is_wet, s, F, T)
     return F, T
-
-
-@njit(**JIT)
-def mesh_integrals(x, R, geom):
-    """(wet area, submerged volume, integral of z^2 nu_z) of the mesh clipped at the still water
-    line, exact (Simpson-like closed forms on each clipped triangle)."""
-    verts, faces, fnormals = geom[3], geom[4], geom[5]
-    lev = vertex_levers(R, verts)
-    P = np.empty((3, 3))
-    h = np.empty(3)
-    tris = np.empty((2, 3, 3))
-    z2n = a_sub = v_sub = 0.0
-    for f in range(faces.shape[0]):
-        for v in range(3):
-            for i in range(3):
-                P[v, i] = lev[faces[f, v], i]
-            h[v] = x[2] + P[v, 2]
-        nz = R[2, 0] * fnormals[f, 0] + R[2, 1] * fnormals[f, 1] + R[2, 2] * fnormals[f, 2]
-        nx = R[0, 0] * fnormals[f, 0] + R[0, 1] * fnormals[f, 1] + R[0, 2] * fnormals[f, 2]
-        ny = R[1, 0] * fnormals[f, 0] + R[1, 1] * fnormals[f, 1] + R[1, 2] * fnormals[f, 2]
-        for k in range(clip(P, h, tris)):
-            t = tris[k]
-            e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
-            e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
-            area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
-            z0, z1, z2 = min(x[2] + t[0, 2], 0.0), min(x[2] + t[1, 2], 0.0), min(x[2] + t[2, 2], 0.0)
-            sz = z0 + z1 + z2
-            a_sub += area
-            v_sub += area * sz / 3.0 * nz
-            z2n += area / 12.0 * (z0 * z0 + z1 * z1 + z2 * z2 + sz * sz) * nz  # integral of z^2 over the triangle, times nu_z
-    return a_sub, v_sub, z2n
-
-
-@njit(**JIT)
-def exact_hydrostatic_energy(x, R, geom, rho_g):
-    """The physical hydrostatic potential rho g * integral of (-z) dV over the mesh clipped at the
-    still water line, J: the same for every force model."""
-    return -0.5 * rho_g * mesh_integrals(x, R, geom)[2]
 
 
 @njit(**JIT)

@@ -103,6 +103,8 @@ def _control(gui, p: Param, value):
     slider whose range also holds `value` (a scene may start outside the usual range)."""
     if p.kind == "choice":
         return gui.add_dropdown(p.title, p.choices, initial_value=value, hint=p.help)
+    if p.kind == "switch":
+        return gui.add_checkbox(p.title, bool(value), hint=p.help)
     if p.kind == "vector":
         add = gui.add_vector2 if p.size == 2 else gui.add_vector3
         return add(p.title, value, step=VECTOR_STEP, hint=p.help)

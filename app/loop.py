@@ -24,7 +24,7 @@ import numpy as np
 import sim
 from sim.body import printable
 from sim.compiling import Compiler, Loader, kernels_ready
-from sim.config import PARAMS, load_scene
+from sim.config import PARAMS, diffracting, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
@@ -61,6 +61,11 @@ class Settings:
     @property
     def density(self) -> float:
         return self.body.mass / self.body.volume
+
+    @property
+    def diffraction(self) -> bool:
+        """Whether the body feels the diffraction force (the scene's switch, or unset: wherever radiation is bem, in waves)."""
+        return diffracting(self.config)
 
     @property
     def points_per_edge(self) -> int:
@@ -497,6 +502,7 @@ class SimLoop:
         unseen), so this runs once per batch, after the last command, and the GUI writes only a change."""
         if not keys:
             return
+        keys = keys | {"diffraction"}  # its control shows the switch in effect, which the waves and radiation decide when unset
         with self._queue.mutex:
             pending = {name for name, _ in self._queue.queue}
         for key in keys - pending:

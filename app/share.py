@@ -15,7 +15,7 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import load_scene
+from sim.config import diffracting, load_scene
 
 from .loop import CONTROLLED, SPEED, Settings
 
@@ -76,6 +76,8 @@ def _link_value(param, text: str):
     try:
         if param.kind == "choice":
             value = text
+        elif param.kind == "switch":
+            value = {"true": True, "false": False}.get(text.lower(), text)
         elif param.kind == "vector":
             value = tuple(float(v) for v in text.split(","))
         else:
@@ -105,9 +107,11 @@ def link_query(settings: Settings) -> str:
         value = settings.value(key)
         if key == "density":
             value = settings.config.body.density if settings.config.body.mass is None else settings.density
-        if preset is not None and value == preset.value(f"{param.section}.{key}"):
-            continue
-        if param.kind == "vector":
+        if preset is not None and value == (diffracting(preset) if key == "diffraction" else preset.value(f"{param.section}.{key}")):
+            continue  # (diffraction: the preset's effective switch, as the control shows it)
+        if param.kind == "switch":
+            value = str(value).lower()
+        elif param.kind == "vector":
             value = ",".join(f"{v:g}" for v in value)
         elif isinstance(value, float):
             value = f"{value:.6g}"

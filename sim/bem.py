@@ -5,6 +5,10 @@ clipped at the still water line of its equilibrium, radiates in each of its six 
 (surge, sway, heave, roll, pitch, yaw about the centre of mass, axes of the world at rest). For each
 frequency omega Capytaine gives the 6x6 added mass A(omega) and radiation damping B(omega), and for
 omega -> infinity A_inf. A lid on the water plane inside the body removes the irregular frequencies.
+Asked for, the same solve gives the wave excitation of the body held at rest: for an incident wave
+of unit amplitude heading beta (elevation Re{e^(i (k (x cos beta + y sin beta) - omega t))}), the
+complex Froude-Krylov force (the undisturbed wave's pressure) and diffraction force (the scattered
+wave's), 6 dofs, on a grid of headings around the circle.
 
 Solving takes seconds to a minute, so results are kept on disk, keyed by everything they depend on
 (the clipped mesh, rho, g, depth and the frequency grid): first in the shipped `assets/coefficients/`,
@@ -14,6 +18,7 @@ files let the presets run without it.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import os
@@ -55,6 +60,18 @@ class Coefficients:
     """Water depth, m (inf: deep water)."""
     panels: int
     """How many panels the wet surface had."""
+    center: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    """(3,) the point the rotations are about (the centre of mass at rest), world frame, m."""
+    headings: np.ndarray | None = None
+    """(m,) wave headings beta of the excitation, rad, increasing in [0, 2 pi); None: not solved."""
+    diffraction: np.ndarray | None = None
+    """(n, m, 6) complex diffraction force per unit wave amplitude: N/m, N m/m (time factor e^(-i omega t))."""
+    froude_krylov: np.ndarray | None = None
+    """(n, m, 6) complex Froude-Krylov force per unit wave amplitude, likewise."""
+
+    @property
+    def has_excitation(self) -> bool:
+        return self.headings is not None
 
     def save(self, path: Path) -> None:
         """Written to a new temporary file beside it (mkstemp: O_EXCL, so never through a link someone placed),
@@ -62,9 +79,10 @@ class Coefficients:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.npz")
         try:
+            excitation = {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov} if self.has_excitation else {}
             with os.fdopen(fd, "wb") as f:
                 np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
-                                    rho=self.rho, depth=self.depth, panels=self.panels)  # fmt: skip
+                                    rho=self.rho, depth=self.depth, panels=self.panels, center=self.center, **excitation)  # fmt: skip
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
@@ -75,7 +93,8 @@ class Coefficients:
         """The coefficients in `path`, checked (ValueError saying what is wrong with the file)."""
         try:
             with np.load(path) as f:
-                c = cls(f["omega"], f["added_mass"], f["damping"], f["added_mass_inf"], float(f["rho"]), float(f["depth"]), int(f["panels"]))
+                extra = {key: f[key] for key in ("center", "headings", "diffraction", "froude_krylov") if key in f.files}
+                c = cls(f["omega"], f["added_mass"], f["damping"], f["added_mass_inf"], float(f["rho"]), float(f["depth"]), int(f["panels"]), **extra)
         except UNREADABLE as e:
             raise ValueError(f"not a coefficients file ({type(e).__name__})") from None
         check(c)
@@ -108,6 +127,16 @@ def check(c: Coefficients) -> None:
         raise ValueError("damping matrices not symmetric")
     if np.any(np.linalg.eigvalsh(0.5 * (B + B.transpose(0, 2, 1))).min(axis=1) < -0.02 * scale):
         raise ValueError("damping not positive semi-definite (the body would draw energy from the waves)")
+    if np.shape(c.center) != (3,) or not np.isfinite(c.center).all():
+        raise ValueError("the centre of rotation is not three finite numbers")
+    if c.headings is not None:
+        beta = np.asarray(c.headings)
+        if beta.ndim != 1 or not len(beta) or np.any(np.diff(beta) <= 0) or beta[0] < 0 or beta[-1] >= 2 * math.pi:
+            raise ValueError("wave headings not increasing in [0, 2 pi)")
+        for name in ("diffraction", "froude_krylov"):
+            X = np.asarray(getattr(c, name))
+            if X.shape != (n, len(beta), 6) or X.dtype.kind != "c" or not np.isfinite(X).all():
+                raise ValueError(f"{name} force {X.shape}: need finite complex numbers, ({n}, {len(beta)}, 6)")
 
 
 def default_frequencies(length: float, g: float = 9.81, n: int = 60) -> np.ndarray:
@@ -116,6 +145,10 @@ def default_frequencies(length: float, g: float = 9.81, n: int = 60) -> np.ndarr
     still resolve them four times; the damping of heave and of the rotations has died out there)."""
     lo, hi = math.sqrt(2 * math.pi * g / (100 * length)), math.sqrt(2 * math.pi * g / (0.5 * length))
     return np.linspace(lo, hi, n)
+
+
+HEADINGS = np.radians(np.arange(0.0, 360.0, 15.0))
+"""Wave headings the excitation is solved for (15 degrees apart, interpolated between)."""
 
 
 def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.ndarray, np.ndarray]:
@@ -132,9 +165,12 @@ def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.
     return T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3)
 
 
-def cache_key(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray) -> str:
+def cache_key(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, center=(0.0, 0.0, 0.0)) -> str:
+    """The solve's inputs hashed (a centre at the origin adds nothing: the keys of files solved before it was a choice stand)."""
     h = hashlib.sha256()
-    for a in (np.round(np.asarray(vertices, float), 9), np.asarray(faces, np.int64), np.array([rho, g, depth]), np.asarray(omega, float)):
+    center = np.round(np.asarray(center, float), 9)
+    for a in (np.round(np.asarray(vertices, float), 9), np.asarray(faces, np.int64), np.array([rho, g, depth]), np.asarray(omega, float),
+              *([center] if center.any() else [])):  # fmt: skip
         h.update(np.ascontiguousarray(a).tobytes())
     return h.hexdigest()[:20]
 
@@ -151,33 +187,42 @@ def note(text: str) -> None:
 
 
 def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf,
-                           omega: np.ndarray | None = None, panel: float | None = None, progress: bool = True) -> Coefficients:  # fmt: skip
-    """A(omega), B(omega), A_inf of the closed mesh (world frame, at rest, centre of mass at the
-    origin) floating in water of density rho: from the shipped files or the user's cache when they
-    hold this case, else solved by Capytaine (and cached). A file that fails `check` counts as absent, with a note."""
+                           omega: np.ndarray | None = None, panel: float | None = None, progress: bool = True, center=(0.0, 0.0, 0.0),
+                           excitation: bool = False) -> Coefficients:  # fmt: skip
+    """A(omega), B(omega), A_inf of the closed mesh (world frame, at rest) floating in water of density rho,
+    rotations about `center` (its centre of mass), and with `excitation` the wave excitation forces too:
+    from the shipped files or the user's cache when they hold this case, else solved by Capytaine (and
+    cached). A file that fails `check` counts as absent, with a note; one without the excitation asked for is solved again."""
     vertices = np.asarray(vertices, float)
     size = float(np.ptp(vertices, axis=0).max())
     panel = panel or size / 8
     wv, wf = wet_mesh(vertices, faces, panel)
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
-    key = cache_key(wv, wf, rho, g, depth, omega)
+    key = cache_key(wv, wf, rho, g, depth, omega, center)
     cached = user_cache() / f"{key}.npz"
-    bad = []
+    bad, partial = [], None
     for path in (SHIPPED / f"{key}.npz", cached):
         if path.exists():
             try:
-                return Coefficients.load(path)
+                found = Coefficients.load(path)
             except ValueError as e:
                 bad.append(f"{path} is not usable ({e})")
+                continue
+            if found.has_excitation or not excitation:
+                return found
+            partial = partial or found
+    what = "the wave excitation (diffraction)" if partial is not None else "radiation = 'bem'"
     try:
-        if bad:
+        if bad or partial is not None:
             import capytaine  # noqa: F401  (said before a solve of minutes starts, or instead of it)
 
-            note(f"note: {bad[0]}: solving again")
-        result = solve(wv, wf, rho, g, depth, omega, progress)
+            note(f"note: {bad[0]}: solving again" if bad else "note: the stored solve for this body has no wave excitation: solving again with it")
+        result = solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None)
     except (ImportError, MissingSolver):
-        raise MissingSolver(f"radiation = 'bem': {bad[0]} and solving again needs Capytaine: pip install -e \".[bem]\"" if bad else
-                            f"radiation = 'bem' needs the boundary-element solver Capytaine for this body (or its coefficients in {cached}): "
+        if partial is not None:
+            raise MissingSolver(f"{what} for this body needs Capytaine (the stored solve has radiation only): pip install -e \".[bem]\"") from None
+        raise MissingSolver(f"{what}: {bad[0]} and solving again needs Capytaine: pip install -e \".[bem]\"" if bad else
+                            f"{what} needs the boundary-element solver Capytaine for this body (or its coefficients in {cached}): "
                             'pip install -e ".[bem]"') from None  # fmt: skip
     keep(result, cached)
     return result
@@ -196,29 +241,47 @@ def keep(result: Coefficients, path: Path) -> None:
         note(f"warning: cannot cache the radiation coefficients in {path.parent} ({e.strerror or e}): this run goes on, the next one solves again")
 
 
-def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True) -> Coefficients:
+def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True,
+          center=(0.0, 0.0, 0.0), headings: np.ndarray | None = None) -> Coefficients:  # fmt: skip
     """Capytaine on the wet mesh (vertices and triangles under z = 0): radiation in the six rigid
-    modes about the origin at every omega and at infinity, with a lid against irregular frequencies."""
+    modes about `center` at every omega and at infinity, with a lid against irregular frequencies;
+    with `headings`, the diffraction problem (body held still) and the Froude-Krylov force for each."""
     try:
         import capytaine as cpt
     except ImportError:
         raise MissingSolver("radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\"") from None
     import logging
 
+    from capytaine.bem.airy_waves import froude_krylov_force
+
     logging.getLogger("capytaine").setLevel(logging.ERROR)  # its resolution warnings concern the top of the grid, where B has died out
+    center = tuple(float(c) for c in center)
     mesh = cpt.Mesh(vertices, faces)
     lid = mesh.generate_lid(z=-0.01 * float(np.ptp(vertices[:, 2])))  # just below the water line, as Capytaine advises
-    body = cpt.FloatingBody(mesh=mesh, lid_mesh=lid, dofs=cpt.rigid_body_dofs(rotation_center=(0.0, 0.0, 0.0)), center_of_mass=(0.0, 0.0, 0.0))
+    body = cpt.FloatingBody(mesh=mesh, lid_mesh=lid, dofs=cpt.rigid_body_dofs(rotation_center=center), center_of_mass=center)
     solver = cpt.BEMSolver()
     water = {"rho": rho, "g": g, "water_depth": depth}
     freqs = [*omega, math.inf]
+    betas = [] if headings is None else [float(b) for b in headings]
     problems = [cpt.RadiationProblem(body=body, radiating_dof=dof, omega=w, **water) for w in freqs for dof in DOFS]
+    problems += [cpt.DiffractionProblem(body=body, wave_direction=b, omega=w, **water) for w in omega for b in betas]
     results = solver.solve_all(problems, progress_bar=progress)
     A = np.zeros((len(freqs), 6, 6))
     B = np.zeros((len(freqs), 6, 6))
+    Xd = np.zeros((len(omega), len(betas), 6), complex)
+    Xfk = np.zeros_like(Xd)
     for r in results:
-        i, j = freqs.index(r.omega), DOFS.index(r.radiating_dof)
+        i = freqs.index(r.omega)
+        if isinstance(r.problem, cpt.DiffractionProblem):
+            j = betas.index(r.problem.wave_direction)
+            fk = froude_krylov_force(r.problem)
+            Xd[i, j] = [r.forces[name] for name in DOFS]
+            Xfk[i, j] = [fk[name] for name in DOFS]
+            continue
+        j = DOFS.index(r.radiating_dof)
         for k, name in enumerate(DOFS):
             A[i, k, j] = r.added_masses[name]
             B[i, k, j] = r.radiation_dampings[name]
-    return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), int(mesh.nb_faces))
+    excitation = {} if headings is None else {"headings": np.asarray(betas), "diffraction": Xd, "froude_krylov": Xfk}
+    return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), int(mesh.nb_faces), np.asarray(center),
+                        **excitation)  # fmt: skip

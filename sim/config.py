@@ -84,6 +84,8 @@ WAVES = (
     Param("waves", "seed", 0, "JONSWAP: random seed of the phases and frequencies (the same seed, the same sea)", lo=0, hi=2**32 - 1, kind="int"),
     Param("waves", "depth", None, "Water depth h (unset: deep water)", "m", lo=0.0, lo_open=True, hi=1e5, kind="optional"),
     Param("waves", "spreading", 0.0, "JONSWAP: directional spreading exponent s of cos^(2s) (0: long-crested)", lo=0.0, hi=100.0),
+    Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
+          "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )
 WATER = (
     Param("water", "current", (0.0, 0.0), "Uniform current (u, v), world frame: the water and its waves move with it", "m/s", lo=-20.0,
@@ -201,11 +203,18 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["fluid"].radiation != "none" and any(checked["water"].current):
         raise ConfigError("a current with radiation is not modelled (the radiation memory assumes water at rest): "
                           "set [water] current = [0, 0] or [fluid] radiation = \"none\"")
+    if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
+        raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
     norm = math.sqrt(sum(c * c for c in i.orientation))
     if abs(norm - 1.0) > QUATERNION_SLACK:
         raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
                           f"(one within {QUATERNION_SLACK:g} of 1 is normalised)")
     return dataclasses.replace(scene, **checked)
+
+
+def diffracting(scene: SceneConfig) -> bool:
+    """Whether the scene's body feels the diffraction force: in waves, with radiation from the BEM, unless switched off."""
+    return scene.waves.kind != "still" and scene.fluid.radiation == "bem" and scene.waves.diffraction is not False
 
 
 MESH_FORCES = "panels"

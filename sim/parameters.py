@@ -13,9 +13,10 @@ from typing import Any
 
 from .errors import ConfigError
 
-KINDS = ("float", "int", "choice", "text", "vector", "optional")
+KINDS = ("float", "int", "choice", "text", "vector", "optional", "switch")
 """float: a finite number; int: a whole number; choice: one of `choices`; text: any string;
-vector: `size` finite numbers; optional: a finite number or None (unset)."""
+vector: `size` finite numbers; optional: a finite number or None (unset); switch: true or false (or None,
+unset, when that is its default: the scene decides)."""
 
 
 @dataclass(frozen=True)
@@ -74,12 +75,20 @@ class Param:
         return f"{text} ({unit})" if unit else text
 
     def describe(self, value) -> str:
+        if self.kind == "switch":
+            return {True: "on", False: "off", None: "auto"}.get(value, str(value))
         return f"{value:g} {self.unit}".strip() if isinstance(value, (int, float)) else str(value)
 
     def check(self, value) -> Any:
         """The value if valid (tuples for vectors), else ConfigError with a one-line message."""
         if self.kind == "optional" and value is None:
             return None
+        if self.kind == "switch":
+            if value is None and self.default is None:
+                return None
+            if not isinstance(value, bool):
+                raise ConfigError(f"{self.what} must be true or false, got {_short(value)}")
+            return value
         if self.kind == "choice":
             if value not in self.choices:
                 raise ConfigError(f"unknown {self.what} {_short(value)}; {self.what} must be one of: {', '.join(self.choices)}")
@@ -115,6 +124,10 @@ class Param:
         Non-numbers and NaN keep `current`; numbers are clipped into `live` (default: the valid
         range); whole-number parameters are rounded."""
         label = self.label or self.what
+        if self.kind == "switch":
+            if isinstance(value, bool):
+                return value, None
+            return current, f"{label}: {_short(value)} is not on or off; kept {current}."
         if self.kind == "choice":
             if value in self.choices:
                 return value, None

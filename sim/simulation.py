@@ -10,7 +10,7 @@ import numpy as np
 
 from . import stability
 from .body import Body, make_body, make_mesh_body
-from .config import SceneConfig, validate, with_overrides
+from .config import SceneConfig, diffracting, validate, with_overrides
 from .errors import SimulationDiverged
 from .forces import Model, hydrostatic_energy
 from .hydrostatics import sampled_model_warning
@@ -21,7 +21,7 @@ from .surface import wet_panels
 from .water import make_water
 
 CSV_COLUMNS = (
-    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model".split(",")
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff".split(",")
 )
 
 
@@ -62,6 +62,8 @@ class Frame:
     E_hyd_model: float | None = None
     """The force model's own hydrostatic potential, -(rho g / 2) * sum of w z^2 nu_z over its wet nodes, J:
     E_hyd for panels; for points and cells their quadrature of it (None: as E_hyd)."""
+    P_diff: float = 0.0
+    """The power of the diffraction force on the body, F_d . (u, omega), W (0 without diffraction)."""
 
     @property
     def E_hyd_of_model(self) -> float:
@@ -75,7 +77,7 @@ class Frame:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
-                self.E_hyd_of_model]  # fmt: skip
+                self.E_hyd_of_model, self.P_diff]  # fmt: skip
 
 
 def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
@@ -107,12 +109,15 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
         F, T = model.loads(wet, state.u_world, omega, state.t)
         e_hyd, a_sub, v_sub = model.hydrostatic_energy(wet), wet.submerged_area, wet.submerged_volume
         wet_index = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
+    p_diff = 0.0
     if model.radiation is not None:
-        f = model.radiation.force(R, state.memory)
+        f = model.radiation.load(R, state.memory, state.t)
         F, T = F + f[:3], T + f[3:]
+        if model.radiation.diffraction is not None:
+            p_diff = float(model.radiation.diffraction.force(state.t) @ np.concatenate([state.u_world, omega]))
     exact = e_hyd if model.fluid.forces == "panels" else physical_hydrostatic_energy(model, state.x_world, R, state.t, kernels)
     return Frame(**common, force_world=F, torque_world=T, E_hyd=exact, submerged_area=a_sub, submerged_volume=v_sub, wet_index=wet_index,
-                 E_hyd_model=None if model.fluid.forces == "panels" else e_hyd)  # fmt: skip
+                 E_hyd_model=None if model.fluid.forces == "panels" else e_hyd, P_diff=p_diff)  # fmt: skip
 
 
 def compiled_model(model: Model) -> bool:
@@ -221,12 +226,14 @@ class Simulation:
 
     def _model(self, body: Body) -> Model:
         fluid = self.scene.fluid
+        water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current)
         radiation = None
         if fluid.radiation == "bem":
             from .radiation import make_radiation
 
-            radiation = make_radiation(body, fluid, initial_state(body, self.scene).R_world_body)
-        return Model(body, make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current), fluid, radiation)
+            start = initial_state(body, self.scene)
+            radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2])
+        return Model(body, water, fluid, radiation)
 
     @property
     def body(self) -> Body:

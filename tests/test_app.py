@@ -484,6 +484,24 @@ def test_points_model_in_its_bad_band_is_flagged_and_cells_clears_it(make_app):
     assert snap.advice == "" and "rocking or drifting" not in describe(snap)
 
 
+def test_diffraction_control_shows_the_switch_in_effect_and_refuses_it_without_radiation(make_app):
+    """The Waves folder's checkbox: on by itself for the sphere (radiation = bem) once there are waves, off
+    when unticked (the model drops the term), and ticked on a scene without radiation: a notice, kept off."""
+    app = make_app("sphere", paused=True)
+    assert app.controls.diffraction.value is False  # still water: nothing to scatter
+    app.controls.kind.value = "regular"
+    app.sync()
+    assert app.controls.diffraction.value is True and app.loop.sim.model.radiation.diffraction is not None
+    app.controls.diffraction.value = False
+    snap = app.sync()
+    assert snap.settings.diffraction is False and app.loop.sim.model.radiation.diffraction is None
+    other = make_app("damped", paused=True)
+    other.controls.diffraction.value = True
+    snap = other.sync()
+    assert "needs [fluid] radiation" in snap.notice and other.controls.diffraction.value is False
+    assert other.loop.sim.scene.waves.diffraction is None and other.loop.is_alive()
+
+
 def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
     """The drag coefficient's control (generated from its declaration) changes Simulation.scene, and
     the term joins the model only while it is nonzero."""

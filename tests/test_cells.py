@@ -125,7 +125,7 @@ def test_every_model_reports_the_physical_hydrostatic_energy():
             assert fr.E_hyd == pytest.approx(expected, rel=1e-12), f
         assert frames["panels"].E_hyd_of_model == frames["panels"].E_hyd
         assert abs(frames["points"].E_hyd_of_model - expected) > 1e-4 * expected
-    assert CSV_COLUMNS[-1] == "E_hyd_model"
+    assert CSV_COLUMNS[CSV_COLUMNS.index("E_rad") + 1] == "E_hyd_model"
 
 
 def test_the_points_model_warns_in_its_bad_band_only():

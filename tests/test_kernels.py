@@ -301,11 +301,12 @@ specialisations (each compiles for half a minute on a cold cache) instead of the
 @pytest.mark.parametrize("integrator, forces, changes", RADIATION_CASES)
 def test_compiled_radiation_matches_numpy(integrator, forces, changes):
     """Added mass in the kicks and the exact linear flow, the memory and E_rad, alone, with damping and
-    drag (relinearised) and in waves: kernel and reference to round-off, memory states included."""
+    drag (relinearised) and in waves (with the diffraction force): kernel and reference to round-off, memory states included."""
     config = with_overrides(load_scene("rest"), fluid__forces=forces, step__integrator=integrator, fluid__radiation="bem",
                             initial__position=(0.0, 0.0, -0.3), **changes)  # fmt: skip
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
     assert compiled.compiled and len(compiled.state.memory) > 20
+    assert (compiled.model.radiation.diffraction is not None) == ("waves__kind" in changes)  # in waves: the diffraction force too
     for _ in range(3):
         reference.step(30)
         compiled.step(30)
@@ -327,7 +328,7 @@ def test_compiled_radiation_with_a_turned_rest_pose(monkeypatch):
     from sim.body import make_box
 
     cube = make_box((1.0, 1.0, 1.0), 10, 900.0)
-    upright = bem.radiation_coefficients(cube.mesh_vertices + [0.0, 0.0, -0.4], cube.mesh_faces, progress=False)
+    upright = bem.radiation_coefficients(cube.mesh_vertices + [0.0, 0.0, -0.4], cube.mesh_faces, progress=False, center=(0.0, 0.0, -0.4))
     a = np.radians(30.0)
     Rz = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
     T = np.kron(np.eye(2), Rz)

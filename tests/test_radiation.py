@@ -17,7 +17,7 @@ def cube():
     solve = bem.solve
     bem.solve = lambda *a, **k: pytest.fail("the shipped cube coefficients were not found")
     try:
-        return bem.radiation_coefficients(b.mesh_vertices + [0.0, 0.0, -0.4], b.mesh_faces, progress=False)
+        return bem.radiation_coefficients(b.mesh_vertices + [0.0, 0.0, -0.4], b.mesh_faces, progress=False, center=(0.0, 0.0, -0.4))
     finally:
         bem.solve = solve
 

@@ -19,7 +19,7 @@ from ..errors import ConfigError
 from ..parameters import Param
 from .tyro_errors import parse
 
-_TYPES = {"float": float, "int": int, "choice": str, "text": str, "optional": float}
+_TYPES = {"float": float, "int": int, "choice": str, "text": str, "optional": float, "switch": bool}
 
 
 def _flag_type(p: Param):
@@ -34,6 +34,8 @@ FROM_SCENE = "(default: from the scene)"
 def _metavar(p: Param) -> str:
     if p.choices:
         return "{" + ",".join(p.choices) + "}"
+    if p.kind == "switch":
+        return "{True,False}"
     word = {"float": "FLOAT", "optional": "FLOAT", "int": "INT", "text": "STR", "choice": "STR"}.get(p.kind, "FLOAT")
     return " ".join([word] * p.size) if p.kind == "vector" else word
 

@@ -151,7 +151,7 @@ class SimLoop:
         fp_raise: bool = False,
         scene_options: tuple[str, ...] = (),
         background_compile: bool = False,
-        compile_kernels: bool = True,
+        kernels: bool = True,
     ):
         self._publish: Callable[[Snapshot], None] | None = None
         self._on_setting: Callable[[str, Any], None] | None = None
@@ -161,17 +161,15 @@ class SimLoop:
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
         self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
-        self._background = background_compile and default_backend() == "numba"
+        self._background = background_compile and kernels and default_backend() == "numba"
         """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""
-        self._compile = compile_kernels
-        """Whether a child may compile kernels this machine lacks (else those scenes stay on the numpy reference)."""
         self._compiler: Compiler | None = None
         """The kernels compiling in a child process (sim/compiling.py); until it is done the numpy reference runs."""
         self._loader: Loader | None = None
         """The kernels loading from the disk cache on a thread."""
         self._loaded: set = set()  # the kernels.Spec this process has loaded
         self._failed: set = set()  # and those that did not compile: not tried again
-        self._backend = "numpy" if self._background else None  # None: the default (compiled where there is a twin)
+        self._backend = "numpy" if self._background or not kernels else None  # None: the default (compiled where there is a twin)
         self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
         self._queue: queue.Queue = queue.Queue()
@@ -288,12 +286,9 @@ class SimLoop:
             else:
                 if self._compiler is not None:
                     self._compiler.stop()  # compiling kernels the scene no longer needs
-                self._compiler = Compiler(spec) if self._compile else None
-                if self._compiler is not None:
-                    print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
-                          "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
-                else:
-                    self._failed.add(spec)  # this loop does not compile: the numpy reference runs the scene
+                self._compiler = Compiler(spec)
+                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
+                      "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
         self._backend = default_backend() if spec in self._loaded else "numpy"
         if self.sim.backend != self._backend:
             self.sim.use_backend(self._backend)

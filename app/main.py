@@ -193,12 +193,12 @@ def check_address(host: str, port: int) -> int:
     raise ConfigError(f"port {port} is busy and so is every port up to {min(port + 100, 65535)}: give another --port (0: any free one)")
 
 
-def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, compile_kernels: bool = True) -> ViewerApp:
+def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, kernels: bool = True) -> ViewerApp:
     """Load the scene (a bad one raises ConfigError before any server starts), start server and simulation thread.
 
     strict=True runs the physics under np.errstate(all="raise") (tests): a NaN pauses the run with a note.
-    compile_kernels=False: scenes whose kernels this machine has not compiled stay on the numpy reference
-    (tests of the controls, which would otherwise start a compile each and kill it at once).
+    kernels=False: the run stays on the numpy reference, compiling and loading nothing (tests of the controls:
+    no compile child killed a few seconds later, no load fighting the simulation thread for the GIL).
     """
     scene = load_scene(args.scene)
     if args.mesh is not None:
@@ -211,7 +211,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, com
     quiet_repeated_tracebacks()
     big_blocks_go_back()
     loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True,
-                   compile_kernels=compile_kernels)
+                   kernels=kernels)
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)

@@ -25,7 +25,7 @@ def viewer(**kwargs):
     from app.main import start
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0, **kwargs), compile_kernels=False, publish_hz=20.0)
+        app = start(ViewArgs(scene="damped", port=0, **kwargs), kernels=False, publish_hz=20.0)
     try:
         yield app
     finally:

@@ -38,7 +38,7 @@ def make_app():
     apps = []
 
     def make(scene="damped", paused=False, **kwargs):
-        app = start(ViewArgs(scene=scene, port=0), strict=True, compile_kernels=False, **kwargs)
+        app = start(ViewArgs(scene=scene, port=0), **{"strict": True, "kernels": False, **kwargs})  # numpy: no compile, no load
         apps.append(app)
         if paused:
             app.controls.paused.value = True
@@ -68,7 +68,7 @@ def test_busy_port_moves_to_the_next(make_app):
         s.bind(("127.0.0.1", 0))
         s.listen()
         busy = s.getsockname()[1]
-        app = start(ViewArgs(scene="rest", port=busy), compile_kernels=False, strict=True)
+        app = start(ViewArgs(scene="rest", port=busy), kernels=False, strict=True)
         try:
             assert app.port > busy
             assert app.url.endswith(f":{app.port}")
@@ -78,7 +78,7 @@ def test_busy_port_moves_to_the_next(make_app):
 
 def test_bad_scene_is_a_config_error_before_any_server():
     with pytest.raises(sim.ConfigError, match="unknown scene 'nope'"):
-        start(ViewArgs(scene="nope", port=0), compile_kernels=False)
+        start(ViewArgs(scene="nope", port=0), kernels=False)
 
 
 @pytest.mark.parametrize("argv", [["-m", "app", "--scene", "nope"], ["-m", "app.cli", "view", "--scene", "nope"]])
@@ -337,7 +337,7 @@ def test_loading_kernels_never_holds_up_the_simulation_thread(make_app, monkeypa
 
     monkeypatch.setattr(sim.compiling, "load", slow_load)
     monkeypatch.setattr(app.loop, "kernels_ready", lambda spec: True)
-    viewer = make_app("damped")
+    viewer = make_app("damped", kernels=True)
     snap = viewer.sync()
     assert snap.engine == "numpy reference (loading the fast kernels)"
     wait_for(viewer, lambda s: s.frame.t > snap.frame.t + 0.2, what="the run to go on while the kernels load")

@@ -20,7 +20,7 @@ def app():
     from app.args import ViewArgs
     from app.main import start
 
-    viewer = start(ViewArgs(scene="rest", port=0), compile_kernels=False, strict=True, publish_hz=20.0)
+    viewer = start(ViewArgs(scene="rest", port=0), kernels=False, strict=True, publish_hz=20.0)
     yield viewer
     viewer.stop()
 

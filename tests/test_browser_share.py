@@ -27,7 +27,7 @@ def app(tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)  # recordings go to ./floatsim-recordings
     monkeypatch.setattr("app.upload.UPLOADS", tmp_path / "uploads")
-    viewer = start(ViewArgs(scene="damped", port=0), compile_kernels=False, strict=True, publish_hz=20.0)
+    viewer = start(ViewArgs(scene="damped", port=0), kernels=False, strict=True, publish_hz=20.0)
     yield viewer
     viewer.stop()
 
@@ -165,7 +165,7 @@ def test_the_banners_link_drives_the_run_and_pages_without_the_token_cannot(brow
 
     page = browser_page
     with contextlib.redirect_stdout(io.StringIO()):
-        viewer = start(ViewArgs(scene="rest", port=0, token="s3cret"), compile_kernels=False, publish_hz=10.0)
+        viewer = start(ViewArgs(scene="rest", port=0, token="s3cret"), kernels=False, publish_hz=10.0)
     try:
 
         def set_density(address: str, value: str, ready=lambda: True) -> None:

@@ -66,7 +66,7 @@ def test_pages_that_come_and_go_leave_nothing_behind():
         return sum(isinstance(o, viser.ClientHandle) for o in gc.get_objects())
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0), compile_kernels=False)
+        app = start(ViewArgs(scene="damped", port=0), kernels=False)
     try:
         asyncio.run(come_and_go(app.port, 50))  # the first pages warm viser's and the allocator's pools
         time.sleep(1.0)

@@ -90,7 +90,7 @@ def test_bad_gui_updates_leave_the_viewer_working_for_everyone():
     from app.main import start
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0), compile_kernels=False)
+        app = start(ViewArgs(scene="damped", port=0), kernels=False)
     try:
         handles = app.server.gui._gui_input_handle_from_uuid
         uuids = list(handles)

@@ -24,7 +24,7 @@ def app(tmp_path, monkeypatch):
 
     monkeypatch.chdir(tmp_path)  # recordings go to ./floatsim-recordings
     with contextlib.redirect_stdout(io.StringIO()):
-        viewer = start(ViewArgs(scene="damped", port=0), compile_kernels=False, strict=True, publish_hz=20.0)
+        viewer = start(ViewArgs(scene="damped", port=0), kernels=False, strict=True, publish_hz=20.0)
     yield viewer
     viewer.stop()
 

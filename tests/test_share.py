@@ -195,7 +195,7 @@ def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):
 
     path = tmp_path / "crate.ply"
     trimesh.creation.box(extents=(800.0, 600.0, 500.0)).export(path)
-    app = start(ViewArgs(scene="damped", port=0, mesh=str(path), mesh_unit="mm"), compile_kernels=False)
+    app = start(ViewArgs(scene="damped", port=0, mesh=str(path), mesh_unit="mm"), kernels=False)
     try:
         snap = app.sync()
         assert snap.body.volume == pytest.approx(0.24, rel=1e-9) and snap.settings.config.body.mesh_unit == "mm"

@@ -54,7 +54,7 @@ def app(tmp_path, monkeypatch, request):
 
     monkeypatch.setattr("app.upload.UPLOADS", tmp_path / "uploads")
     with contextlib.redirect_stdout(io.StringIO()):
-        viewer = start(ViewArgs(scene="damped", port=0), compile_kernels=False, strict=getattr(request, "param", True), publish_hz=20.0)
+        viewer = start(ViewArgs(scene="damped", port=0), kernels=False, strict=getattr(request, "param", True), publish_hz=20.0)
     yield viewer
     viewer.stop()
 
@@ -193,7 +193,7 @@ def test_the_uploads_folder_is_bounded_and_keeps_the_running_body(tmp_path, monk
 
         monkeypatch.setattr("app.upload.UPLOADS", folder)
         with contextlib.redirect_stdout(io.StringIO()):
-            viewer = start(ViewArgs(scene="damped", port=0, mesh=str(running)), compile_kernels=False, strict=True, publish_hz=20.0)
+            viewer = start(ViewArgs(scene="damped", port=0, mesh=str(running)), kernels=False, strict=True, publish_hz=20.0)
         wait_for(viewer, lambda s: s.body.name.startswith("running"), what="the running mesh")
         upload(viewer, "crate.stl", stl(trimesh.creation.box(extents=(0.7, 0.6, 0.5))))
         wait_for(viewer, lambda s: s.body.name.startswith("crate"), what="the upload")

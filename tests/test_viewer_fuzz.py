@@ -55,7 +55,7 @@ def test_malformed_frames_cost_no_lasting_memory_and_one_traceback_per_kind(capf
     monkeypatch.setattr(logger, "handlers", [handler])
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0), compile_kernels=False)
+        app = start(ViewArgs(scene="damped", port=0), kernels=False)
     try:
         time.sleep(1.0)
         gc.collect()

@@ -24,7 +24,7 @@ import numpy as np
 import sim
 from sim.body import printable
 from sim.compiling import Compiler, Loader, kernels_ready
-from sim.config import PARAMS, diffracting, load_scene
+from sim.config import IN_EFFECT, PARAMS, in_effect, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
@@ -40,6 +40,8 @@ STEP_SECONDS = 0.25
 CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
 """Scene parameters with a live control, by key (the command that changes each is its key)."""
 _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
+DERIVED = {PARAMS[q].key for q in IN_EFFECT} & CONTROLLED.keys()
+"""Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 
 
 @dataclass(frozen=True)
@@ -62,19 +64,9 @@ class Settings:
     def density(self) -> float:
         return self.body.mass / self.body.volume
 
-    @property
-    def diffraction(self) -> bool:
-        """Whether the body feels the diffraction force (the scene's switch, or unset: wherever radiation is bem, in waves)."""
-        return diffracting(self.config)
-
-    @property
-    def points_per_edge(self) -> int:
-        b = self.config.body
-        return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
-
     def __getattr__(self, key: str):
         if key in _QUALNAME:
-            return self.config.value(_QUALNAME[key])
+            return in_effect(self.config, _QUALNAME[key])
         raise AttributeError(key)
 
     def value(self, key: str):
@@ -497,7 +489,7 @@ class SimLoop:
         unseen), so this runs once per batch, after the last command, and the GUI writes only a change."""
         if not keys:
             return
-        keys = keys | {"diffraction"}  # its control shows the switch in effect, which the waves and radiation decide when unset
+        keys = keys | DERIVED
         with self._queue.mutex:
             pending = {name for name, _ in self._queue.queue}
         for key in keys - pending:

@@ -15,9 +15,10 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import diffracting, load_scene
+from sim.config import in_effect, load_scene, with_overrides
+from sim.errors import ConfigError
 
-from .loop import CONTROLLED, SPEED, Settings
+from .loop import CONTROLLED, DERIVED, SPEED, Settings
 
 PROBE = "floatsim-address"
 VISER_PARAMS = {"fixedDpr", "darkMode", "showStats", "websocket", "logCamera", "playbackPath", "synchronizedVideoOverlay",
@@ -100,25 +101,40 @@ def _preset(name: str):
 
 def link_query(settings: Settings) -> str:
     """The query that reproduces the running setup: the preset and every controlled parameter that
-    differs from it (a loaded mesh lives on this server only: it is not part of the link)."""
-    pairs = [("scene", settings.scene)]
+    differs from it (a loaded mesh lives on this server only: it is not part of the link). A value
+    other parameters decide (`IN_EFFECT`) is compared with what the link's scene would have in effect."""
     preset = _preset(settings.scene)
-    for key, param in CONTROLLED.items():
-        value = settings.value(key)
-        if key == "density":
-            value = settings.config.body.density if settings.config.body.mass is None else settings.density
-        if preset is not None and value == (diffracting(preset) if key == "diffraction" else preset.value(f"{param.section}.{key}")):
-            continue  # (diffraction: the preset's effective switch, as the control shows it)
-        if param.kind == "switch":
-            value = str(value).lower()
-        elif param.kind == "vector":
-            value = ",".join(f"{v:g}" for v in value)
-        elif isinstance(value, float):
-            value = f"{value:.6g}"
-        pairs.append((key, value))
+    written = {key: _shown(settings, key) for key in CONTROLLED.keys() - DERIVED}
+    written = {key: v for key, v in written.items() if preset is None or v != in_effect(preset, _qualname(key))}
+    target = preset
+    try:
+        target = preset and with_overrides(preset, **{_qualname(key).replace(".", "__"): v for key, v in written.items()})
+    except ConfigError:  # (the run took each of these values, so the preset should too: then the link gives every value)
+        target = None
+    derived = {key: settings.value(key) for key in DERIVED}
+    differ = written | {key: v for key, v in derived.items() if target is None or v != in_effect(target, _qualname(key))}
+    pairs = [("scene", settings.scene)] + [(key, _text(CONTROLLED[key], differ[key])) for key in CONTROLLED if key in differ]
     if settings.speed != 1.0:
         pairs.append(("speed", f"{settings.speed:g}"))
     return "?" + urlencode(pairs, safe=",")
+
+
+def _qualname(key: str) -> str:
+    return f"{CONTROLLED[key].section}.{key}"
+
+
+def _shown(settings: Settings, key: str):
+    if key == "density":  # the scene's own density where it gives one (a mass given makes it derived)
+        return settings.config.body.density if settings.config.body.mass is None else settings.density
+    return settings.value(key)
+
+
+def _text(param, value) -> str:
+    if param.kind == "switch":
+        return str(value).lower()
+    if param.kind == "vector":
+        return ",".join(f"{v:g}" for v in value)
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 def mesh_left_out(settings: Settings) -> bool:

@@ -217,6 +217,22 @@ def diffracting(scene: SceneConfig) -> bool:
     return scene.waves.kind != "still" and scene.fluid.radiation == "bem" and scene.waves.diffraction is not False
 
 
+def points_per_edge(scene: SceneConfig) -> int:
+    """N of the samples' grid: a mesh's from its sample count (6 N^2 on a cube's faces)."""
+    b = scene.body
+    return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
+
+
+IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge}
+"""Parameters whose value in effect is not simply the one written: decided by others when unset, or moot."""
+
+
+def in_effect(scene: SceneConfig, qualname: str):
+    """The value of a parameter the run uses (what a control shows and a share link compares)."""
+    derived = IN_EFFECT.get(qualname)
+    return derived(scene) if derived is not None else scene.value(qualname)
+
+
 MESH_FORCES = "panels"
 """A mesh body's force model unless the scene or a flag names one. The samples' midpoint rule misses
 the torque of the pressure's variation across each triangle; on a triangulation with a handedness

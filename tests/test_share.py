@@ -189,6 +189,31 @@ def test_links_carry_the_preset_and_what_differs_from_it():
     assert problems == ["'scene' given more than once (the first kept)", "unknown parameter 'bogus'", "dt = 'abc' is not a number"]
 
 
+def test_links_compare_the_value_in_effect_not_the_one_written():
+    """The sphere's diffraction switch is unset: off in still water, on in waves (radiation from the BEM). A link
+    names it only where the run's switch differs from what the link's own scene would have in effect, and a
+    fresh viewer opening the link runs as the first one did."""
+    from app.loop import SimLoop
+
+    def opened(query: str) -> SimLoop:
+        fresh = SimLoop(load_scene("sphere"), "sphere", scene_options=("sphere",), kernels=False)
+        commands, problems = parse_link(query, ("sphere",))
+        assert not problems
+        for name, value in commands[1:]:
+            fresh._apply(name, value)
+        return fresh
+
+    loop = SimLoop(load_scene("sphere"), "sphere", scene_options=("sphere",), kernels=False)
+    assert link_query(loop.settings) == "?scene=sphere"  # (its N: the mesh's, from its samples)
+    loop._apply("kind", "regular")
+    assert link_query(loop.settings) == "?scene=sphere&kind=regular"  # waves with a BEM: diffraction on, as unset
+    assert opened(link_query(loop.settings)).sim.model.radiation.diffraction is not None
+    loop._apply("diffraction", False)
+    query = link_query(loop.settings)
+    assert query == "?scene=sphere&kind=regular&diffraction=false" and loop.sim.model.radiation.diffraction is None
+    assert opened(query).sim.model.radiation.diffraction is None
+
+
 def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):
     from app.args import ViewArgs
     from app.main import start

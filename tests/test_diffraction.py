@@ -18,6 +18,7 @@ import sim.bem as bem
 from sim import Simulation, State, load_scene, with_overrides
 from sim.body import make_box
 from sim.diffraction import transfer_at
+from studies.accuracy.excitation import frequency_domain_rao, time_domain_rao
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO, G = 1000.0, 9.81
@@ -192,51 +193,6 @@ def test_the_csv_carries_the_diffraction_power(tmp_path):
     assert np.abs(expected).max() > 1e-3  # watts: the scattered wave works on the body
     np.testing.assert_allclose(rows["P_diff"], expected, rtol=1e-6, atol=1e-9 * np.abs(expected).max())
     assert not run("--diffraction", "False")["P_diff"].any()
-
-
-def frequency_domain_rao(c: bem.Coefficients, body, rest_z: float, i: int, diffraction: bool = True) -> np.ndarray:
-    """(6,) complex response per unit wave amplitude (heading 0) at the solve's frequency i: the linear equation
-    [-omega^2 (M + A) - i omega B + C] xi = X_FK + X_d, C the exact mesh's hydrostatic stiffness at rest."""
-    from sim.hydrostatics import hydrostatics
-
-    h = hydrostatics(body, np.array([0.0, 0.0, rest_z]), np.eye(3))
-    w = c.omega[i]
-    C = np.zeros((6, 6))
-    C[2, 2] = RHO * G * h.waterplane_area
-    C[3, 3], C[4, 4] = RHO * G * h.volume * h.gm  # the cube and the sphere: their principal waterplane axes are x and y
-    M = np.diag([body.mass] * 3 + list(body.inertia))
-    X = c.froude_krylov[i, 0] + (c.diffraction[i, 0] if diffraction else 0.0)
-    return np.linalg.solve(-(w**2) * (M + c.added_mass[i]) - 1j * w * c.damping[i] + C, X)
-
-
-def time_domain_rao(base, rest_z: float, w: float, a: float, start: np.ndarray, periods: int = 30, fit: int = 10) -> np.ndarray:
-    """(6,) complex first harmonic per unit amplitude of (x, y, z - z_rest, roll, pitch, yaw) over the last `fit`
-    periods of a run in regular waves of amplitude a, started on the linear steady state `start` (position and
-    velocity; the orientation stays the rest pose's, which the radiation is linear about), a drift removed, and
-    referred to the wave at the body's mean x (it wanders a few cm in the first periods)."""
-    T = 2 * np.pi / w
-    x0, v0 = (a * start).real, (-1j * w * a * start).real
-    scene = with_overrides(base, waves__kind="regular", waves__height=2 * a, waves__period=T, initial__position=(x0[0], x0[1], rest_z + x0[2]),
-                           initial__velocity=tuple(v0[:3]), initial__omega=tuple(v0[3:]), fluid__damping=0.0)  # fmt: skip
-    sim = Simulation(scene)
-    rad = sim.model.radiation  # its memory in steady state too (x' = F x + G nu at nu = -i omega xi), or the surge, which has no
-    nu = -1j * w * a * start  # restoring force, keeps the offset of the memory's start-up and the body wanders from the waves' reference
-    memory = np.linalg.solve(-1j * w * np.eye(rad.states) - rad.F, rad.G @ nu).real
-    s = sim.state
-    sim.reset(State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, 0.0))
-    chunk = max(1, round(T / sim.dt / 64))
-    times, motions = [], []
-    for _ in range(round(periods * T / sim.dt / chunk)):
-        sim.step(chunk)
-        R = sim.state.R_world_body
-        times.append(sim.state.t)
-        motions.append([*(sim.state.x_world - [0.0, 0.0, rest_z]), 0.5 * (R[2, 1] - R[1, 2]), 0.5 * (R[0, 2] - R[2, 0]), 0.5 * (R[1, 0] - R[0, 1])])
-    t, q = np.array(times), np.array(motions)
-    keep = t > t[-1] - fit * T
-    basis = np.column_stack([np.ones(keep.sum()), t[keep], np.cos(w * t[keep]), np.sin(w * t[keep])])
-    coef, *_ = np.linalg.lstsq(basis, q[keep], rcond=None)
-    k = w * w / G
-    return (coef[2] + 1j * coef[3]) / a * np.exp(-1j * k * q[keep, 0].mean())
 
 
 @pytest.mark.slow

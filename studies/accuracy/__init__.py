@@ -1,10 +1,11 @@
 """`python -m studies report`: the accuracy report, OUT_DIR/accuracy.md with figures in OUT_DIR/accuracy/.
 
-Six parts, every number computed from runs made by this command (nothing hand-typed): work-precision
+Seven parts, every number computed from runs made by this command (nothing hand-typed): work-precision
 diagrams with observed orders, the sampled model's error against the exact panel model as N grows, a
 stability map of the fixed-step integrators over damping and density, a verdict table (cheapest
 method per target accuracy), a table of stiff and extreme cases, and where the energy can rise with
-a map of the sampled model's steady rocking and drift over density and N (`leak`).
+a map of the sampled model's steady rocking and drift over density and N (`leak`), and the response in waves
+with and without the diffraction force, time domain against frequency domain (`excitation`).
 
 `compute` runs the simulations and returns plain data, `numbers` derives what the text quotes, `plot`
 draws and `text` writes the markdown. Wall-clock figures are medians of `repeats` runs, single-threaded.
@@ -38,6 +39,7 @@ from .compute import (
     stiff_rows,
     work_precision,
 )
+from .excitation import FULL_EXCITATION, QUICK_EXCITATION, Excitation, ExcitationSettings, compute_excitation
 from .leak import FULL_LEAK, QUICK_LEAK, Leak, LeakSettings, compute_leak
 
 
@@ -65,14 +67,15 @@ class ReportData:
     messages: list[tuple[str, str]]
     verdict: dict[float, dict[str, WPPoint | None]]
     leak: Leak
+    excitation: Excitation
     figures: list[str]
     seconds: float
     markdown: str = ""
 
 
-def compute_all(cfg: Settings, repeats: int, blas: str, leak_cfg: LeakSettings) -> ReportData:
+def compute_all(cfg: Settings, repeats: int, blas: str, leak_cfg: LeakSettings, excitation_cfg: ExcitationSettings) -> ReportData:
     """Every run of the report, with a progress bar; the orders, rates and verdict filled in."""
-    bar = common.progress(cfg.jobs() + leak_cfg.jobs(), unit="run")
+    bar = common.progress(cfg.jobs() + leak_cfg.jobs() + excitation_cfg.jobs(), unit="run")
 
     def tick(n=1):
         bar.update(n)
@@ -87,12 +90,13 @@ def compute_all(cfg: Settings, repeats: int, blas: str, leak_cfg: LeakSettings) 
             stiff = stiff_rows(cfg, tick)
             extremes, messages = extreme_cases(cfg, tick)
             leak = compute_leak(leak_cfg, tick)
+            excitation = compute_excitation(excitation_cfg, tick)
     finally:
         bar.close()
     for res in wp:
         res.orders = numbers.observed_orders(res)
     me.rates = numbers.model_rates(me)
-    return ReportData(cfg, info, wp, me, st, stiff, extremes, messages, numbers.verdict(wp, cfg.targets), leak, [], 0.0)
+    return ReportData(cfg, info, wp, me, st, stiff, extremes, messages, numbers.verdict(wp, cfg.targets), leak, excitation, [], 0.0)
 
 
 def draw_all(data: ReportData, fig_dir: Path, repeats: int) -> None:
@@ -107,7 +111,8 @@ def draw_all(data: ReportData, fig_dir: Path, repeats: int) -> None:
     plot.stability(data.stability, cfg, fig_dir / "stability.png")
     plot.creep(data.stiff, fig_dir / "stiff_creep.png")
     plot.leak(data.leak, fig_dir / "leak.png")
-    data.figures += ["model_error.png", "stability.png", "stiff_creep.png", "leak.png"]
+    plot.excitation(data.excitation, fig_dir / "excitation.png")
+    data.figures += ["model_error.png", "stability.png", "stiff_creep.png", "leak.png", "excitation.png"]
 
 
 def run_report(args: ReportArgs) -> ReportData:
@@ -119,7 +124,7 @@ def run_report(args: ReportArgs) -> ReportData:
     fig_dir.mkdir(parents=True, exist_ok=True)
     blas = common.single_thread_blas()
     repeats = max(1, args.repeats)
-    data = compute_all(cfg, repeats, blas, QUICK_LEAK if args.quick else FULL_LEAK)
+    data = compute_all(cfg, repeats, blas, QUICK_LEAK if args.quick else FULL_LEAK, QUICK_EXCITATION if args.quick else FULL_EXCITATION)
     draw_all(data, fig_dir, repeats)
     data.seconds = time.perf_counter() - started
     data.markdown = text.markdown(data, args)

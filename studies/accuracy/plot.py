@@ -197,3 +197,40 @@ def leak(data, path: Path) -> None:
         fig.legend(handles, labels, loc="upper right", fontsize=9)
     fig.colorbar(mesh, ax=axes, label=f"tilt range (deg); at rest below {ROCKING:g}")
     save(fig, path, DPI)
+
+
+def excitation(data, path: Path) -> None:
+    """|RAO| per body and dof over the wavelength: frequency domain (lines) and time domain (markers), with
+    the diffraction force and without it (Froude-Krylov only)."""
+    from matplotlib.ticker import FormatStrFormatter, NullFormatter
+
+    from .excitation import DOF_NAMES
+
+    plt = pyplot()
+    bodies = [b for b in data.settings.bodies if data.of(b.name)]
+    cols = max(len(b.dofs) for b in bodies)
+    fig, axes = plt.subplots(len(bodies), cols, figsize=(4.2 * cols, 3.4 * len(bodies)), squeeze=False)
+    for row, b in enumerate(bodies):
+        rs = sorted(data.of(b.name), key=lambda r: r.wavelength)
+        lam = np.array([r.wavelength for r in rs])
+        for col in range(cols):
+            ax = axes[row, col]
+            if col >= len(b.dofs):
+                ax.set_visible(False)
+                continue
+            d = b.dofs[col]
+            for attr_f, attr_t, colour, ls, marker, label in (("freq_full", "time_full", "C0", "-", "o", "with diffraction"),
+                                                               ("freq_fk", "time_fk", "C1", "--", "s", "Froude-Krylov only")):  # fmt: skip
+                ax.plot(lam, [abs(getattr(r, attr_f)[d]) for r in rs], color=colour, ls=ls, label=f"frequency domain, {label}")
+                ax.plot(lam, [abs(getattr(r, attr_t)[d]) for r in rs], marker, color=colour, mfc="none", label=f"time domain, {label}")
+            ax.set_xscale("log")
+            ax.set_xticks([t for t in (1.5, 2, 3, 5, 10, 20) if lam.min() * 0.9 <= t <= lam.max() * 1.1], minor=False)
+            ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            unit = "m/m" if d < 3 else "rad/m"
+            ax.set(xlabel="wavelength / body length", ylabel=f"|{DOF_NAMES[d]}| per wave amplitude ({unit})", title=f"{b.name}: {DOF_NAMES[d]}")
+            ax.grid(True, which="both", alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=9)
+    fig.tight_layout(rect=(0, 0.13, 1, 1))
+    save(fig, path, DPI)

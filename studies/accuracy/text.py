@@ -23,7 +23,7 @@ REL = "accuracy"
 
 
 def markdown(data: ReportData, args: ReportArgs) -> str:
-    sections = (_intro(data, args), _work_precision(data), _model_error(data), _stability(data), _verdict(data), _stiff_and_extreme(data), _leak(data))
+    sections = (_intro(data, args), _work_precision(data), _model_error(data), _stability(data), _verdict(data), _stiff_and_extreme(data), _leak(data), _excitation(data))
     return "\n".join(line for lines in sections for line in lines)
 
 
@@ -454,3 +454,49 @@ def _warning_coverage(lk) -> str:
             "(h the sample spacing, L the square root of the waterplane area; an empirical bound read off this map): of the "
             f"{len(leaking)} runs above that do not come to rest it covers {caught}, and it also warns for {false} of the "
             f"{len(points) - len(leaking)} that do.")
+
+
+def _excitation(data: ReportData) -> list[str]:
+    """Part 7: the response with and without the diffraction force, time domain against frequency domain."""
+    from .excitation import DOF_NAMES
+
+    ex = data.excitation
+    cfg = ex.settings
+    L = ["## 7. Waves a body disturbs: the response with and without diffraction", ""]
+    L.append(f"The sphere and cube presets with radiation from the shipped BEM solves, in regular waves of {cfg.amplitude * 1000:g} mm "
+             f"amplitude {cfg.lo:g} to {cfg.hi:g} body lengths long (every {cfg.every}{'nd' if cfg.every == 2 else 'th'} frequency of the "
+             "solve), heading 0. Markers: compiled time-domain runs (nonlinear Froude-Krylov on the exact wet surface, the fitted "
+             f"radiation memory), started on the linear steady state and run {cfg.periods} periods, the first harmonic of the last "
+             f"{cfg.fit} fitted. Lines: the linear frequency-domain response of the same coefficients, "
+             "[-ω²(M + A) - iωB + C] ξ = X_FK + X_d, C the exact mesh's hydrostatic stiffness at rest; dashed, the same without "
+             "the diffraction force X_d (floatsim before it had one). The error is |ξ_time - ξ_frequency| over the largest translation "
+             "amplitude of that period (complex: amplitude and phase).")  # fmt: skip
+    L.append("")
+    L.append(f"![response with and without diffraction]({REL}/excitation.png)")
+    L.append("")
+    rows = []
+    for b in cfg.bodies:
+        for d in b.dofs:
+            rs = ex.of(b.name)
+            if not rs:
+                continue
+            change = max(rs, key=lambda r: abs(abs(r.freq_full[d]) / abs(r.freq_fk[d]) - 1))
+            rows.append([b.name, DOF_NAMES[d], f"{max(r.error(d) for r in rs):.2%}", f"{max(r.error(d, False) for r in rs):.2%}",
+                         f"{abs(change.freq_full[d]) / abs(change.freq_fk[d]) - 1:+.0%} at T = {change.period:.2f} s"])  # fmt: skip
+    L += md_table(["body", "dof", "largest error, with diffraction", "largest error, Froude-Krylov only", "largest change by diffraction"], rows)
+    L.append("")
+    L.append("Period by period (|ξ| per unit wave amplitude, m/m or rad/m):")
+    L.append("")
+    rows = []
+    for r in sorted(ex.responses, key=lambda r: (r.body, r.period)):
+        for d in r.dofs:
+            rows.append([r.body, f"{r.period:.3f}", f"{r.wavelength:.2f}", DOF_NAMES[d], f"{abs(r.freq_full[d]):.4f}", f"{abs(r.time_full[d]):.4f}",
+                         f"{r.error(d):.2%}", f"{abs(r.freq_fk[d]):.4f}", f"{abs(r.time_fk[d]):.4f}", f"{r.error(d, False):.2%}",
+                         f"{abs(r.freq_full[d]) / abs(r.freq_fk[d]) - 1:+.1%}"])  # fmt: skip
+    L += md_table(["body", "T (s)", "λ (m)", "dof", "frequency domain", "time domain", "error", "FK only: frequency", "FK only: time", "error",
+                   "diffraction changes |ξ| by"], rows)  # fmt: skip
+    L.append("")
+    L.append("Valid where linear theory is: small waves and small motions against the wave (the scattered wave is the one of the body "
+             "at rest). Left out: second-order drift forces and slamming.")  # fmt: skip
+    L.append("")
+    return L

@@ -21,6 +21,8 @@ from .water import WaterView
 
 COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
+LINES_HZ = 15.0
+LINE_COLOUR = (60, 60, 70)
 WET = np.array([30, 110, 230], np.uint8)
 DRY = np.array([245, 150, 40], np.uint8)
 
@@ -47,8 +49,10 @@ class SceneView:
         self.body: sim.Body | None = None
         self.mesh = self.points = None
         self._wet: np.ndarray | None = None  # wet set last sent
-        self._colour_time = self._arrow_time = -np.inf
+        self._colour_time = self._arrow_time = self._lines_time = -np.inf
         self.colour_updates = 0
+        self.lines = None
+        """The mooring lines' node (made for the first scene that has lines)."""
         self.set_body(body)
 
     def set_body(self, body: sim.Body) -> None:
@@ -98,6 +102,23 @@ class SceneView:
             if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
                 self._send_arrows(snap, now)
             self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
+            self._show_lines(frame.lines, now)
+
+    def _show_lines(self, lines: tuple, now: float) -> None:
+        """The mooring lines as segments between their nodes, at most LINES_HZ times a second (none: hidden)."""
+        if not lines:
+            if self.lines is not None and self.lines.visible:
+                self.lines.visible = False
+            return
+        if now - self._lines_time < 1.0 / LINES_HZ:
+            return
+        segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in lines]).astype(np.float32)
+        if self.lines is None or len(self.lines.points) != len(segments):
+            self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
+        else:
+            self.lines.points = segments
+            self.lines.visible = True
+        self._lines_time = now
 
     def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
         if self._wet is not None and np.array_equal(self._wet, wet_index):

@@ -36,14 +36,14 @@ def kernels_ready(spec) -> bool:
 
 def spec_argument(spec) -> str:
     """A kernels.Spec as one command-line word (for the child)."""
-    return ",".join([spec.scheme, spec.model, "+".join(spec.terms), str(int(spec.waves)), str(int(spec.radiating)), str(int(spec.current))])
+    return ",".join([spec.scheme, spec.model, "+".join(spec.terms), str(int(spec.waves)), str(int(spec.radiating)), str(int(spec.current)), str(int(spec.held))])
 
 
 def parse_spec(word: str):
     from .kernels import Spec
 
-    scheme, model, terms, waves, radiating, current = word.split(",")
-    return Spec(scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1")
+    scheme, model, terms, waves, radiating, current, held = word.split(",")
+    return Spec(scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1", held == "1")
 
 
 class Compiler:

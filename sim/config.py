@@ -91,7 +91,24 @@ WATER = (
     Param("water", "current", (0.0, 0.0), "Uniform current (u, v), world frame: the water and its waves move with it", "m/s", lo=-20.0,
           hi=20.0, kind="vector", size=2, name="current", label="Current (u, v)", gui=()),
 )
-SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER}
+MOORINGS = (
+    Param("moorings", "lines", 0, "Mooring lines on MoorDyn (the .[moorings] extra): a symmetric spread of this many identical lines "
+          "(0: none)", lo=0, hi=64, kind="int", name="mooring lines"),
+    Param("moorings", "line_file", "", "A MoorDyn v2 input file instead of the spread: its Coupled points are the fairleads (world "
+          "positions at the starting pose), relative to the scene file or the working directory", kind="text", name="mooring file"),
+    Param("moorings", "first_heading", 0.0, "Direction of the first line's anchor from the body, degrees from +x (the others evenly "
+          "around)", "deg", lo=-360.0, hi=360.0),
+    Param("moorings", "anchor_radius", 20.0, "Horizontal distance of the anchors from the world's vertical axis (x = y = 0)", "m", lo=0.0, hi=1e5),
+    Param("moorings", "anchor_depth", 10.0, "Depth of the seabed the anchors sit on (MoorDyn's water depth)", "m", lo=0.0, lo_open=True, hi=1e4),
+    Param("moorings", "fairlead_radius", 0.5, "Horizontal distance of the fairleads from the centre of mass (starting pose)", "m", lo=0.0, hi=1e4),
+    Param("moorings", "fairlead_height", 0.0, "Height of the fairleads above the centre of mass (starting pose)", "m", lo=-1e4, hi=1e4),
+    Param("moorings", "line_length", 25.0, "Unstretched length of each line", "m", lo=0.0, lo_open=True, hi=1e5),
+    Param("moorings", "line_mass", 1.0, "Mass per unit length of each line", "kg/m", lo=0.0, lo_open=True, hi=1e5),
+    Param("moorings", "line_diameter", 0.01, "Volume-equivalent diameter (buoyancy and drag)", "m", lo=0.0, lo_open=True, hi=100.0),
+    Param("moorings", "line_stiffness", 1.0e6, "Axial stiffness EA", "N", lo=0.0, lo_open=True, hi=1e13),
+    Param("moorings", "segments", 20, "Segments per line (lumped masses: segments + 1 nodes)", lo=1, hi=500, kind="int"),
+)
+SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER, "moorings": MOORINGS}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
 """Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
 assert len({p.key for p in PARAMS.values()}) == len(PARAMS), "a parameter key is declared in two sections"
@@ -111,7 +128,9 @@ InitialConfig = _section("InitialConfig", INITIAL)
 StepConfig = _section("StepConfig", STEP)
 WavesConfig = _section("WavesConfig", WAVES)
 WaterConfig = _section("WaterConfig", WATER)
-SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig, "water": WaterConfig}
+MooringsConfig = _section("MooringsConfig", MOORINGS)
+SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig, "water": WaterConfig,
+                 "moorings": MooringsConfig}
 
 
 @dataclass(frozen=True)
@@ -124,6 +143,7 @@ class SceneConfig:
     step: StepConfig = field(default_factory=StepConfig)
     waves: WavesConfig = field(default_factory=WavesConfig)
     water: WaterConfig = field(default_factory=WaterConfig)
+    moorings: MooringsConfig = field(default_factory=MooringsConfig)
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -221,6 +241,11 @@ def points_per_edge(scene: SceneConfig) -> int:
     """N of the samples' grid: a mesh's from its sample count (6 N^2 on a cube's faces)."""
     b = scene.body
     return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
+
+
+def moored(scene: SceneConfig) -> bool:
+    """Whether the scene has mooring lines (a spread or a MoorDyn file)."""
+    return bool(scene.moorings.lines or scene.moorings.line_file)
 
 
 IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge}

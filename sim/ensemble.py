@@ -59,6 +59,7 @@ class Ensemble:
             return
         first = self.sims[live[0]]
         one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].scene.water == first.scene.water and self.sims[i].state.t == first.state.t and self.sims[i].model.radiation is None
+                      and self.sims[i].moorings is None  # (moored bodies step on their own: MoorDyn between steps)
                       for i in live)  # fmt: skip
         if self.backend == "numba" and first.compiled and one_sea:
             self._step_compiled(live, n, check_energy)

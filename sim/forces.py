@@ -157,10 +157,13 @@ class Model:
     Caches the wet surface of the last pose asked for, so an integrator step that ends where the
     next begins, and the frame read in between, find it once."""
 
-    def __init__(self, body, water, fluid, radiation=None):
+    def __init__(self, body, water, fluid, radiation=None, held: bool = False):
         self.body, self.water, self.fluid = body, water, fluid
         self.radiation = radiation
         """radiation.Radiation (added mass and memory about the rest pose), or None."""
+        self.held = np.zeros(6) if held else None
+        """(6,) a load another model gives the body (the mooring lines, moorings.py), held over each step:
+        force and moment about the centre of mass, world frame, N and N m. Its owner writes it between steps. None: none."""
         self.terms = tuple(term for term in TERMS if term.is_used(fluid))
         self.pose_terms = tuple(term for term in self.terms if not term.twist)
         self.twist_terms = tuple(term for term in self.terms if term.twist)
@@ -194,8 +197,11 @@ class Model:
         return force, torque
 
     def pose_loads(self, wet: WetSurface, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Force and torque of the terms that depend on the pose only (gravity, pressure)."""
-        return self._sum(self.pose_terms, wet, None, t)
+        """Force and torque of the terms that depend on the pose only (gravity, pressure), and the held load."""
+        force, torque = self._sum(self.pose_terms, wet, None, t)
+        if self.held is not None:
+            force, torque = force + self.held[:3], torque + self.held[3:]
+        return force, torque
 
     def twist_loads(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Force and torque of the terms that depend on the twist (damping, drag)."""

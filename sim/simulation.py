@@ -10,7 +10,7 @@ import numpy as np
 
 from . import stability
 from .body import Body, make_body, make_mesh_body
-from .config import SceneConfig, diffracting, validate, with_overrides
+from .config import SceneConfig, diffracting, moored, validate, with_overrides
 from .errors import SimulationDiverged
 from .forces import Model, hydrostatic_energy
 from .hydrostatics import sampled_model_warning
@@ -21,7 +21,8 @@ from .surface import wet_panels
 from .water import make_water
 
 CSV_COLUMNS = (
-    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff".split(",")
+    "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff,"
+    "Fx_moor,Fy_moor,Fz_moor,T_fair_max".split(",")
 )
 
 
@@ -64,6 +65,12 @@ class Frame:
     E_hyd for panels; for points and cells their quadrature of it (None: as E_hyd)."""
     P_diff: float = 0.0
     """The power of the diffraction force on the body, F_d . (u, omega), W (0 without diffraction)."""
+    mooring_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    """(3,) the mooring lines' pull on the body, N (in force_world too; zero without lines)."""
+    fairlead_tensions: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    """(k,) each fairlead's tension, N."""
+    lines: tuple = ()
+    """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
 
     @property
     def E_hyd_of_model(self) -> float:
@@ -77,7 +84,7 @@ class Frame:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
-                self.E_hyd_of_model, self.P_diff]  # fmt: skip
+                self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0))]  # fmt: skip
 
 
 def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
@@ -208,9 +215,12 @@ class Simulation:
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
         body = body or self._make_body(scene)
+        self.moorings = None
+        """moorings.Moorings: the scene's mooring lines in MoorDyn, or None."""
         self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.state = initial_state(body, scene)
+        self._moor()
         norm = float(np.linalg.norm(scene.initial.orientation))
         if abs(norm - 1.0) > 1e-6:  # a hand-typed one (a preset's, rounded to many digits, passes silently)
             self.notes.append(f"initial orientation q0 had norm {norm:.6g}: normalised")
@@ -233,7 +243,21 @@ class Simulation:
 
             start = initial_state(body, self.scene)
             radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2])
-        return Model(body, water, fluid, radiation)
+        return Model(body, water, fluid, radiation, held=moored(self.scene))
+
+    def _moor(self) -> None:
+        """(Re)start the mooring lines at the current state: MoorDyn finds their shape at rest for it."""
+        if self.moorings is not None:
+            self.moorings.close()
+            self.moorings = None
+        if not moored(self.scene):
+            return
+        from .moorings import Moorings
+
+        s, R = self.state, self.state.R_world_body
+        self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
+        self.moorings.t = s.t
+        self.model.held[:] = self.moorings.load
 
     @property
     def body(self) -> Body:
@@ -252,7 +276,11 @@ class Simulation:
         """Diagnostics of the current state (computed once per state and model)."""
         key = (self.state, self.model)
         if self._frame_key != key:
-            self._frame, self._frame_key = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves), key
+            frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
+            if self.moorings is not None:
+                frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions(),
+                                            lines=tuple(self.moorings.lines()))  # fmt: skip
+            self._frame, self._frame_key = frame, key
         return self._frame
 
     @property
@@ -297,7 +325,10 @@ class Simulation:
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
         checked = self.state
-        self.state = self._advance_compiled(n) if self.compiled else self._advance_numpy(n)
+        if self.moorings is not None:
+            self.state = self._advance_moored(n)
+        else:
+            self.state = self._advance_compiled(n) if self.compiled else self._advance_numpy(n)
         if self.model.radiation is not None:
             rest = initial_state(self.body, self.scene).q_world_body
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
@@ -328,6 +359,20 @@ class Simulation:
                 raise SimulationDiverged(self.diagnose(state.t + dt, why))
             state = new
         return state
+
+    def _advance_moored(self, n: int) -> State:
+        """Step by step, the mooring lines advanced over each and their mean pull held over it (moorings.py)."""
+        advance = self._advance_compiled if self.compiled else self._advance_numpy
+        held = self.model.held
+        try:
+            for _ in range(n):
+                s = self.state
+                R = s.R_world_body
+                held[:] = self.moorings.advance(s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world), self.dt)
+                self.state = advance(1)
+        finally:
+            held[:] = self.moorings.load  # the pull now, as the frame shows it
+        return self.state
 
     def _advance_compiled(self, n: int) -> State:
         from . import kernels
@@ -395,9 +440,13 @@ class Simulation:
         self.scene = scene
         try:
             self._apply(old, scene)
+            if (old.moorings, old.fluid.rho, old.fluid.g) != (scene.moorings, scene.fluid.rho, scene.fluid.g):
+                self._moor()  # the lines at rest for the body where it is now
         except Exception:
             self.scene = old  # e.g. radiation asked for a body that sinks: nothing changed
             raise
+        if self.moorings is not None:
+            self.model.held[:] = self.moorings.load  # (a new model starts with the pull as it is)
         self._sync_memory()
         self._rebase_energy()
 
@@ -455,6 +504,7 @@ class Simulation:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""
         self.state = state or initial_state(self.body, self.scene)
         self.largest_turn = 0.0
+        self._moor()
         self._memory_of = None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
         self._sync_memory()
         self._rebase_energy()

@@ -38,6 +38,9 @@ class BenchArgs:
     waves: bool = True
     """Also time the sea states (still, a regular wave, a 64-component JONSWAP sea with and without drag) on
     both models, against the direct sum over components and the numpy reference."""
+    moorings: bool = True
+    """Also time the moored-buoy preset (3 lines x 20 segments on MoorDyn, a 64-component sea, radiation and diffraction):
+    with its lines against without, and the split between the body's step and MoorDyn (needs the .[moorings] extra)."""
     startup: bool = False
     """Instead of the above: how long `python -m sim run --scene NAME --t-end 1` takes in a fresh process from an
     empty kernel cache (a first run on a machine) and from the cache it left, for each preset (minutes each, cold)."""
@@ -117,6 +120,7 @@ def bench(args: BenchArgs) -> int:
             bar.update()
     radiation_rows = _radiation_rows(base, args) if args.radiation else []
     wave_rows = _wave_rows(base, args, bar) if args.waves else []
+    mooring_rows = _mooring_rows(args) if args.moorings else []
     bar.close()
     sweep_rows = _sweep_rows(args.sweep_cases) if args.sweep_cases else []
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
@@ -137,6 +141,10 @@ def bench(args: BenchArgs) -> int:
         print()
         print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
         _table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
+    if mooring_rows:
+        print()
+        print("the moored-buoy preset (compiled, implicit, dt = 0.01 s): the body's step with and without its lines, and where a moored step's time goes")
+        _table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
     return 0
 
 
@@ -166,6 +174,36 @@ def _sweep_rows(cases: int) -> list[tuple[str, ...]]:
                      f"{serial / wall:.2f}x", f"{max(0.0, 1 - stats['busy'] / (workers * running)):.1%}", f"{sched:.2%}",
                      f"{n * 2.0 / (wall * workers):,.0f}"))  # fmt: skip
     return rows
+
+
+def _mooring_rows(args: BenchArgs) -> list[tuple[str, ...]]:
+    """The moored buoy with and without its lines; the moored step split into MoorDyn's part (timed inside
+    moorings.advance), the body's own step (the unmoored cost) and the rest (the per-step coupling)."""
+    from ..errors import ConfigError
+
+    base = load_scene("moored-buoy")
+    try:
+        moored = Simulation(base)
+    except ConfigError as e:  # no MoorDyn here
+        print(f"moorings: skipped ({e})")
+        return []
+    free = Simulation(with_overrides(base, moorings__lines=0))
+    body = _median_step_seconds(free, args.repeats, args.budget)
+    moored.step(1)
+    moored.moorings.seconds = 0.0
+    steps = max(1, int(args.budget / body))
+    costs, lines = [], []
+    for _ in range(args.repeats):
+        before = moored.moorings.seconds
+        t0 = time.perf_counter()
+        moored.step(steps)
+        costs.append((time.perf_counter() - t0) / steps)
+        lines.append((moored.moorings.seconds - before) / steps)
+    cost, line = statistics.median(costs), statistics.median(lines)
+    dt = moored.dt
+    return [("without lines", f"{body * 1e6:.0f}", f"{dt / body:.0f}", f"{body * 1e6:.0f}", "-", "-"),
+            (f"{len(moored.moorings.lines())} lines x {base.moorings.segments} segments", f"{cost * 1e6:.0f}", f"{dt / cost:.0f}",
+             f"{body * 1e6:.0f}", f"{line * 1e6:.0f}", f"{(cost - body - line) * 1e6:.0f}")]  # fmt: skip
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:

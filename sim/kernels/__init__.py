@@ -49,12 +49,14 @@ class Spec(NamedTuple):
     waves: bool
     radiating: bool
     current: bool = False
+    held: bool = False
+    """Whether another model gives the body a load held over each step (the mooring lines)."""
 
     @property
     def key(self) -> str:
         """A name for this specialisation, usable in a module name."""
         mask = sum(1 << i for i, name in enumerate(COMPILED_TERMS) if name in self.terms)
-        return f"{self.scheme}_{self.model}_t{mask:x}_{self._water}{'_rad' if self.radiating else ''}"
+        return f"{self.scheme}_{self.model}_t{mask:x}_{self._water}{'_rad' if self.radiating else ''}{'_held' if self.held else ''}"
 
     @property
     def _water(self) -> str:
@@ -63,7 +65,7 @@ class Spec(NamedTuple):
     def describe(self) -> str:
         terms = " + ".join(self.terms) or "no forces"
         water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
-        return f"{self.scheme} scheme, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}"
+        return f"{self.scheme} scheme, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
 
 
 def spec_of(model, scheme: str) -> Spec:
@@ -71,7 +73,8 @@ def spec_of(model, scheme: str) -> Spec:
     compile and vanish exactly with their coefficient, so they are always in: a scene whose damping goes
     from 0 to 100 keeps its kernels; a nonlinear one (drag) is compiled only where used."""
     water = model.water
-    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names), not water.flat, model.radiation is not None, water.flat and not water.at_rest)
+    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names), not water.flat, model.radiation is not None, water.flat and not water.at_rest,
+                model.held is not None)  # fmt: skip
 
 
 def compiled_terms(used) -> tuple[str, ...]:

@@ -11,20 +11,23 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import JIT, njit
-from .spec import DAMPING, DRAG, GRAVITY, HAS_NONLINEAR, PRESSURE, TWIST_TERMS, USED, WET_TERMS
+from .layout import HELD
+from .spec import DAMPING, DRAG, GRAVITY, HAS_NONLINEAR, HOLDING, PRESSURE, TWIST_TERMS, USED, WET_TERMS
 from .terms import damping, drag, gravity, pressure
 from .wet import wet_surface
 
 
 @njit(inline="always", **JIT)
 def pose_loads(x, R, t, model, s, sea):
-    """(F, T, D, wet): the pose terms' force and torque at a pose and time, the linear damping matrix D
+    """(F, T, D, wet): the pose terms' force and torque at a pose and time (and the held load), the linear damping matrix D
     there, and whether any twist term has a wet surface to act on. Damping's part from the water's
     motion (its affine part, zero in still water) goes to s.ws[4] for twist_loads and linearised."""
     load = np.zeros(6)
     D = np.zeros((6, 6))
     if USED & GRAVITY:
         load += gravity(model, None)
+    if HOLDING:  # (forces.Model.held)
+        load += model.coef[HELD : HELD + 6]
     s.ws[4][:] = 0.0
     is_wet = False
     if USED & WET_TERMS:

@@ -14,8 +14,8 @@ Sea `sea_pack(water, body)`: (components (n, 8): a, omega, k_x, k_y, k, phase, c
 direction; depth (inf: deep); long-crested (one direction for all); the body's radius about its
 centre of mass, m; the uniform current (3,) (u, v, 0), m/s). Still water has no components.
 
-Coefficients `coef`, (COEF_BASE + number of term parameters,) float64: rho, g, then every force
-term's parameters in `forces.TERMS` order. Terms mask `terms`: bit i set when `forces.TERMS[i]` is
+Coefficients `coef`, (COEF_BASE + number of term parameters + 6,) float64: rho, g, then every force
+term's parameters in `forces.TERMS` order, then the held load (forces.Model.held: zero without). Terms mask `terms`: bit i set when `forces.TERMS[i]` is
 used by the scene. So a new term gets its bit and its slots from its registry line alone.
 """
 
@@ -42,6 +42,11 @@ COMPILED_TERMS = ("gravity", "pressure", "damping", "drag")
 reference, with a note (a test checks this list against forces.TERMS)."""
 
 
+HELD = COEF_BASE + len(TERM_PARAMS)
+"""Where the held load (6,) starts in `coef`: a wrench another model gives over a step (the mooring lines)."""
+COEF_SIZE = HELD + 6
+
+
 def bit(term: str) -> int:
     """The mask bit of a registered term."""
     return 1 << [t.name for t in TERMS].index(term)
@@ -52,8 +57,8 @@ def slot(key: str) -> int:
     return COEF_BASE + TERM_PARAMS.index(key)
 
 
-def coefficients(fluid) -> np.ndarray:
-    return np.array([fluid.rho, fluid.g, *(float(getattr(fluid, key)) for key in TERM_PARAMS)])
+def coefficients(fluid, held: np.ndarray | None = None) -> np.ndarray:
+    return np.array([fluid.rho, fluid.g, *(float(getattr(fluid, key)) for key in TERM_PARAMS), *(np.zeros(6) if held is None else held)])
 
 
 def pack(model) -> tuple[int, np.ndarray]:
@@ -61,7 +66,7 @@ def pack(model) -> tuple[int, np.ndarray]:
     mask = 0
     for term in model.terms:
         mask |= bit(term.name)
-    return mask, coefficients(model.fluid)
+    return mask, coefficients(model.fluid, model.held)
 
 
 def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float, np.ndarray]:

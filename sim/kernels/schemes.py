@@ -231,14 +231,14 @@ def advance_many(Y, t0, n_steps, dt, geom, masses, inertias, coefs, sea, rad):
 def warm_up() -> None:
     """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
     from ..body import make_box
-    from .layout import COEF_BASE, TERM_PARAMS
+    from .layout import COEF_SIZE
     from .simulation import observe
     from .spec import RADIATING
     from .surface import exact_hydrostatic_energy
 
     body = make_box((1.0, 1.0, 1.0), 1, 1.0)
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-    coef = np.ones(COEF_BASE + len(TERM_PARAMS))
+    coef = np.ones(COEF_SIZE)
     comps = np.zeros((1 if WAVES else 0, 8))
     sea = (comps, math.inf, True, 1.0, np.zeros(3))
     rad = None

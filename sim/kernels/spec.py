@@ -32,6 +32,9 @@ MOVING = WAVES or CURRENT
 RADIATING = bool(SPEC.radiating)
 """Whether the body radiates (the kernels also drop that code by testing their `rad` argument against None)."""
 
+HOLDING = bool(SPEC.held)
+"""Whether another model gives the body a load held over each step (the mooring lines: layout.HELD)."""
+
 GRAVITY, PRESSURE, DAMPING, DRAG = bit("gravity"), bit("pressure"), bit("damping"), bit("drag")
 USED = sum(bit(name) for name in SPEC.terms)
 """The scene's terms (bit i: forces.TERMS[i])."""

@@ -1,0 +1,79 @@
+"""The elastic catenary in closed form: a mooring line at rest, for checking MoorDyn and for the
+linearised stiffness of a spread (what the moored body's slow surge period follows from).
+
+A line of unstretched length L, weight in water w per unit length and axial stiffness EA hangs from
+its anchor on a flat, frictionless seabed to its fairlead, a horizontal span X and a height Z above the
+anchor. With H the horizontal tension (constant along the line) and V the vertical one at the
+fairlead, the suspended part is V / w long; where it is shorter than L the rest lies on the seabed
+(Irvine, *Cable Structures*, 1981; the equations of MAP++ and MoorPy without seabed friction):
+
+  on the seabed in part (L_b = L - V / w > 0):
+    X = L_b + (H / w) asinh(V / H) + H L / EA
+    Z = (H / w) (sqrt(1 + (V / H)^2) - 1) + V^2 / (2 EA w)
+  fully suspended:
+    X = (H / w) (asinh(V / H) - asinh((V - w L) / H)) + H L / EA
+    Z = (H / w) (sqrt(1 + (V / H)^2) - sqrt(1 + ((V - w L) / H)^2)) + (V L - w L^2 / 2) / EA
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import fsolve
+
+
+def _ends(H: float, V: float, L: float, w: float, EA: float) -> tuple[float, float]:
+    """(X, Z) of the fairlead above the anchor for tensions H, V."""
+    on_bed = L - V / w
+    if on_bed > 0:
+        return (on_bed + H / w * math.asinh(V / H) + H * L / EA,
+                H / w * (math.sqrt(1 + (V / H) ** 2) - 1) + V * V / (2 * EA * w))  # fmt: skip
+    Va = V - w * L
+    return (H / w * (math.asinh(V / H) - math.asinh(Va / H)) + H * L / EA,
+            H / w * (math.sqrt(1 + (V / H) ** 2) - math.sqrt(1 + (Va / H) ** 2)) + (V * L - w * L * L / 2) / EA)  # fmt: skip
+
+
+def catenary(X: float, Z: float, L: float, w: float, EA: float) -> tuple[float, float]:
+    """(H, V): the horizontal and vertical tension at the fairlead, N, of a line spanning X horizontally
+    and Z vertically (m) from its anchor on the seabed; w its weight in water, N/m, EA its axial stiffness, N."""
+    if X + Z <= L:  # slack: it hangs straight down from the fairlead and the rest lies (folded) on the seabed
+        return 0.0, w * Z
+    guess_V = min(w * L, w * Z + 1e-3 * w * L)
+    guess_H = max(w * L * 1e-2, w * X * X / (2 * max(Z, 1e-6)) * 0.5)
+
+    def residual(p):
+        H, V = np.exp(p)  # positive by construction
+        x, z = _ends(H, V, L, w, EA)
+        return [(x - X) / L, (z - Z) / L]
+
+    p, info, ok, msg = fsolve(residual, np.log([guess_H, guess_V]), full_output=True, xtol=1e-13)
+    if ok != 1 or max(abs(r) for r in residual(p)) > 1e-10:
+        raise ValueError(f"the catenary did not converge ({msg.strip()})")
+    H, V = np.exp(p)
+    return float(H), float(V)
+
+
+def fairlead_tension(X: float, Z: float, L: float, w: float, EA: float) -> float:
+    H, V = catenary(X, Z, L, w, EA)
+    return math.hypot(H, V)
+
+
+def spread_surge_stiffness(spread, x0: np.ndarray, rho: float, g: float, step: float = 1e-4) -> float:
+    """-d(F_x)/dx of a moorings.Spread on a body at x0 moved along x (translation only), N/m: the central
+    difference of the lines' summed horizontal pull, each line a catenary."""
+
+    def pull(dx: float) -> float:
+        w, total = spread.weight_in_water(rho, g), 0.0
+        for a in spread.headings():
+            c, s = math.cos(a), math.sin(a)
+            anchor = np.array([spread.anchor_radius * c, spread.anchor_radius * s])
+            fair = np.array([x0[0] + dx + spread.fairlead_radius * c, x0[1] + spread.fairlead_radius * s])
+            gap = anchor - fair
+            X = float(np.hypot(*gap))
+            Z = spread.anchor_depth + x0[2] + spread.fairlead_height
+            H, _ = catenary(X, Z, spread.line_length, w, spread.line_stiffness)
+            total += H * gap[0] / X  # towards the anchor
+        return total
+
+    return -(pull(step) - pull(-step)) / (2 * step)

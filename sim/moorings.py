@@ -1,0 +1,278 @@
+"""Mooring lines on MoorDyn: lumped-mass lines with seabed contact, coupled to the body every step.
+
+MoorDyn (Hall & Goupee 2015, `moordyn` on PyPI, the optional extra `.[moorings]`) integrates the lines;
+floatsim gives it the fairleads' positions and velocities and takes back the lines' pull on them. The
+fairleads are MoorDyn "coupled" points; the body's load is their forces' sum and moment about its
+centre of mass.
+
+Coupling, per step of the body from t to t + dt: MoorDyn advances the lines over the step with each
+fairlead moving at its velocity at t (its own sub-steps), which predicts the pull at t + dt; the body
+feels the mean of the pull at t and that prediction, held over its step (the trapezoidal rule on an
+explicit predictor: second order in dt where the fairleads move smoothly, the way WEC-Sim and OpenFAST
+couple MoorDyn too). The lines' own state lives in MoorDyn; a run can go forward only.
+
+Lines are declared in the scene's [moorings] table, a symmetric spread of identical lines (anchors on the
+seabed around the body's starting position, fairleads on the body), or by a MoorDyn v2 input file whose
+"Coupled" points are the fairleads (their positions in the file: world, at the body's starting pose).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+import os
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ConfigError
+
+LINE_DRAG = (1.2, 1.0, 0.2, 0.0)
+"""Cd, Ca normal, Cd, Ca axial of the spread's line type: MoorDyn's usual values for a chain-like line."""
+REACH = 1.1
+"""A line may span at most this times its unstretched length (a 10 % stretch) at the start."""
+SEABED_STIFFNESS = 3.0e6
+"""Seabed stiffness, Pa/m: MoorDyn's usual value (a node sinks 0.3 mm per kPa of its weight on the seabed)."""
+
+
+def moordyn():
+    """The moordyn module, or a one-line ConfigError saying how to get it."""
+    try:
+        import moordyn as md
+    except ImportError:
+        raise ConfigError("mooring lines need MoorDyn: pip install -e '.[moorings]' (or pip install moordyn)") from None
+    return md
+
+
+_LIBC = ctypes.CDLL(None)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise a x b of (k, 3) arrays (np.cross costs 80 us here: it was a third of a moored step)."""
+    return np.column_stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]])
+
+
+_NULL: list[int] = []
+
+
+@contextlib.contextmanager
+def _quiet():
+    """MoorDyn prints its progress ("t = ...") to the C stdout at every step: send that to /dev/null (the CSV may be on stdout)."""
+    if not _NULL:
+        _NULL.append(os.open(os.devnull, os.O_WRONLY))
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(_NULL[0], 1)
+        yield
+    finally:
+        _LIBC.fflush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+@dataclass(frozen=True)
+class Spread:
+    """A symmetric spread of `lines` identical lines, as the [moorings] table gives it."""
+
+    lines: int
+    first_heading: float
+    anchor_radius: float
+    anchor_depth: float
+    fairlead_radius: float
+    fairlead_height: float
+    line_length: float
+    line_mass: float
+    line_diameter: float
+    line_stiffness: float
+    segments: int
+
+    def headings(self) -> np.ndarray:
+        return np.radians(self.first_heading) + 2 * math.pi * np.arange(self.lines) / self.lines
+
+    def weight_in_water(self, rho: float, g: float) -> float:
+        """w, N/m: the line's weight less its buoyancy."""
+        return (self.line_mass - rho * math.pi * self.line_diameter**2 / 4) * g
+
+    def seabed_damping(self) -> float:
+        """Pa s/m: a node on the seabed critically damped, 2 sqrt(k_bed m) per node (MoorDyn's usual 3e5 suits
+        a heavy chain; on a light line it would be the stiffest rate of all)."""
+        return 2 * math.sqrt(SEABED_STIFFNESS * self.line_mass / self.line_diameter)
+
+    def sub_step(self, rho: float) -> float:
+        """MoorDyn's time step: a quarter of the time an axial wave takes along a segment, and of the seabed
+        contact's period over 2 pi (its explicit scheme's stability, with room)."""
+        mass = self.line_mass + rho * math.pi * self.line_diameter**2 / 4  # with the water it carries
+        axial = (self.line_length / self.segments) / math.sqrt(self.line_stiffness / mass)
+        bed = math.sqrt(self.line_mass / (SEABED_STIFFNESS * self.line_diameter))
+        return 0.25 * min(axial, bed)
+
+    def input_file(self, x0: np.ndarray, R0: np.ndarray, rho: float, g: float) -> str:
+        """The MoorDyn v2 input file of the spread: anchors about the world's z axis, fairleads on a body at x0
+        with orientation R0 (input frame to world)."""
+        rows = []
+        for i, a in enumerate(self.headings()):
+            c, s = math.cos(a), math.sin(a)
+            anchor = np.array([self.anchor_radius * c, self.anchor_radius * s, -self.anchor_depth])  # about the world's vertical axis
+            fair = x0 + R0 @ np.array([self.fairlead_radius * c, self.fairlead_radius * s, self.fairlead_height])
+            reach = float(np.linalg.norm(fair - anchor))
+            if reach > REACH * self.line_length:
+                raise ConfigError(f"the mooring lines cannot reach: line {i + 1}'s anchor is {reach:.4g} m from its fairlead, the line "
+                                  f"{self.line_length:g} m long (at most {REACH - 1:.0%} stretch); make [moorings] line_length longer or "
+                                  "anchor_radius shorter")  # fmt: skip
+            rows.append((anchor, fair))
+        points = "\n".join(f"{2 * i + 1} Fixed {a[0]:.9g} {a[1]:.9g} {a[2]:.9g} 0 0 0 0\n{2 * i + 2} Coupled {f[0]:.9g} {f[1]:.9g} {f[2]:.9g} 0 0 0 0"
+                           for i, (a, f) in enumerate(rows))  # fmt: skip
+        lines = "\n".join(f"{i + 1} line {2 * i + 1} {2 * i + 2} {self.line_length:.9g} {self.segments} -" for i in range(self.lines))
+        cd, ca, cd_ax, ca_ax = LINE_DRAG
+        return f"""--------------------- MoorDyn Input File ------------------------------------
+floatsim: {self.lines} lines, a symmetric spread
+----------------------- LINE TYPES ------------------------------------------
+TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx
+(name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)
+line {self.line_diameter:.9g} {self.line_mass:.9g} {self.line_stiffness:.9g} -1.0 0 {cd} {ca} {cd_ax} {ca_ax}
+---------------------- POINTS --------------------------------
+ID Attachment X Y Z Mass Volume CdA Ca
+(#) (-) (m) (m) (m) (kg) (m^3) (m^2) (-)
+{points}
+---------------------- LINES --------------------------------------
+ID LineType AttachA AttachB UnstrLen NumSegs Outputs
+(#) (name) (#) (#) (m) (-) (-)
+{lines}
+---------------------- OPTIONS -----------------------------------------
+{self.sub_step(rho):.6g} dtM
+{SEABED_STIFFNESS:g} kbot
+{self.seabed_damping():.6g} cbot
+{self.anchor_depth:.9g} WtrDpth
+{rho:.9g} WtrDnsty
+{g:.9g} g
+1.0 dtIC
+200.0 TmaxIC
+4.0 CdScaleIC
+0.0005 threshIC
+------------------------- need this line --------------------------------------
+"""
+
+
+def spread_of(section) -> Spread | None:
+    """The [moorings] table's spread (None when it declares no lines)."""
+    if not section.lines:
+        return None
+    return Spread(**{f: getattr(section, f) for f in Spread.__dataclass_fields__})
+
+
+class Moorings:
+    """The scene's mooring lines in MoorDyn, coupled to one body. `load` is the wrench to hold over the
+    next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
+
+    def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0):
+        """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0."""
+        md = moordyn()
+        self._md = md
+        self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
+        path = Path(self._folder.name) / "lines.txt"
+        path.write_text(text)
+        with _quiet():
+            self._system = md.Create(str(path))
+        if self._system is None:
+            raise ConfigError("MoorDyn could not read the mooring input (see its messages above)")
+        md.SetVerbosity(self._system, md.LEVEL_ERR)
+        points = [md.GetPoint(self._system, i + 1) for i in range(md.GetNumberPoints(self._system))]
+        self._fairleads = [p for p in points if md.GetPointType(p) == md.POINT_TYPE_COUPLED]
+        if not self._fairleads or md.NCoupledDOF(self._system) != 3 * len(self._fairleads):
+            self.close()
+            raise ConfigError("the mooring input must couple the body through 'Coupled' points (its fairleads) and nothing else")
+        world = np.array([md.GetPointPos(p) for p in self._fairleads], float)
+        self.r_body = (world - x0) @ R0
+        """(k, 3) the fairleads in the body frame, m."""
+        self._lines = [md.GetLine(self._system, i + 1) for i in range(md.GetNumberLines(self._system))]
+        x, v = self._kinematics(x0, R0, u0, omega0)
+        with _quiet():
+            status = md.Init(self._system, x, v)
+        if status:
+            self.close()
+            raise ConfigError(f"MoorDyn could not find the lines' rest shape (error {status})")
+        self.t = float(t0)
+        self.seconds = 0.0
+        """Wall time spent in MoorDyn's steps so far, s (the benchmark's split)."""
+        self._forces = np.array([md.GetPointForce(p) for p in self._fairleads], float)  # at t, on the fairleads
+        self.load = self._wrench(self._forces, R0)
+        """(6,) the lines' force and moment about the centre of mass on the body, world frame, N and N m."""
+
+    @classmethod
+    def of_scene(cls, scene, x0, R0, u0, omega0) -> Moorings | None:
+        m = scene.moorings
+        if m.line_file:
+            given = Path(m.line_file)
+            path = next((p for p in (Path(scene.base_dir) / given, given) if p.is_file()), None)
+            if path is None:
+                raise ConfigError(f"mooring file not found: {m.line_file}")
+            return cls(path.read_text(), x0, R0, u0, omega0)
+        spread = spread_of(m)
+        if spread is None:
+            return None
+        q = np.asarray(scene.initial.orientation, float)
+        from .rotation import quat_to_matrix
+
+        text = spread.input_file(np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g)
+        return cls(text, x0, R0, u0, omega0)
+
+    def _kinematics(self, x, R, u, omega) -> tuple[np.ndarray, np.ndarray]:
+        lever = self.r_body @ R.T
+        return (x + lever).ravel(), (u + _cross(omega[None, :], lever)).ravel()
+
+    def _wrench(self, forces: np.ndarray, R: np.ndarray) -> np.ndarray:
+        lever = self.r_body @ R.T
+        return np.concatenate([forces.sum(axis=0), _cross(lever, forces).sum(axis=0)])
+
+    def advance(self, x, R, u, omega, dt: float) -> np.ndarray:
+        """Move the lines from self.t over dt with the fairleads at the body's pose and twist at self.t;
+        return the wrench to hold over that step (the mean of the pull at both ends)."""
+        pos, vel = self._kinematics(x, R, u, omega)
+        started = time.perf_counter()
+        with _quiet():
+            ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)
+        self.seconds += time.perf_counter() - started
+        if not np.all(np.isfinite(ahead)):
+            from .errors import SimulationDiverged
+
+            raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments")
+        held = 0.5 * (self._forces + ahead)
+        self._forces, self.t = ahead, self.t + dt
+        self.load = self._wrench(ahead, R)
+        return self._wrench(held, R)
+
+    def lines(self) -> list[np.ndarray]:
+        """Each line's node positions, (segments + 1, 3), world frame, m: anchor end first."""
+        md = self._md
+        return [np.array([md.GetLineNodePos(ln, i) for i in range(md.GetLineN(ln) + 1)], float) for ln in self._lines]
+
+    def fairlead_tensions(self) -> np.ndarray:
+        """(k,) the magnitude of each fairlead's pull, N."""
+        return np.linalg.norm(self._forces, axis=1)
+
+    def close(self) -> None:
+        if getattr(self, "_system", None) is not None:
+            with _quiet():
+                self._md.Close(self._system)
+            self._system = None
+        if getattr(self, "_folder", None) is not None:
+            self._folder.cleanup()
+            self._folder = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - at interpreter shutdown MoorDyn's module may be gone already
+            pass

@@ -1,0 +1,160 @@
+"""Issue 26, moorings: lines on MoorDyn coupled to the body every step, checked against the elastic catenary
+(a line at rest), the moored buoy's surge period from its added mass and the lines' linearised stiffness, the
+compiled twin against the reference with the lines' pull held over each step, and the user's mistakes."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim import ConfigError, Simulation, load_scene, with_overrides
+from sim.catenary import catenary, spread_surge_stiffness
+from sim.equilibrium import rest_height
+from sim.moorings import spread_of
+
+ROOT = Path(__file__).resolve().parents[1]
+RHO, G = 1000.0, 9.81
+
+
+def run_cli(tmp_path, *args: str) -> tuple[subprocess.CompletedProcess, np.ndarray | None]:
+    out = tmp_path / "run.csv"
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--out", str(out), *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    rows = np.genfromtxt(out, delimiter=",", names=True) if done.returncode == 0 else None
+    return done, rows
+
+
+@pytest.mark.parametrize("segments", [20, 40])
+def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
+    """One line of the moored-buoy preset, as `run` writes its pull at t = 0 (MoorDyn's rest shape for the
+    starting pose): the horizontal and vertical tension at the fairlead against the closed-form elastic
+    catenary with seabed contact (sim/catenary.py), within 1 %, closer with more segments."""
+    done, rows = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "1", "--segments", str(segments), "--t-end", "0.01", "--every", "1")
+    assert done.returncode == 0, done.stderr
+    first = rows[0]
+    spread = spread_of(load_scene("moored-buoy").moorings)
+    X = spread.anchor_radius - (first["x"] + spread.fairlead_radius)  # heading 0: the anchor on +x, the body upright
+    Z = spread.anchor_depth + first["z"] + spread.fairlead_height
+    H, V = catenary(X, Z, spread.line_length, spread.weight_in_water(RHO, G), spread.line_stiffness)
+    assert first["Fx_moor"] == pytest.approx(H, rel=0.01) and -first["Fz_moor"] == pytest.approx(V, rel=0.01)
+    assert first["T_fair_max"] == pytest.approx(math.hypot(H, V), rel=0.01)
+    assert abs(first["Fy_moor"]) < 1e-6 * H
+
+
+def test_more_segments_come_closer_to_the_catenary():
+    errors = []
+    for segments in (5, 10, 20, 40):
+        scene = with_overrides(load_scene("moored-buoy"), moorings__lines=1, moorings__segments=segments, fluid__radiation="none", waves__kind="still")
+        sim = Simulation(scene, backend="numpy")
+        s = spread_of(scene.moorings)
+        x = sim.state.x_world
+        H, V = catenary(s.anchor_radius - x[0] - s.fairlead_radius, s.anchor_depth + x[2] + s.fairlead_height, s.line_length,
+                        s.weight_in_water(RHO, G), s.line_stiffness)  # fmt: skip
+        errors.append(abs(sim.frame().fairlead_tensions[0] / math.hypot(H, V) - 1))
+        sim.moorings.close()
+    print("tension error against the catenary, 5/10/20/40 segments:", [f"{e:.2%}" for e in errors])
+    assert errors[-1] < 2e-3 and all(b < a for a, b in zip(errors, errors[1:])), errors
+
+
+def _predicted_surge_period(sim: Simulation, z_rest: float) -> float:
+    """2 pi sqrt((M + A_11(omega)) / k): k the spread's catenary stiffness at the rest depth, A_11 the BEM's
+    surge added mass at that period (a fixed point: A varies slowly there)."""
+    from sim.bem import radiation_coefficients
+
+    body = sim.body
+    spread = spread_of(sim.scene.moorings)
+    k = spread_surge_stiffness(spread, np.array([0.0, 0.0, z_rest]), RHO, G)
+    z = round(rest_height(body, sim.scene.fluid, np.eye(3)), 9)  # the pose the shipped solve is about
+    c = radiation_coefficients(body.mesh_vertices + [0.0, 0.0, z], body.mesh_faces, progress=False, center=(0.0, 0.0, z))
+    T = 2 * math.pi * math.sqrt(body.mass / k)
+    for _ in range(20):
+        A = float(np.interp(2 * math.pi / T, c.omega, c.added_mass[:, 0, 0]))
+        T = 2 * math.pi * math.sqrt((body.mass + A) / k)
+    return T
+
+
+def test_the_moored_buoy_surges_at_the_period_of_its_added_mass_and_mooring_stiffness():
+    """Released 0.5 m off its rest position in calm water (the preset's sea at Hs 0: the same compiled kernels),
+    the buoy swings back and forth at 2 pi sqrt((M + A_11) / k_mooring) within 3 %."""
+    scene = with_overrides(load_scene("moored-buoy"), waves__hs=0.0, initial__position=(0.5, 0.0, -0.44))  # about its moored draft
+    sim = Simulation(scene)
+    t, x, z = [], [], []
+    while sim.state.t < 80.0:
+        sim.step(5)
+        t.append(sim.state.t)
+        x.append(sim.state.x_world[0])
+        z.append(sim.state.x_world[2])
+    t, x = np.array(t), np.array(x)
+    down = [t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i]) for i in range(len(x) - 1) if x[i] > 0 >= x[i + 1]]
+    assert len(down) >= 2, "the buoy did not swing back and forth"
+    measured = float(np.mean(np.diff(down)))
+    predicted = _predicted_surge_period(sim, float(np.mean(z[len(z) // 2 :])))
+    print(f"surge period: measured {measured:.3f} s, predicted {predicted:.3f} s ({measured / predicted - 1:+.2%})")
+    assert measured == pytest.approx(predicted, rel=0.03), (measured, predicted)
+
+
+def test_compiled_and_reference_agree_with_the_lines_pulling():
+    """The same moored run (lines, waves, radiation, diffraction) on the kernels and on numpy: the pull is held
+    over each step in both, so their trajectories meet to round-off."""
+    scene = with_overrides(load_scene("moored-buoy"), initial__position=(0.3, 0.1, -0.35))
+    runs = []
+    for backend in ("numba", "numpy"):
+        sim = Simulation(scene, backend=backend)
+        sim.step(200)
+        f = sim.frame()
+        runs.append(np.concatenate([sim.state.x_world, sim.state.q_world_body, sim.state.u_world, f.fairlead_tensions]))
+        assert np.abs(f.mooring_force).max() > 10.0  # the lines pull
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-9, atol=1e-9)
+
+
+def test_the_frame_carries_the_lines_and_the_pull_is_in_the_force():
+    sim = Simulation(load_scene("moored-buoy"), backend="numpy")
+    f = sim.frame()
+    spread = spread_of(sim.scene.moorings)
+    assert len(f.lines) == 3 and all(line.shape == (spread.segments + 1, 3) for line in f.lines)
+    for line, heading in zip(f.lines, spread.headings()):
+        anchor = spread.anchor_radius * np.array([math.cos(heading), math.sin(heading)])
+        np.testing.assert_allclose(line[0], [*anchor, -spread.anchor_depth], atol=1e-9)  # anchor end first, on the seabed
+        assert line[:, 2].min() >= -spread.anchor_depth - 0.01  # the seabed holds it (its contact is a stiff spring)
+    unmoored = Simulation(with_overrides(load_scene("moored-buoy"), moorings__lines=0), backend="numpy").frame()
+    np.testing.assert_allclose(f.force_world - unmoored.force_world, f.mooring_force, atol=1e-9)
+
+
+def test_a_moordyn_file_gives_the_same_lines_as_the_spread(tmp_path):
+    """[moorings] line_file: the spread's own MoorDyn input, written out, gives the same pull."""
+    scene = load_scene("moored-buoy")
+    spread = spread_of(scene.moorings)
+    path = tmp_path / "lines.txt"
+    path.write_text(spread.input_file(np.array(scene.initial.position), np.eye(3), RHO, G))
+    a = Simulation(scene, backend="numpy").frame()
+    b = Simulation(with_overrides(scene, moorings__lines=0, moorings__line_file=str(path)), backend="numpy").frame()
+    np.testing.assert_allclose(a.mooring_force, b.mooring_force, rtol=1e-9, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("--line-file", "nowhere.txt"), "mooring file not found: nowhere.txt"),
+        (("--line-length", "5"), "the mooring lines cannot reach"),
+        (("--segments", "0"), "segments must be >= 1"),
+    ],
+)
+def test_mistakes_are_one_line_and_exit_2(tmp_path, args, message):
+    done, _ = run_cli(tmp_path, "--scene", "moored-buoy", "--t-end", "0.1", *args)
+    assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_without_moordyn_the_error_says_how_to_get_it(tmp_path):
+    code = "import sys; sys.modules['moordyn'] = None; from sim.commands import floatsim; sys.exit(floatsim(['run', '--scene', 'moored-buoy']))"
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "pip install -e '.[moorings]'" in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+def test_a_config_error_for_lines_that_cannot_reach():
+    with pytest.raises(ConfigError, match="cannot reach"):
+        Simulation(with_overrides(load_scene("moored-buoy"), moorings__line_length=5.0), backend="numpy")

@@ -158,3 +158,41 @@ def test_without_moordyn_the_error_says_how_to_get_it(tmp_path):
 def test_a_config_error_for_lines_that_cannot_reach():
     with pytest.raises(ConfigError, match="cannot reach"):
         Simulation(with_overrides(load_scene("moored-buoy"), moorings__line_length=5.0), backend="numpy")
+
+
+def test_a_recording_draws_the_lines_where_the_run_had_them():
+    """The replay page (the viewer's scene in a recording) carries the mooring lines: the last update of its
+    /moorings node is the last frame's lines, segment by segment."""
+    import base64
+    import re
+
+    import msgspec
+    import zstandard
+
+    from app.replay import replay_html
+    from app.take import Take, shot_of
+
+    sim = Simulation(load_scene("moored-buoy"))
+    take = Take()
+    take.add(shot_of(sim))
+    while sim.state.t < 1.0:
+        sim.step(7)
+        take.add(shot_of(sim))
+    raw = base64.b64decode(re.search(r'window.__VISER_EMBED_DATA__="([^"]+)"', replay_html(take)).group(1))
+    inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=int.from_bytes(raw[:8], "little"))
+    n = int.from_bytes(inner[:8], "little")
+    doc = msgspec.msgpack.decode(inner[8 : 8 + n])
+    sizes, starts, at = doc["binaryBufferLengths"], [], 8 + n
+    for size in sizes:  # the arrays follow the messages, each at an offset that is a multiple of 8 (viser's framing)
+        at += -at % 8
+        starts.append(at)
+        at += size
+    assert at == len(inner)
+    updates = [m[1]["updates"]["points"] for m in doc["messages"] if m[1].get("name") == "/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"]
+    assert len(updates) >= 10  # streamed as the run goes (15 a second at most)
+    i = updates[-1]["__binary_index"]
+    last = np.frombuffer(inner[starts[i] : starts[i] + sizes[i]], dtype=np.float32).reshape(-1, 2, 3)
+    shown = [np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in take[k].frame.lines]) for k in range(len(take))]
+    gaps = [np.abs(last - lines).max() for lines in shown]
+    assert min(gaps) < 1e-5 and np.argmin(gaps) >= len(take) - 3, gaps  # one of the last shots (the drawing is throttled)
+    assert max(gaps) > 1e-3  # the lines moved during the run

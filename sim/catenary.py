@@ -59,20 +59,16 @@ def fairlead_tension(X: float, Z: float, L: float, w: float, EA: float) -> float
     return math.hypot(H, V)
 
 
-def spread_surge_stiffness(spread, x0: np.ndarray, rho: float, g: float, step: float = 1e-4) -> float:
-    """-d(F_x)/dx of a moorings.Spread on a body at x0 moved along x (translation only), N/m: the central
-    difference of the lines' summed horizontal pull, each line a catenary."""
+def surge_stiffness(spread, x0: np.ndarray, rho: float, g: float, step: float = 1e-4) -> float:
+    """-d(F_x)/dx of a moorings.LineSet on a body upright at x0 moved along x (translation only), N/m: the
+    central difference of the lines' summed horizontal pull, each line a catenary from an anchor on the seabed."""
 
     def pull(dx: float) -> float:
         w, total = spread.weight_in_water(rho, g), 0.0
-        for a in spread.headings():
-            c, s = math.cos(a), math.sin(a)
-            anchor = np.array([spread.anchor_radius * c, spread.anchor_radius * s])
-            fair = np.array([x0[0] + dx + spread.fairlead_radius * c, x0[1] + spread.fairlead_radius * s])
-            gap = anchor - fair
+        for anchor, fair in spread.ends(np.asarray(x0, float) + [dx, 0.0, 0.0], np.eye(3)):
+            gap = (anchor - fair)[:2]
             X = float(np.hypot(*gap))
-            Z = spread.anchor_depth + x0[2] + spread.fairlead_height
-            H, _ = catenary(X, Z, spread.line_length, w, spread.line_stiffness)
+            H, _ = catenary(X, float(fair[2] - anchor[2]), spread.line_length, w, spread.line_stiffness)
             total += H * gap[0] / X  # towards the anchor
         return total
 

@@ -107,6 +107,10 @@ MOORINGS = (
     Param("moorings", "line_diameter", 0.01, "Volume-equivalent diameter (buoyancy and drag)", "m", lo=0.0, lo_open=True, hi=100.0),
     Param("moorings", "line_stiffness", 1.0e6, "Axial stiffness EA", "N", lo=0.0, lo_open=True, hi=1e13),
     Param("moorings", "segments", 20, "Segments per line (lumped masses: segments + 1 nodes)", lo=1, hi=500, kind="int"),
+    Param("moorings", "anchors", (), "Anchor points instead of the spread's, world frame (one line each, on or above the seabed at anchor_depth)", "m",
+          lo=-1e5, hi=1e5, kind="points", size=64, flag=False),
+    Param("moorings", "fairleads", (), "Fairlead points for the anchors given, relative to the centre of mass in the scene's input frame "
+          "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
 )
 SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER, "moorings": MOORINGS}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
@@ -223,6 +227,11 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["fluid"].radiation != "none" and any(checked["water"].current):
         raise ConfigError("a current with radiation is not modelled (the radiation memory assumes water at rest): "
                           "set [water] current = [0, 0] or [fluid] radiation = \"none\"")
+    m = checked["moorings"]
+    if len(m.anchors) != len(m.fairleads):
+        raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
+    if m.anchors and m.lines and m.lines != len(m.anchors):
+        raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
     norm = math.sqrt(sum(c * c for c in i.orientation))
@@ -244,8 +253,8 @@ def points_per_edge(scene: SceneConfig) -> int:
 
 
 def moored(scene: SceneConfig) -> bool:
-    """Whether the scene has mooring lines (a spread or a MoorDyn file)."""
-    return bool(scene.moorings.lines or scene.moorings.line_file)
+    """Whether the scene has mooring lines (a spread, anchor points or a MoorDyn file)."""
+    return bool(scene.moorings.lines or scene.moorings.line_file or scene.moorings.anchors)
 
 
 IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge}

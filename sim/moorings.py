@@ -77,8 +77,9 @@ def _quiet():
 
 
 @dataclass(frozen=True)
-class Spread:
-    """A symmetric spread of `lines` identical lines, as the [moorings] table gives it."""
+class LineSet:
+    """Identical lines as the [moorings] table gives them: a symmetric spread of `lines`, or one line per
+    anchor given (with its fairlead)."""
 
     lines: int
     first_heading: float
@@ -91,9 +92,23 @@ class Spread:
     line_diameter: float
     line_stiffness: float
     segments: int
+    anchors: tuple = ()
+    fairleads: tuple = ()
 
     def headings(self) -> np.ndarray:
         return np.radians(self.first_heading) + 2 * math.pi * np.arange(self.lines) / self.lines
+
+    def ends(self, x0: np.ndarray, R0: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(anchor, fairlead) of each line, world frame, for a body at x0 with orientation R0 (input frame to
+        world): the points given, or the spread's (anchors about the world's z axis on the seabed)."""
+        if self.anchors:
+            return [(np.array(a, float), x0 + R0 @ np.array(f, float)) for a, f in zip(self.anchors, self.fairleads)]
+        out = []
+        for a in self.headings():
+            c, s = math.cos(a), math.sin(a)
+            anchor = np.array([self.anchor_radius * c, self.anchor_radius * s, -self.anchor_depth])
+            out.append((anchor, x0 + R0 @ np.array([self.fairlead_radius * c, self.fairlead_radius * s, self.fairlead_height])))
+        return out
 
     def weight_in_water(self, rho: float, g: float) -> float:
         """w, N/m: the line's weight less its buoyancy."""
@@ -115,23 +130,21 @@ class Spread:
     def input_file(self, x0: np.ndarray, R0: np.ndarray, rho: float, g: float) -> str:
         """The MoorDyn v2 input file of the spread: anchors about the world's z axis, fairleads on a body at x0
         with orientation R0 (input frame to world)."""
-        rows = []
-        for i, a in enumerate(self.headings()):
-            c, s = math.cos(a), math.sin(a)
-            anchor = np.array([self.anchor_radius * c, self.anchor_radius * s, -self.anchor_depth])  # about the world's vertical axis
-            fair = x0 + R0 @ np.array([self.fairlead_radius * c, self.fairlead_radius * s, self.fairlead_height])
+        rows = self.ends(x0, R0)
+        for i, (anchor, fair) in enumerate(rows):
+            if anchor[2] < -self.anchor_depth * (1 + 1e-9):
+                raise ConfigError(f"mooring anchor {i + 1} is {-anchor[2]:g} m deep, below the seabed at anchor_depth = {self.anchor_depth:g} m")
             reach = float(np.linalg.norm(fair - anchor))
             if reach > REACH * self.line_length:
                 raise ConfigError(f"the mooring lines cannot reach: line {i + 1}'s anchor is {reach:.4g} m from its fairlead, the line "
                                   f"{self.line_length:g} m long (at most {REACH - 1:.0%} stretch); make [moorings] line_length longer or "
                                   "anchor_radius shorter")  # fmt: skip
-            rows.append((anchor, fair))
         points = "\n".join(f"{2 * i + 1} Fixed {a[0]:.9g} {a[1]:.9g} {a[2]:.9g} 0 0 0 0\n{2 * i + 2} Coupled {f[0]:.9g} {f[1]:.9g} {f[2]:.9g} 0 0 0 0"
                            for i, (a, f) in enumerate(rows))  # fmt: skip
-        lines = "\n".join(f"{i + 1} line {2 * i + 1} {2 * i + 2} {self.line_length:.9g} {self.segments} -" for i in range(self.lines))
+        lines = "\n".join(f"{i + 1} line {2 * i + 1} {2 * i + 2} {self.line_length:.9g} {self.segments} -" for i in range(len(rows)))
         cd, ca, cd_ax, ca_ax = LINE_DRAG
         return f"""--------------------- MoorDyn Input File ------------------------------------
-floatsim: {self.lines} lines, a symmetric spread
+floatsim: {len(rows)} lines
 ----------------------- LINE TYPES ------------------------------------------
 TypeName Diam Mass/m EA BA/-zeta EI Cd Ca CdAx CaAx
 (name) (m) (kg/m) (N) (N-s/-) (N-m^2) (-) (-) (-) (-)
@@ -159,11 +172,11 @@ ID LineType AttachA AttachB UnstrLen NumSegs Outputs
 """
 
 
-def spread_of(section) -> Spread | None:
-    """The [moorings] table's spread (None when it declares no lines)."""
-    if not section.lines:
+def lines_of(section) -> LineSet | None:
+    """The [moorings] table's lines (None when it declares none: no spread, no anchors)."""
+    if not section.lines and not section.anchors:
         return None
-    return Spread(**{f: getattr(section, f) for f in Spread.__dataclass_fields__})
+    return LineSet(**{f: getattr(section, f) for f in LineSet.__dataclass_fields__})
 
 
 class Moorings:
@@ -213,7 +226,7 @@ class Moorings:
             if path is None:
                 raise ConfigError(f"mooring file not found: {m.line_file}")
             return cls(path.read_text(), x0, R0, u0, omega0)
-        spread = spread_of(m)
+        spread = lines_of(m)
         if spread is None:
             return None
         q = np.asarray(scene.initial.orientation, float)

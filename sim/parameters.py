@@ -13,10 +13,11 @@ from typing import Any
 
 from .errors import ConfigError
 
-KINDS = ("float", "int", "choice", "text", "vector", "optional", "switch")
+KINDS = ("float", "int", "choice", "text", "vector", "optional", "switch", "points")
 """float: a finite number; int: a whole number; choice: one of `choices`; text: any string;
 vector: `size` finite numbers; optional: a finite number or None (unset); switch: true or false (or None,
-unset, when that is its default: the scene decides)."""
+unset, when that is its default: the scene decides); points: a list of up to `size` points of three
+finite numbers each (scene files only, no flag)."""
 
 
 @dataclass(frozen=True)
@@ -99,8 +100,14 @@ class Param:
             return value
         if self.kind == "vector":
             if not isinstance(value, (tuple, list)) or len(value) != self.size:
-                raise ConfigError(f"{self.what} must have {self.size} numbers, got {value!r}")
+                raise ConfigError(f"{self.what} must have {self.size} numbers, got {_short(value)}")
             return tuple(float(self._number(v)) for v in value)
+        if self.kind == "points":
+            if not isinstance(value, (tuple, list)) or len(value) > self.size:
+                raise ConfigError(f"{self.what} must be a list of at most {self.size} points [x, y, z], got {_short(value)}")
+            if not all(isinstance(p, (tuple, list)) and len(p) == 3 for p in value):
+                raise ConfigError(f"{self.what}: each point must be three numbers [x, y, z], got {_short(value)}")
+            return tuple(tuple(float(self._number(v)) for v in p) for p in value)
         return self._number(value)
 
     def _number(self, value) -> float | int:

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from sim import ConfigError, Simulation, load_scene, with_overrides
-from sim.catenary import catenary, spread_surge_stiffness
+from sim.catenary import catenary, surge_stiffness
 from sim.equilibrium import rest_height
-from sim.moorings import spread_of
+from sim.moorings import lines_of
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO, G = 1000.0, 9.81
@@ -36,7 +36,7 @@ def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
     done, rows = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "1", "--segments", str(segments), "--t-end", "0.01", "--every", "1")
     assert done.returncode == 0, done.stderr
     first = rows[0]
-    spread = spread_of(load_scene("moored-buoy").moorings)
+    spread = lines_of(load_scene("moored-buoy").moorings)
     X = spread.anchor_radius - (first["x"] + spread.fairlead_radius)  # heading 0: the anchor on +x, the body upright
     Z = spread.anchor_depth + first["z"] + spread.fairlead_height
     H, V = catenary(X, Z, spread.line_length, spread.weight_in_water(RHO, G), spread.line_stiffness)
@@ -50,7 +50,7 @@ def test_more_segments_come_closer_to_the_catenary():
     for segments in (5, 10, 20, 40):
         scene = with_overrides(load_scene("moored-buoy"), moorings__lines=1, moorings__segments=segments, fluid__radiation="none", waves__kind="still")
         sim = Simulation(scene, backend="numpy")
-        s = spread_of(scene.moorings)
+        s = lines_of(scene.moorings)
         x = sim.state.x_world
         H, V = catenary(s.anchor_radius - x[0] - s.fairlead_radius, s.anchor_depth + x[2] + s.fairlead_height, s.line_length,
                         s.weight_in_water(RHO, G), s.line_stiffness)  # fmt: skip
@@ -66,8 +66,8 @@ def _predicted_surge_period(sim: Simulation, z_rest: float) -> float:
     from sim.bem import radiation_coefficients
 
     body = sim.body
-    spread = spread_of(sim.scene.moorings)
-    k = spread_surge_stiffness(spread, np.array([0.0, 0.0, z_rest]), RHO, G)
+    spread = lines_of(sim.scene.moorings)
+    k = surge_stiffness(spread, np.array([0.0, 0.0, z_rest]), RHO, G)
     z = round(rest_height(body, sim.scene.fluid, np.eye(3)), 9)  # the pose the shipped solve is about
     c = radiation_coefficients(body.mesh_vertices + [0.0, 0.0, z], body.mesh_faces, progress=False, center=(0.0, 0.0, z))
     T = 2 * math.pi * math.sqrt(body.mass / k)
@@ -114,7 +114,7 @@ def test_compiled_and_reference_agree_with_the_lines_pulling():
 def test_the_frame_carries_the_lines_and_the_pull_is_in_the_force():
     sim = Simulation(load_scene("moored-buoy"), backend="numpy")
     f = sim.frame()
-    spread = spread_of(sim.scene.moorings)
+    spread = lines_of(sim.scene.moorings)
     assert len(f.lines) == 3 and all(line.shape == (spread.segments + 1, 3) for line in f.lines)
     for line, heading in zip(f.lines, spread.headings()):
         anchor = spread.anchor_radius * np.array([math.cos(heading), math.sin(heading)])
@@ -127,7 +127,7 @@ def test_the_frame_carries_the_lines_and_the_pull_is_in_the_force():
 def test_a_moordyn_file_gives_the_same_lines_as_the_spread(tmp_path):
     """[moorings] line_file: the spread's own MoorDyn input, written out, gives the same pull."""
     scene = load_scene("moored-buoy")
-    spread = spread_of(scene.moorings)
+    spread = lines_of(scene.moorings)
     path = tmp_path / "lines.txt"
     path.write_text(spread.input_file(np.array(scene.initial.position), np.eye(3), RHO, G))
     a = Simulation(scene, backend="numpy").frame()
@@ -196,3 +196,31 @@ def test_a_recording_draws_the_lines_where_the_run_had_them():
     gaps = [np.abs(last - lines).max() for lines in shown]
     assert min(gaps) < 1e-5 and np.argmin(gaps) >= len(take) - 3, gaps  # one of the last shots (the drawing is throttled)
     assert max(gaps) > 1e-3  # the lines moved during the run
+
+
+def test_anchors_and_fairleads_given_point_by_point_are_the_spread_they_describe(tmp_path):
+    """[moorings] anchors and fairleads (a scene file's lists) in place of the spread's parameters: the same
+    three lines pull the same; a count that does not match, or an anchor under the seabed, is one line and exit 2."""
+    from sim.moorings import LineSet
+
+    base = load_scene("moored-buoy")
+    lines = lines_of(base.moorings)
+    ends = lines.ends(np.zeros(3), np.eye(3))
+    anchors = [[float(v) for v in a] for a, _ in ends]
+    fairleads = [[float(v) for v in f] for _, f in ends]
+    text = (ROOT / "assets/scenes/moored-buoy.toml").read_text().replace("lines = 3\n", f"anchors = {anchors}\nfairleads = {fairleads}\n")
+    scene_file = tmp_path / "points.toml"
+    scene_file.write_text(text)
+    given = load_scene(str(scene_file))
+    assert given.moorings.lines == 0 and isinstance(lines_of(given.moorings), LineSet)
+    a = Simulation(base, backend="numpy").frame()
+    b = Simulation(given, backend="numpy").frame()
+    np.testing.assert_allclose(b.mooring_force, a.mooring_force, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(b.fairlead_tensions, a.fairlead_tensions, rtol=1e-9)
+    scene_file.write_text(text.replace(f"fairleads = {fairleads}", f"fairleads = {fairleads[:2]}"))
+    done, _ = run_cli(tmp_path, "--scene", str(scene_file), "--t-end", "0.1")
+    assert done.returncode == 2 and "3 anchors and 2 fairleads" in done.stderr, done.stderr
+    deep = [[*anchors[0][:2], -12.0], *anchors[1:]]
+    scene_file.write_text(text.replace(f"anchors = {anchors}", f"anchors = {deep}"))
+    done, _ = run_cli(tmp_path, "--scene", str(scene_file), "--t-end", "0.1")
+    assert done.returncode == 2 and "below the seabed" in done.stderr and "Traceback" not in done.stderr, done.stderr

@@ -107,6 +107,10 @@ def describe(snap: Snapshot) -> str:
         f"inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
         f"Speed: {state} (asked {s.speed:g}×){' on the ' + snap.engine if snap.engine else ''} · {snap.body.n_samples} samples",
     ]
+    if f.lines:
+        pull = f.mooring_force
+        lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
+                     f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**")  # fmt: skip
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "

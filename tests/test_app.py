@@ -622,3 +622,20 @@ def test_a_stiff_adaptive_setting_stops_with_a_message_and_the_loop_stays_respon
     app.controls.paused.value = True
     t0 = time.monotonic()
     assert app.sync(timeout=5).settings.paused and time.monotonic() - t0 < 2.0  # the thread is back at its commands
+
+
+def test_the_moored_scene_shows_its_lines_and_their_pull(make_app):
+    """moored-buoy in the viewer: the lines are drawn (a /moorings node of 3 x 20 segments that moves as the run
+    goes) and the readouts give their pull and the largest fairlead tension, as the frame has them."""
+    app = make_app("moored-buoy")
+    deadline = time.monotonic() + 20.0
+    while time.monotonic() < deadline and (app.scene.lines is None or app.sync().frame.t < 0.3):
+        time.sleep(0.05)
+    snap = app.sync()
+    assert app.scene.lines is not None and app.scene.lines.visible and app.scene.lines.points.shape == (60, 2, 3)
+    first = app.scene.lines.points.copy()
+    text = describe(snap)
+    assert "Mooring: 3 lines" in text and f"{snap.frame.fairlead_tensions.max():.4g} N" in text
+    while time.monotonic() < deadline + 10.0 and np.array_equal(app.scene.lines.points, first):
+        time.sleep(0.05)
+    assert not np.array_equal(app.scene.lines.points, first)  # streamed as the lines move

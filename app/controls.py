@@ -17,7 +17,7 @@ from sim.parameters import Param
 
 from .loop import CONTROLLED, SPEED, Settings
 
-FOLDERS = {"Body": ("body",), "Water": ("fluid", "water"), "Waves": ("waves",), "Start": ("initial",), "Integration": ("step",)}
+FOLDERS = {"Body": ("body",), "Water": ("fluid", "water"), "Waves": ("waves",), "Joint": ("constraint",), "Start": ("initial",), "Integration": ("step",)}
 """The folders of controls, each holding the scene sections named."""
 VECTOR_STEP = 0.1
 

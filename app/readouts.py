@@ -111,6 +111,8 @@ def describe(snap: Snapshot) -> str:
         pull = f.mooring_force
         lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
                      f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**")  # fmt: skip
+    if s.joint != "free":
+        lines.append(f"Joint: {s.joint} to the seabed · power take-off **{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "

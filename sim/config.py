@@ -17,6 +17,7 @@ from .body import UNITS
 from .errors import ConfigError
 from .forces import TERMS
 from .integrators import INTEGRATORS
+from .joints import JOINTS
 from .limits import check_samples
 from .parameters import Param
 from .surface import FORCE_MODELS
@@ -112,7 +113,21 @@ MOORINGS = (
     Param("moorings", "fairleads", (), "Fairlead points for the anchors given, relative to the centre of mass in the scene's input frame "
           "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
 )
-SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER, "moorings": MOORINGS}
+CONSTRAINT = (
+    Param("constraint", "joint", "free", "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
+          "turning) or revolute (turns about axis through the pivot)", kind="choice", choices=JOINTS, label="Joint", gui=()),
+    Param("constraint", "axis", (0.0, 0.0, 1.0), "The joint's axis, world frame (normalised)", lo=-1e3, hi=1e3, kind="vector", size=3,
+          name="joint axis"),
+    Param("constraint", "pivot", (0.0, 0.0, 0.0), "A point on a revolute joint's axis, from the starting centre of mass, world frame", "m",
+          lo=-1e5, hi=1e5, kind="vector", size=3, name="joint pivot"),
+    Param("constraint", "pto_stiffness", 0.0, "Power take-off spring on the joint's coordinate (N/m sliding, N m/rad turning), about the "
+          "starting pose", lo=0.0, hi=1e9, name="PTO stiffness"),
+    Param("constraint", "pto_damping", 0.0, "Power take-off damper on the joint's coordinate (N s/m sliding, N m s/rad turning): the "
+          "power it absorbs is the CSV's P_pto", lo=0.0, hi=1e9, live=(0.0, 1e7), name="PTO damping", label="PTO damping",
+          gui=(0.0, 20000.0, 10.0)),
+)
+SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER, "moorings": MOORINGS,
+            "constraint": CONSTRAINT}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
 """Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
 assert len({p.key for p in PARAMS.values()}) == len(PARAMS), "a parameter key is declared in two sections"
@@ -133,8 +148,9 @@ StepConfig = _section("StepConfig", STEP)
 WavesConfig = _section("WavesConfig", WAVES)
 WaterConfig = _section("WaterConfig", WATER)
 MooringsConfig = _section("MooringsConfig", MOORINGS)
+ConstraintConfig = _section("ConstraintConfig", CONSTRAINT)
 SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig, "water": WaterConfig,
-                 "moorings": MooringsConfig}
+                 "moorings": MooringsConfig, "constraint": ConstraintConfig}
 
 
 @dataclass(frozen=True)
@@ -148,6 +164,7 @@ class SceneConfig:
     waves: WavesConfig = field(default_factory=WavesConfig)
     water: WaterConfig = field(default_factory=WaterConfig)
     moorings: MooringsConfig = field(default_factory=MooringsConfig)
+    constraint: ConstraintConfig = field(default_factory=ConstraintConfig)
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -232,6 +249,10 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):
         raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
+    if checked["constraint"].joint != "free" and checked["fluid"].radiation != "none":
+        raise ConfigError("a joint with radiation is not modelled yet (it comes with several bodies): set [fluid] radiation = \"none\"")
+    if checked["constraint"].joint != "free" and not any(checked["constraint"].axis):
+        raise ConfigError("[constraint] axis must not be zero")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
     norm = math.sqrt(sum(c * c for c in i.orientation))

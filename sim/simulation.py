@@ -22,7 +22,7 @@ from .water import make_water
 
 CSV_COLUMNS = (
     "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff,"
-    "Fx_moor,Fy_moor,Fz_moor,T_fair_max".split(",")
+    "Fx_moor,Fy_moor,Fz_moor,T_fair_max,P_pto,E_pto".split(",")
 )
 
 
@@ -71,6 +71,10 @@ class Frame:
     """(k,) each fairlead's tension, N."""
     lines: tuple = ()
     """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
+    P_pto: float = 0.0
+    """The power the joint's take-off absorbs, c theta_dot^2, W (0 without a joint)."""
+    E_pto: float = 0.0
+    """The energy it has absorbed so far, J."""
 
     @property
     def E_hyd_of_model(self) -> float:
@@ -84,7 +88,7 @@ class Frame:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
-                self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0))]  # fmt: skip
+                self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0)), self.P_pto, self.E_pto]  # fmt: skip
 
 
 def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
@@ -217,9 +221,14 @@ class Simulation:
         body = body or self._make_body(scene)
         self.moorings = None
         """moorings.Moorings: the scene's mooring lines in MoorDyn, or None."""
+        self.joint = None
+        """joints.WorldJoint: the body's joint to the world, or None (free)."""
+        self.pto_energy = 0.0
+        """The energy the joint's take-off has absorbed since the start, J."""
         self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.state = initial_state(body, scene)
+        self._join()
         self._moor()
         norm = float(np.linalg.norm(scene.initial.orientation))
         if abs(norm - 1.0) > 1e-6:  # a hand-typed one (a preset's, rounded to many digits, passes silently)
@@ -244,6 +253,29 @@ class Simulation:
             start = initial_state(body, self.scene)
             radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2])
         return Model(body, water, fluid, radiation, held=moored(self.scene))
+
+    def _join(self) -> None:
+        """The joint to the world about the scene's starting pose; the state put on it (its velocity projected)."""
+        from .joints import WorldJoint
+
+        start = initial_state(self.body, self.scene)
+        self.joint = WorldJoint.of_scene(self.scene, start.x_world, start.R_world_body)
+        self.pto_energy = 0.0
+        if self.joint is not None:
+            s = self.state
+            self.state = self.joint.state(self.body, s.t, self.joint.coordinate(s), self.joint.rate(self.body, s), s)
+
+    def _rejoin(self) -> None:
+        """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
+        from .joints import WorldJoint
+
+        old = self.joint
+        start = (old.x0, old.R0) if old is not None else (self.state.x_world, self.state.R_world_body)
+        self.joint = WorldJoint.of_scene(self.scene, *start)
+        if self.joint is not None:
+            s = self.state
+            self.state = self.joint.state(self.body, s.t, self.joint.coordinate(s), self.joint.rate(self.body, s), s)
+        self._check_backend()
 
     def _moor(self) -> None:
         """(Re)start the mooring lines at the current state: MoorDyn finds their shape at rest for it."""
@@ -280,6 +312,9 @@ class Simulation:
             if self.moorings is not None:
                 frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions(),
                                             lines=tuple(self.moorings.lines()))  # fmt: skip
+            if self.joint is not None:
+                rate = self.joint.rate(self.body, self.state)
+                frame = dataclasses.replace(frame, P_pto=self.joint.damping * rate * rate, E_pto=self.pto_energy)
             self._frame, self._frame_key = frame, key
         return self._frame
 
@@ -293,7 +328,7 @@ class Simulation:
         """Whether the scene has a compiled twin: a fixed-step integrator with one, a force model it covers in this water, every term compiled."""
         from .kernels import SCHEMES, missing_terms
 
-        return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model)
+        return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model) and self.joint is None
 
     @property
     def spec(self):
@@ -313,7 +348,9 @@ class Simulation:
 
         integ = self.integrator
         note = None
-        if self.backend == "numba" and missing_terms(self.model):
+        if self.backend == "numba" and self.joint is not None:
+            note = "the joint has no compiled twin yet: the scene runs on the numpy reference (slower)"
+        elif self.backend == "numba" and missing_terms(self.model):
             note = f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)"
         elif self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
@@ -325,8 +362,8 @@ class Simulation:
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
         checked = self.state
-        if self.moorings is not None:
-            self.state = self._advance_moored(n)
+        if self.moorings is not None or self.joint is not None:
+            self.state = self._advance_coupled(n)
         else:
             self.state = self._advance_compiled(n) if self.compiled else self._advance_numpy(n)
         if self.model.radiation is not None:
@@ -360,18 +397,29 @@ class Simulation:
             state = new
         return state
 
-    def _advance_moored(self, n: int) -> State:
-        """Step by step, the mooring lines advanced over each and their mean pull held over it (moorings.py)."""
+    def _advance_coupled(self, n: int) -> State:
+        """Step by step: the mooring lines advanced over each and their mean pull held over it (moorings.py);
+        a jointed body stepped on its joint's coordinate (joints.py)."""
+        from .joints import step as joint_step
+
         advance = self._advance_compiled if self.compiled else self._advance_numpy
         held = self.model.held
         try:
             for _ in range(n):
                 s = self.state
-                R = s.R_world_body
-                held[:] = self.moorings.advance(s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world), self.dt)
-                self.state = advance(1)
+                if self.moorings is not None:
+                    R = s.R_world_body
+                    held[:] = self.moorings.advance(s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world), self.dt)
+                if self.joint is None:
+                    self.state = advance(1)
+                    continue
+                new, absorbed = joint_step(self.model, self.joint, s, self.dt)
+                if not new.is_finite():
+                    raise SimulationDiverged(self.diagnose(s.t + self.dt, "the state became non-finite"))
+                self.state, self.pto_energy = new, self.pto_energy + absorbed
         finally:
-            held[:] = self.moorings.load  # the pull now, as the frame shows it
+            if self.moorings is not None:
+                held[:] = self.moorings.load  # the pull now, as the frame shows it
         return self.state
 
     def _advance_compiled(self, n: int) -> State:
@@ -442,6 +490,8 @@ class Simulation:
             self._apply(old, scene)
             if (old.moorings, old.fluid.rho, old.fluid.g) != (scene.moorings, scene.fluid.rho, scene.fluid.g):
                 self._moor()  # the lines at rest for the body where it is now
+            if old.constraint != scene.constraint:
+                self._rejoin()
         except Exception:
             self.scene = old  # e.g. radiation asked for a body that sinks: nothing changed
             raise
@@ -504,6 +554,7 @@ class Simulation:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""
         self.state = state or initial_state(self.body, self.scene)
         self.largest_turn = 0.0
+        self._join()
         self._moor()
         self._memory_of = None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
         self._sync_memory()

@@ -639,3 +639,19 @@ def test_the_moored_scene_shows_its_lines_and_their_pull(make_app):
     while time.monotonic() < deadline + 10.0 and np.array_equal(app.scene.lines.points, first):
         time.sleep(0.05)
     assert not np.array_equal(app.scene.lines.points, first)  # streamed as the lines move
+
+
+def test_a_joint_with_a_take_off_from_the_viewer(make_app):
+    """The Joint folder: a slide with a take-off damper set live; the readouts give the power it absorbs as the
+    frame has it, and the body only slides."""
+    app = make_app("drop")
+    app.controls.joint.value = "prismatic"
+    app.controls.pto_damping.value = 2000.0
+    snap = app.sync()
+    assert snap.settings.joint == "prismatic" and app.loop.sim.joint is not None and app.loop.sim.joint.damping == 2000.0
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline and app.sync().frame.E_pto <= 0.0:
+        time.sleep(0.05)
+    snap = app.sync()
+    assert snap.frame.E_pto > 0.0 and f"**{snap.frame.E_pto:.4g} J** absorbed" in describe(snap)
+    assert not snap.frame.u_world[:2].any() and not snap.frame.omega_world.any()

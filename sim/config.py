@@ -249,8 +249,6 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):
         raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
-    if checked["constraint"].joint != "free" and checked["fluid"].radiation != "none":
-        raise ConfigError("a joint with radiation is not modelled yet (it comes with several bodies): set [fluid] radiation = \"none\"")
     if checked["constraint"].joint != "free" and not any(checked["constraint"].axis):
         raise ConfigError("[constraint] axis must not be zero")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":

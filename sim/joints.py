@@ -18,7 +18,10 @@ the take-off's damper) linearised and solved implicitly in each half kick, as th
 scheme does: second order, and stable for any damping. The pose is a function of theta, so the joint
 never drifts: the constraint holds to round-off whatever the step.
 
-Not yet: joints between two bodies, and a jointed body with radiation (both come with several bodies).
+With radiation the joint's mass takes the added mass at infinite frequency, J^T (M + A_inf) J, and its load
+the radiation memory's force (the memory driven by the joint's twist) and the diffraction force.
+
+Not yet: joints between two bodies (they come with several bodies).
 """
 
 from __future__ import annotations
@@ -125,15 +128,31 @@ def step(model, joint: WorldJoint, s: State, dt: float) -> tuple[State, float]:
     each half kick; returns the new state and the energy the take-off absorbed over the step, J."""
     body = model.body
     theta, rate = joint.coordinate(s), joint.rate(body, s)
+    memory, radiated = s.memory, s.E_rad
     if not joint.dofs:
-        return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), s.memory, s.E_rad), 0.0
+        return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), memory, radiated), 0.0
     absorbed = 0.0
     for half in (0, 1):
         if half == 1:
+            memory, radiated = _drift_memory(model, joint, theta, theta + dt * rate, rate, memory, radiated, dt)
             theta = theta + dt * rate
-        rate, work = _kick(*_affine(model, joint, theta, rate, s.t + half * dt), rate, 0.5 * dt, joint.damping)
+        rate, work = _kick(*_affine(model, joint, theta, rate, s.t + half * dt, memory), rate, 0.5 * dt, joint.damping)
         absorbed += work
-    return joint.state(body, s.t + dt, theta, rate, s), absorbed
+    return joint.state(body, s.t + dt, theta, rate, State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, radiated)), absorbed
+
+
+def _drift_memory(model, joint: WorldJoint, theta0: float, theta1: float, rate: float, memory, radiated: float, dt: float):
+    """(memory, E_rad) after the drift from theta0 to theta1 at `rate`: the radiation memory advanced exactly
+    with the twist in the fit's axes averaged over both ends (as integrators.drift_memory), and the energy
+    the radiated waves took, dt nu . mu averaged likewise."""
+    rad = model.radiation
+    if rad is None:
+        return memory, radiated
+    (x0, R0), (x1, R1) = joint.pose(theta0), joint.pose(theta1)
+    nu0, nu1 = joint.jacobian(x0) * rate, joint.jacobian(x1) * rate
+    new = rad.advance(memory, 0.5 * (rad.fit_velocity(R0, nu0) + rad.fit_velocity(R1, nu1)), dt)
+    power = -0.5 * (nu0 @ rad.force(R0, memory) + nu1 @ rad.force(R1, new))
+    return new, radiated + dt * power
 
 
 def _kick(Q: float, Dq: float, Mq: float, v: float, h: float, c: float) -> tuple[float, float]:
@@ -148,14 +167,18 @@ def _kick(Q: float, Dq: float, Mq: float, v: float, h: float, c: float) -> tuple
     return a + b * (1.0 - e1), c * (a * a * h + 2.0 * a * b * e1 / lam + b * b * e2 / (2.0 * lam))
 
 
-def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float) -> tuple[float, float, float]:
+def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memory) -> tuple[float, float, float]:
     """(Q0, D_q, M_q) with the generalised load ~ Q0 - D_q theta_dot near `rate`: the take-off's spring in Q0,
-    its damper in D_q with the loads' own damping along the joint."""
+    its damper in D_q with the loads' own damping along the joint; with radiation, the memory's and the
+    diffraction force in Q0 and the added mass at infinite frequency in M_q."""
     x, R = joint.pose(theta)
     J = joint.jacobian(x)
     wet = model.wetted(x, R, t)
     f, D = model.linearised(wet, J * rate, t)  # loads ~ f - D nu near nu = J rate
     Dq = joint.damping + (0.0 if D is None else float(J @ D @ J))
-    return float(J @ f) - joint.stiffness * theta, Dq, joint.mass(model.body, R, J)
+    rad = model.radiation
+    if rad is None:
+        return float(J @ f) - joint.stiffness * theta, Dq, joint.mass(model.body, R, J)
+    return float(J @ (f + rad.load(R, memory, t))) - joint.stiffness * theta, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)
 
 

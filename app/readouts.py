@@ -23,7 +23,10 @@ SERIES = (
     ("L", "|L| (kg·m²/s)", "#2b8a3e", lambda f: float(np.linalg.norm(f.L_world))),
     ("F", "|F| (N)", "#c92a2a", lambda f: float(np.linalg.norm(f.force_world))),
     ("E", "E total (J)", "#7048e8", lambda f: f.E_total),
+    ("P", "P take-off (W)", "#e8590c", lambda f: f.P_pto),
 )
+JOINT_ONLY = ("P",)
+"""Plots shown only while the body has a joint to the world."""
 NOISE = 1e-9
 """Plotted values are rounded to this fraction of the body's own scale (`scales`): round-off (|F| of 1e-13 N
 at rest) then plots as the flat zero it is, not as swings with every tick labelled 0."""
@@ -33,9 +36,10 @@ Y_AXIS_PX = 76
 
 def scales(body, g: float) -> np.ndarray:
     """The natural size of each plotted quantity for a body (SERIES order): its radius, M r sqrt(g r),
-    its weight, its weight times its radius."""
+    its weight, its weight times its radius, its weight times sqrt(g r)."""
     r, weight = max(body.radius, 1e-6), body.mass * max(g, 1e-6)
-    return np.array([r, body.mass * r * np.sqrt(max(g, 1e-6) * r), weight, weight * r])
+    speed = np.sqrt(max(g, 1e-6) * r)
+    return np.array([r, body.mass * r * speed, weight, weight * r, weight * speed])
 
 
 def denoise(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -60,6 +64,7 @@ class Readouts:
                 legend={"show": True},
                 axes=({}, {"size": Y_AXIS_PX}),
                 aspect=2.2,
+                visible=key not in JOINT_ONLY,
             )
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._epoch = -1
@@ -84,7 +89,10 @@ class Readouts:
         self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
         data[~np.isfinite(data)] = np.nan
+        jointed = snap.settings.joint != "free"
         for i, (key, *_) in enumerate(SERIES):
+            if key in JOINT_ONLY and self.plots[key].visible != jointed:
+                self.plots[key].visible = jointed
             self.plots[key].data = (data[0], data[i + 1])
 
 

@@ -23,6 +23,7 @@ COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
 LINES_HZ = 15.0
 LINE_COLOUR = (60, 60, 70)
+JOINT_COLOUR = (240, 120, 20)
 WET = np.array([30, 110, 230], np.uint8)
 DRY = np.array([245, 150, 40], np.uint8)
 
@@ -53,6 +54,8 @@ class SceneView:
         self.colour_updates = 0
         self.lines = None
         """The mooring lines' node (made for the first scene that has lines)."""
+        self.joint = None
+        self._joint_of = None  # the [constraint] table the joint's node shows
         self.set_body(body)
 
     def set_body(self, body: sim.Body) -> None:
@@ -103,6 +106,22 @@ class SceneView:
                 self._send_arrows(snap, now)
             self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
             self._show_lines(frame.lines, now)
+            self._show_joint(frame.joint_axis)
+
+    def _show_joint(self, axis) -> None:
+        """A slide's or a hinge's axis (frame.joint_axis), 4 body radii long; sent when it changes, hidden without one."""
+        key = None if axis is None else (tuple(axis[0]), tuple(axis[1]))
+        if key == self._joint_of:
+            return
+        self._joint_of = key
+        if axis is None:
+            if self.joint is not None:
+                self.joint.visible = False
+            return
+        point, direction = (np.asarray(a, float) for a in axis)
+        reach = 2.0 * self._sized_for
+        segment = np.array([[point - reach * direction, point + reach * direction]], np.float32)
+        self.joint = self.server.scene.add_line_segments("/joint", segment, JOINT_COLOUR, thickness=0.04)
 
     def _show_lines(self, lines: tuple, now: float) -> None:
         """The mooring lines as segments between their nodes, at most LINES_HZ times a second (none: hidden)."""

@@ -124,14 +124,14 @@ def load(spec) -> float:
 
 
 def preset_specs() -> list:
-    """The kernels.Spec of every preset scene, as shipped."""
+    """The kernels.Spec of every preset scene with a compiled twin, as shipped."""
     from .config import available_scenes, load_scene
     from .simulation import Simulation
 
     specs = []
     for name in available_scenes():
         sim = Simulation(load_scene(name), backend="numpy")
-        if sim.spec not in specs:
+        if sim.has_twin and sim.spec not in specs:  # (a jointed body runs on the reference)
             specs.append(sim.spec)
     return specs
 

@@ -75,6 +75,9 @@ class Frame:
     """The power the joint's take-off absorbs, c theta_dot^2, W (0 without a joint)."""
     E_pto: float = 0.0
     """The energy it has absorbed so far, J."""
+    joint_axis: tuple | None = None
+    """(point, unit direction), world frame: the axis a prismatic joint slides along or a revolute one turns
+    about (None: free or fixed)."""
 
     @property
     def E_hyd_of_model(self) -> float:
@@ -314,7 +317,9 @@ class Simulation:
                                             lines=tuple(self.moorings.lines()))  # fmt: skip
             if self.joint is not None:
                 rate = self.joint.rate(self.body, self.state)
-                frame = dataclasses.replace(frame, P_pto=self.joint.damping * rate * rate, E_pto=self.pto_energy)
+                j = self.joint
+                axis = None if j.kind == "fixed" else ((j.pivot if j.kind == "revolute" else j.x0), j.axis)
+                frame = dataclasses.replace(frame, P_pto=j.damping * rate * rate, E_pto=self.pto_energy, joint_axis=axis)
             self._frame, self._frame_key = frame, key
         return self._frame
 

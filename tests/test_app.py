@@ -655,3 +655,15 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
     snap = app.sync()
     assert snap.frame.E_pto > 0.0 and f"**{snap.frame.E_pto:.4g} J** absorbed" in describe(snap)
     assert not snap.frame.u_world[:2].any() and not snap.frame.omega_world.any()
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and not (app.readouts.plots["P"].visible and len(app.readouts.plots["P"].data[0]) > 3):
+        time.sleep(0.05)
+    assert app.readouts.plots["P"].visible and np.nanmax(app.readouts.plots["P"].data[1]) > 0.0  # the take-off's power, plotted
+    ends = app.scene.joint.points[0]
+    assert app.scene.joint.visible and np.allclose(ends[:, :2], 0.0) and ends[1, 2] - ends[0, 2] > 1.0  # the slide's vertical axis
+    app.controls.joint.value = "free"
+    app.sync()
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and (app.scene.joint.visible or app.readouts.plots["P"].visible):
+        time.sleep(0.05)
+    assert not app.scene.joint.visible and not app.readouts.plots["P"].visible

@@ -225,3 +225,28 @@ def test_a_slide_along_a_free_motion_changes_nothing():
     np.testing.assert_allclose(slide.state.x_world, free.state.x_world, atol=1e-9)
     np.testing.assert_allclose(slide.state.memory, free.state.memory, rtol=1e-7, atol=1e-8)  # (the free one: round-off in other dofs)
     assert slide.state.E_rad == pytest.approx(free.state.E_rad, rel=1e-7) and free.state.E_rad > 1.0
+
+
+def test_a_recording_shows_the_joint_axis():
+    """The replay of a run on a hinge draws its axis where the frame puts it."""
+    import base64
+    import re
+
+    import msgspec
+    import zstandard
+
+    from app.replay import replay_html
+    from app.take import Take, shot_of
+
+    sim = Simulation(with_overrides(heave_scene(0.01), constraint__joint="revolute", constraint__axis=(0.0, 1.0, 0.0),
+                                    constraint__pivot=(0.0, 0.0, 0.6)), backend="numpy")  # fmt: skip
+    take = Take()
+    for _ in range(5):
+        take.add(shot_of(sim))
+        sim.step(5)
+    raw = base64.b64decode(re.search(r'window.__VISER_EMBED_DATA__="([^"]+)"', replay_html(take)).group(1))
+    inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=int.from_bytes(raw[:8], "little"))
+    doc = msgspec.msgpack.decode(inner[8 : 8 + int.from_bytes(inner[:8], "little")])
+    assert [m for _, m in doc["messages"] if m.get("name") == "/joint" and m["type"] == "LineSegmentsMessage"]
+    point, direction = sim.frame().joint_axis
+    np.testing.assert_allclose(point, [0.0, 0.0, 0.7]) and np.testing.assert_allclose(direction, [0.0, 1.0, 0.0])

@@ -255,6 +255,12 @@ class Simulation:
 
             start = initial_state(body, self.scene)
             radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2])
+            depth = self.scene.waves.depth
+            if depth is not None:
+                note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "
+                        f"depth {depth:g} m they hold for waves shorter than about {2 * depth:g} m (k h > pi: tanh k h > 0.996)")  # fmt: skip
+                if note not in self.notes:
+                    self.notes.append(note)
         return Model(body, water, fluid, radiation, held=moored(self.scene))
 
     def _join(self) -> None:

@@ -212,3 +212,11 @@ def test_time_domain_response_matches_the_frequency_domain_rao(name):
         for d in dofs:
             assert abs(got[d]) == pytest.approx(abs(want[d]), rel=0.02, abs=0.01 * np.abs(want[:3]).max()), (i, d)
             assert abs(np.angle(got[d] / want[d])) < 0.02 or abs(want[d]) < 0.01 * np.abs(want[:3]).max(), (i, d)
+
+
+def test_a_finite_depth_sea_says_the_coefficients_are_deep_water():
+    """The shipped solves are deep-water ones: in a sea of finite depth the run says where they hold."""
+    sim = Simulation(with_overrides(load_scene("sphere"), waves__kind="regular", waves__height=0.02, waves__period=2.0, waves__depth=5.0),
+                     backend="numpy")  # fmt: skip
+    assert any("deep-water solve" in n and "shorter than about 10 m" in n for n in sim.notes), sim.notes
+    assert not any("deep-water" in n for n in Simulation(load_scene("sphere"), backend="numpy").notes)

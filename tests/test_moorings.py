@@ -35,6 +35,7 @@ def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
     catenary with seabed contact (sim/catenary.py), within 1 %, closer with more segments."""
     done, rows = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "1", "--segments", str(segments), "--t-end", "0.01", "--every", "1")
     assert done.returncode == 0, done.stderr
+    assert "moorings: 1 line (MoorDyn), pull now" in done.stdout, done.stdout
     first = rows[0]
     spread = lines_of(load_scene("moored-buoy").moorings)
     X = spread.anchor_radius - (first["x"] + spread.fairlead_radius)  # heading 0: the anchor on +x, the body upright

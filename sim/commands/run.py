@@ -232,6 +232,14 @@ def run(args: RunArgs, watch=None) -> int:
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "
           f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)" + (f", E_rad = {last.E_rad:.6g} J radiated" if sim.model.radiation else ""))  # fmt: skip
+    if sim.joint is not None:
+        j = sim.joint
+        print(f"joint: {j.kind} to the seabed, take-off k {j.stiffness:g}, c {j.damping:g}: {last.E_pto:.6g} J absorbed, "
+              f"{last.E_pto / last.t if last.t > 0 else 0.0:.4g} W on average")  # fmt: skip
+    if sim.moorings is not None:
+        n = len(last.lines)
+        print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring_force):.4g} N, largest fairlead tension "
+              f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
     rate = steps / wall if wall > 0 else math.inf
     print(f"{steps} steps in {wall:.3g} s wall ({rate:.0f} steps/s, {last.t / wall if wall > 0 else math.inf:.3g}x real time)"
           + (f"; {rows} rows -> {args.out}" if out else ""))  # fmt: skip

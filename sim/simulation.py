@@ -358,17 +358,18 @@ class Simulation:
         from .kernels import SCHEMES, missing_terms
 
         integ = self.integrator
-        note = None
+        notes = []
+        if self.joint is not None and integ.name != "implicit":
+            notes.append(f"a jointed body steps by its own scheme (Stormer-Verlet, its damping implicit): integrator '{integ.name}' is not used")
         if self.backend == "numba" and self.joint is not None:
-            note = "the joint has no compiled twin yet: the scene runs on the numpy reference (slower)"
+            notes.append("the joint has no compiled twin yet: the scene runs on the numpy reference (slower)")
         elif self.backend == "numba" and missing_terms(self.model):
-            note = f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)"
+            notes.append(f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)")
         elif self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
-            note = f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)"
+            notes.append(f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)")
         elif self.backend == "numba" and not compiled_model(self.model):
-            note = "the cells force model has no compiled twin in waves: it runs on the numpy reference (slower)"
-        if note and note not in self.notes:
-            self.notes.append(note)
+            notes.append("the cells force model has no compiled twin in waves: it runs on the numpy reference (slower)")
+        self.notes += [n for n in notes if n not in self.notes]
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""

@@ -170,6 +170,9 @@ def test_mistakes_are_one_line_and_exit_2(args, message):
 def test_a_joint_runs_on_the_reference_and_says_so():
     sim = Simulation(heave_scene(0.01))
     assert not sim.compiled and any("joint has no compiled twin" in n for n in sim.notes)
+    assert not any("own scheme" in n for n in sim.notes)
+    rk4 = Simulation(heave_scene(0.01, step__integrator="rk4"))
+    assert any("own scheme" in n and "'rk4' is not used" in n for n in rk4.notes), rk4.notes
 
 
 def test_a_heaving_converter_absorbs_the_frequency_domain_power():

@@ -5,7 +5,8 @@ Joints (`[constraint] joint`):
 - `prismatic`: it slides along the world axis `axis` through its starting centre of mass, without turning;
   its coordinate s = axis . (x - x_0), m;
 - `revolute`: it turns about the world axis `axis` through the world point `pivot` (its centre of mass
-  swings on a circle about it); its coordinate theta, rad, from the starting pose.
+  swings on a circle about it); its coordinate theta, rad, from the starting pose, in (-pi, pi] (the
+  take-off's spring acts on that: a hinge that turns past half a turn meets it from the other side).
 
 The body's twist is J(theta) theta_dot, J the joint's twist per unit rate (6,). Its motion is the joint
 coordinate's: M_q theta_ddot = J . (F, T) + Q_pto, with M_q = J^T M J (M the rigid body's 6x6 mass in
@@ -14,8 +15,8 @@ power take-off: Q_pto = -k (theta - theta_0) - c theta_dot; its absorbed power c
 P_pto; E_pto its integral).
 
 Stepping (`step`): Stormer-Verlet on (theta, theta_dot) with the twist-dependent loads (damping, drag,
-the take-off's damper) linearised and solved implicitly in each half kick, as the free body's `implicit`
-scheme does: second order, and stable for any damping. The pose is a function of theta, so the joint
+the take-off's damper) linearised and their linear flow solved exactly over each half kick, as the free
+body's `implicit` scheme does: second order, and stable for any damping. The pose is a function of theta, so the joint
 never drifts: the constraint holds to round-off whatever the step.
 
 With radiation the joint's mass takes the added mass at infinite frequency, J^T (M + A_inf) J, and its load

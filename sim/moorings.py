@@ -49,29 +49,26 @@ def moordyn():
     return md
 
 
-_LIBC = ctypes.CDLL(None)
-
-
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise a x b of (k, 3) arrays (np.cross costs 80 us here: it was a third of a moored step)."""
     return np.column_stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]])
 
 
-_NULL: list[int] = []
+_NULL: list = []  # /dev/null's descriptor and the C library (for fflush), opened once
 
 
 @contextlib.contextmanager
 def _quiet():
     """MoorDyn prints its progress ("t = ...") to the C stdout at every step: send that to /dev/null (the CSV may be on stdout)."""
     if not _NULL:
-        _NULL.append(os.open(os.devnull, os.O_WRONLY))
+        _NULL.extend([os.open(os.devnull, os.O_WRONLY), ctypes.CDLL(None)])
     sys.stdout.flush()
     saved = os.dup(1)
     try:
         os.dup2(_NULL[0], 1)
         yield
     finally:
-        _LIBC.fflush(None)
+        _NULL[1].fflush(None)
         os.dup2(saved, 1)
         os.close(saved)
 

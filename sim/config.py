@@ -153,6 +153,26 @@ SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialCon
                  "moorings": MooringsConfig, "constraint": ConstraintConfig}
 
 
+ENTRY_SECTIONS = ("body", "initial", "constraint")
+"""The tables a [[bodies]] entry gives flat (their keys are unique), beside its name, parent and force model."""
+
+
+@dataclass(frozen=True)
+class BodyEntry:
+    """One of a scene's [[bodies]]: a body, its starting pose and its joint to its parent."""
+
+    name: str
+    parent: str = "world"
+    """The body it is jointed to (listed before it), or 'world' (the seabed)."""
+    body: BodyConfig = field(default_factory=BodyConfig)
+    initial: InitialConfig = field(default_factory=InitialConfig)
+    constraint: ConstraintConfig = field(default_factory=ConstraintConfig)
+    """Its joint to the parent: free (world only), fixed (welded), prismatic or revolute, with the take-off;
+    `axis` in world axes at the start, `pivot` from its starting centre of mass."""
+    forces: str | None = None
+    """Its own force model (None: the scene's [fluid] forces)."""
+
+
 @dataclass(frozen=True)
 class SceneConfig:
     name: str = "custom"
@@ -165,6 +185,8 @@ class SceneConfig:
     water: WaterConfig = field(default_factory=WaterConfig)
     moorings: MooringsConfig = field(default_factory=MooringsConfig)
     constraint: ConstraintConfig = field(default_factory=ConstraintConfig)
+    bodies: tuple[BodyEntry, ...] = ()
+    """[[bodies]]: several bodies on joints (system.py); empty: the one body of [body], [initial], [constraint]."""
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -211,7 +233,11 @@ def _from_dict(data: dict, where: str) -> SceneConfig:
     for key, value in data.items():
         if key not in known:
             raise ConfigError(f"{where}: unknown key '{key}' (known: {', '.join(known)})")
-        if key in SECTION_TYPES:
+        if key == "bodies":
+            if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+                raise ConfigError(f"{where}: bodies must be an array of tables ([[bodies]])")
+            value = tuple(_body_entry(v, f"{where} [[bodies]] #{i + 1}") for i, v in enumerate(value))
+        elif key in SECTION_TYPES:
             if not isinstance(value, dict):
                 raise ConfigError(f"{where}: [{key}] must be a table")
             params = {p.key for p in SECTIONS[key]}
@@ -224,6 +250,65 @@ def _from_dict(data: dict, where: str) -> SceneConfig:
     if isinstance(body, dict) and body.get("shape") == "mesh" and not (isinstance(fluid, dict) and "forces" in fluid):
         kwargs["fluid"] = dataclasses.replace(kwargs.get("fluid", FluidConfig()), forces=MESH_FORCES)
     return SceneConfig(**kwargs)
+
+
+def _body_entry(data: dict, where: str) -> BodyEntry:
+    """A [[bodies]] table: name, parent, forces and the keys of [body], [initial] and [constraint], flat."""
+    owner = {p.key: p.section for name in ENTRY_SECTIONS for p in SECTIONS[name]}
+    own = {"name", "parent", "forces"}
+    tables: dict[str, dict] = {name: {} for name in ENTRY_SECTIONS}
+    for k, v in data.items():
+        if k not in owner and k not in own:
+            raise ConfigError(f"{where}: unknown key '{k}' (known: {', '.join(sorted(own | set(owner)))})")
+        if k in owner:
+            tables[owner[k]][k] = tuple(v) if isinstance(v, list) else v
+    if not isinstance(data.get("name"), str) or not data["name"]:
+        raise ConfigError(f"{where}: give the body a name (name = \"float\")")
+    if tables["body"].get("shape") == "mesh" and "forces" not in data:
+        data = {**data, "forces": MESH_FORCES}
+    return BodyEntry(data["name"], data.get("parent", "world"), *(SECTION_TYPES[name](**tables[name]) for name in ENTRY_SECTIONS),
+                     data.get("forces"))  # fmt: skip
+
+
+def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
+    """Each [[bodies]] entry checked as its tables are, then the tree: unique names, parents listed first."""
+    entries, seen = [], []
+    for e in scene.bodies:
+        if not isinstance(e.name, str) or not e.name or e.name in seen or e.name == "world":
+            raise ConfigError(f"[[bodies]]: body names must be distinct and not 'world', got {e.name!r}")
+        where = f"[[bodies]] {e.name}"
+        if not isinstance(e.parent, str) or (e.parent != "world" and e.parent not in seen):
+            raise ConfigError(f"{where}: parent {e.parent!r} is not a body listed before it (or 'world')")
+        if e.forces is not None and e.forces not in FORCE_MODELS:
+            raise ConfigError(f"{where}: forces must be one of {', '.join(FORCE_MODELS)}, got {e.forces!r}")
+        try:
+            tables = {name: dataclasses.replace(getattr(e, name), **{p.key: p.check(getattr(getattr(e, name), p.key)) for p in SECTIONS[name]})
+                      for name in ENTRY_SECTIONS}  # fmt: skip
+        except ConfigError as err:
+            raise ConfigError(f"{where}: {err}") from None
+        b, c = tables["body"], tables["constraint"]
+        if b.shape == "mesh" and not b.mesh:
+            raise ConfigError(f"{where}: body shape 'mesh' needs a mesh file")
+        if b.mass is None and b.density is None:
+            raise ConfigError(f"{where}: give the body a density or a mass")
+        if c.joint == "free" and e.parent != "world":
+            raise ConfigError(f"{where}: a free body has no parent (give it a joint: fixed, prismatic or revolute)")
+        if c.joint != "free" and not any(c.axis):
+            raise ConfigError(f"{where}: the joint's axis must not be zero")
+        norm = math.sqrt(sum(q * q for q in tables["initial"].orientation))
+        if abs(norm - 1.0) > QUATERNION_SLACK:
+            raise ConfigError(f"{where}: initial orientation must be a unit quaternion (w, x, y, z), got norm {norm:.6g}")
+        entries.append(dataclasses.replace(e, **tables))
+        seen.append(e.name)
+    untouched = [f"[{name}]" for name in ENTRY_SECTIONS if getattr(scene, name) != SECTION_TYPES[name]()]
+    if untouched:
+        raise ConfigError(f"a scene with [[bodies]] gives each body its own shape, pose and joint: {', '.join(untouched)} (and their flags) "
+                          "do not apply; set them in the [[bodies]] entries")  # fmt: skip
+    if moored(scene):
+        raise ConfigError("mooring lines on a scene with [[bodies]] are not modelled yet: moor a one-body scene")
+    if scene.fluid.radiation != "none":
+        raise ConfigError("radiation with [[bodies]] needs the multi-body BEM solve, not there yet: set [fluid] radiation = \"none\"")
+    return tuple(entries)
 
 
 def validate(scene: SceneConfig) -> SceneConfig:
@@ -257,7 +342,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if abs(norm - 1.0) > QUATERNION_SLACK:
         raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
                           f"(one within {QUATERNION_SLACK:g} of 1 is normalised)")
-    return dataclasses.replace(scene, **checked)
+    checked = dataclasses.replace(scene, **checked)
+    return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked
 
 
 def diffracting(scene: SceneConfig) -> bool:

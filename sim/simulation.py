@@ -11,7 +11,7 @@ import numpy as np
 from . import stability
 from .body import Body, make_body, make_mesh_body
 from .config import SceneConfig, diffracting, moored, validate, with_overrides
-from .errors import SimulationDiverged
+from .errors import ConfigError, SimulationDiverged
 from .forces import Model, hydrostatic_energy
 from .hydrostatics import sampled_model_warning
 from .integrators import make_integrator
@@ -204,6 +204,9 @@ class Simulation:
             scene = with_overrides(scene, body__shape="mesh", body__mesh=name)
         self._mesh = mesh
         scene = validate(scene)
+        if scene.bodies:
+            raise ConfigError(f"scene {scene.name!r} has several bodies ([[bodies]]): `python -m sim run` runs it; the viewer, sweeps and "
+                              "studies take one-body scenes for now")  # fmt: skip
         self.scene = scene
         self.backend = backend or default_backend()
         self.notes: list[str] = []

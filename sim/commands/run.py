@@ -166,6 +166,10 @@ def run(args: RunArgs, watch=None) -> int:
         raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
     scene = scene_from_args(args)
+    if scene.bodies:
+        from .run_bodies import run_bodies
+
+        return run_bodies(args, scene)
     from ..compiling import kernels_ready
 
     sim = Simulation(scene, backend="numpy")  # nothing compiles before we know the run needs it

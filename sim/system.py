@@ -1,0 +1,460 @@
+"""Several bodies on joints (a scene's [[bodies]]): a tree of rigid groups in generalised coordinates.
+
+Each body names a parent (a body listed before it, or the world: the seabed) and a joint to it:
+- `free` (world only): six coordinates of its own, its centre of mass and orientation;
+- `fixed`: welded to its parent: bodies welded together are one rigid *group* and move as one body;
+- `prismatic`: slides along `axis` through its starting centre of mass, turning with its parent;
+- `revolute`: turns about `axis` through `pivot` (given from its starting centre of mass).
+Axes are given in world axes at the start; they move with the parent. A joint's coordinate theta
+(m or rad) is 0 at the start, and its take-off acts on it: Q = -k theta - c theta_dot, absorbing
+c theta_dot^2 (the energy it has taken is `SystemState.absorbed`).
+
+The coordinates: each free group's centre of mass and orientation, each one-dof joint's theta; the
+velocities v stack each free group's (u, omega) (world frame, at the group's centre of mass) and each
+joint's theta_dot. Every body's pose is a function of the coordinates (forward kinematics), so the
+joints hold to round-off whatever the step: no drift, nothing to project. Each body's twist is
+nu_b = J_b v, and with M_b its 6x6 mass in world axes, the motion is
+
+    M_q v_dot = sum_b J_b^T (w_b - gyro_b - M_b J_b_dot v) - K theta - C theta_dot,  M_q = sum_b J_b^T M_b J_b,
+
+w_b the body's loads (its own force model's terms, as a one-body scene), gyro_b = (0, omega x I omega).
+
+Stepping (`step`): Stormer-Verlet on a Lie group (a drift moves each free group at its velocity, its
+orientation turned by exp(h omega)), with each half kick solving the linearised kick exactly: the
+loads near v as Q0 - D v (D: the terms' damping, the take-offs' dampers and the velocity-product
+terms' Jacobian), M v_dot = Q0 - D v over the half step by a matrix exponential, which also gives
+each take-off's absorbed energy exactly (Van Loan's integral). Second order, and stable for any
+damping, as the one-body implicit scheme and the joint to the world are.
+
+The velocity-product term J_dot v is a central difference of J v along the motion (its error ~1e-10
+relative); it is left out where every Jacobian is constant (slides on slides to the world).
+Not yet: radiation coupling between bodies (the multi-body BEM solve), moorings on several bodies,
+a compiled twin, the viewer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.linalg import expm
+
+from .body import Body, make_body
+from .config import SceneConfig
+from .forces import Model
+from .joints import _rotation
+from .rotation import matrix_to_quat, normalized, quat_to_matrix, rotate_world, skew
+from .surface import wet_panels
+from .water import make_water
+
+
+@dataclass(frozen=True, eq=False)
+class Member:
+    """A body in its group."""
+
+    name: str
+    model: Model
+    offset: np.ndarray
+    """(3,) its centre of mass from the group's, group frame, m."""
+    rotation: np.ndarray
+    """(3, 3) its principal frame in the group's frame."""
+
+    @property
+    def body(self) -> Body:
+        return self.model.body
+
+
+@dataclass(frozen=True, eq=False)
+class Group:
+    """Bodies welded together, and their joint to the parent group (or the world). The group's frame
+    is the world's axes at the start, its origin the members' centre of mass."""
+
+    name: str
+    members: tuple[Member, ...]
+    kind: str
+    """free, fixed, prismatic or revolute."""
+    parent: int
+    """Index of the parent group, -1: the world."""
+    axis: np.ndarray
+    """(3,) unit joint axis, parent frame."""
+    pivot: np.ndarray
+    """(3,) a point on a revolute axis, parent frame, from the parent's origin (world: a world point), m."""
+    offset: np.ndarray
+    """(3,) the group's origin at theta = 0, parent frame, from the parent's origin, m."""
+    stiffness: float = 0.0
+    damping: float = 0.0
+    dofs: slice = field(default_factory=lambda: slice(0, 0))
+    """Its columns in v."""
+    coordinate: int = -1
+    """Index of theta (one-dof joints) or of its free pose (free groups) in the state."""
+    origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    """(3,) its origin at the start, world frame, m."""
+
+    @property
+    def mass(self) -> float:
+        return sum(m.body.mass for m in self.members)
+
+
+@dataclass(frozen=True, eq=False)
+class SystemState:
+    t: float
+    x_free: np.ndarray
+    """(f, 3) each free group's centre of mass, world, m."""
+    q_free: np.ndarray
+    """(f, 4) each free group's orientation (w, x, y, z) from its starting one."""
+    theta: np.ndarray
+    """(j,) each one-dof joint's coordinate, m or rad."""
+    v: np.ndarray
+    """(d,) the generalised velocities."""
+    absorbed: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """(j,) the energy each take-off has absorbed so far, J."""
+
+    def is_finite(self) -> bool:
+        return bool(all(np.isfinite(a).all() for a in (self.x_free, self.q_free, self.theta, self.v)))
+
+
+@dataclass(frozen=True, eq=False)
+class Pose:
+    """Every body's pose and the Jacobian of its twist, for one configuration."""
+
+    x: list
+    R: list
+    J: list
+    """(6, d) each body's twist (u at its centre of mass, omega), world frame, per unit v."""
+
+
+class System:
+    """The static description: groups in tree order, each body's model. `bodies[i]` follows the scene's order."""
+
+    def __init__(self, groups: list[Group], order: list[tuple[int, int]], water, fluid):
+        self.groups, self.water, self.fluid = groups, water, fluid
+        self.order = order
+        """(group, member) of each body in the scene's order."""
+        self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
+        self.joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
+        self.n_free = sum(g.kind == "free" for g in groups)
+        constant = []
+        for g in groups:  # a slide on slides to the world has a constant Jacobian; a lone hinge to the world no velocity-product load
+            constant.append(g.kind in ("fixed", "prismatic") and (g.parent < 0 or constant[g.parent]))
+        lone_hinge = [g.kind == "revolute" and g.parent < 0 and not any(h.parent == i for h in groups) for i, g in enumerate(groups)]
+        self.needs_bias = not all(c or h for c, h in zip(constant, lone_hinge))
+
+    @property
+    def members(self) -> list[Member]:
+        return [self.groups[g].members[m] for g, m in self.order]
+
+    # kinematics
+
+    def group_poses(self, s: SystemState) -> tuple[list, list, list]:
+        """(x, R, J) of each group's origin: forward kinematics down the tree."""
+        xs, Rs, Js = [], [], []
+        for g in self.groups:
+            if g.parent < 0:
+                xp, Rp, Jp = np.zeros(3), np.eye(3), np.zeros((6, self.n_dofs))
+            else:
+                xp, Rp, Jp = xs[g.parent], Rs[g.parent], Js[g.parent]
+            if g.kind == "free":
+                x, R = s.x_free[g.coordinate].copy(), quat_to_matrix(s.q_free[g.coordinate])
+                J = np.zeros((6, self.n_dofs))
+                J[:, g.dofs] = np.eye(6)
+            else:
+                theta = s.theta[g.coordinate] if g.coordinate >= 0 else 0.0
+                a = Rp @ g.axis
+                if g.kind == "revolute":
+                    turn = _rotation(g.axis, theta)
+                    x, R = xp + Rp @ (g.pivot + turn @ (g.offset - g.pivot)), Rp @ turn
+                else:
+                    x, R = xp + Rp @ (g.offset + theta * g.axis if g.kind == "prismatic" else g.offset), Rp
+                J = _carried(Jp, x - xp)
+                if g.kind == "prismatic":
+                    J[:3, g.dofs.start] += a
+                elif g.kind == "revolute":
+                    J[:3, g.dofs.start] += np.cross(a, x - (xp + Rp @ g.pivot))
+                    J[3:, g.dofs.start] += a
+            xs.append(x)
+            Rs.append(R)
+            Js.append(J)
+        return xs, Rs, Js
+
+    def pose(self, s: SystemState) -> Pose:
+        """Each body's pose and twist Jacobian (the scene's order)."""
+        xg, Rg, Jg = self.group_poses(s)
+        x, R, J = [], [], []
+        for gi, mi in self.order:
+            m = self.groups[gi].members[mi]
+            xm = xg[gi] + Rg[gi] @ m.offset
+            x.append(xm)
+            R.append(Rg[gi] @ m.rotation)
+            J.append(_carried(Jg[gi], xm - xg[gi]))
+        return Pose(x, R, J)
+
+    def drifted(self, s: SystemState, h: float, v: np.ndarray | None = None) -> SystemState:
+        """The coordinates moved at velocity v (default s.v) for time h: free groups translated and turned by exp(h omega)."""
+        v = s.v if v is None else v
+        x, q, theta = s.x_free.copy(), s.q_free.copy(), s.theta.copy()
+        for g in self.groups:
+            if g.kind == "free":
+                u, w = v[g.dofs][:3], v[g.dofs][3:]
+                x[g.coordinate] += h * u
+                q[g.coordinate] = rotate_world(q[g.coordinate], h * w)
+            elif g.coordinate >= 0:
+                theta[g.coordinate] += h * v[g.dofs.start]
+        return SystemState(s.t, x, q, theta, s.v, s.absorbed)
+
+    # dynamics
+
+    def mass_matrix(self, pose: Pose) -> np.ndarray:
+        """M_q = sum_b J_b^T M_b J_b."""
+        M = np.zeros((self.n_dofs, self.n_dofs))
+        for m, R, J in zip(self.members, pose.R, pose.J):
+            M += J.T @ _body_mass(m.body, R) @ J
+        return M
+
+    def bias(self, s: SystemState, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(b(v), db/dv): the velocity-product load b(v) = sum_b J_b^T (M_b J_b_dot v + (0, omega x I omega)) and
+        its Jacobian. J_b_dot w along a direction of motion is a central difference of J_b there; b is quadratic in v."""
+        n = self.n_dofs
+        if not self.needs_bias:
+            return np.zeros(n), np.zeros((n, n))
+        pose = self.pose(s)
+
+        def rate(w: np.ndarray) -> list[np.ndarray]:  # d J_b / dt while moving at w
+            eps = 1e-5 / max(1.0, float(np.abs(w).max(initial=0.0)))
+            ahead, behind = self.pose(self.drifted(s, eps, w)), self.pose(self.drifted(s, -eps, w))
+            return [(a - c) / (2 * eps) for a, c in zip(ahead.J, behind.J)]
+
+        along_v, along_e = rate(v), [rate(e) for e in np.eye(n)]
+        b, B = np.zeros(n), np.zeros((n, n))
+        for k, (m, R, J) in enumerate(zip(self.members, pose.R, pose.J)):
+            Mb = _body_mass(m.body, R)
+            inertia = Mb[3:, 3:]
+            omega = J[3:] @ v
+            b += J.T @ (Mb @ (along_v[k] @ v) + np.concatenate([np.zeros(3), np.cross(omega, inertia @ omega)]))
+            cross = along_v[k] + np.column_stack([d[k] @ v for d in along_e])  # d(J_dot(v) v)/dv
+            gyro = (skew(omega) @ inertia - skew(inertia @ omega)) @ J[3:]  # d(omega x I omega)/dv
+            B += J.T @ (Mb @ cross + np.vstack([np.zeros((3, n)), gyro]))
+        return b, B
+
+    def affine(self, s: SystemState, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M_q, Q0, D_q): the generalised load near v as Q0 - D_q v, and the mass matrix, at s's configuration and time."""
+        pose = self.pose(s)
+        n = self.n_dofs
+        Q, D = np.zeros(n), np.zeros((n, n))
+        for m, x, R, J in zip(self.members, pose.x, pose.R, pose.J):
+            wet = m.model.wetted(x, R, s.t)
+            f, Dm = m.model.linearised(wet, J @ v, s.t)
+            Q += J.T @ f
+            if Dm is not None:
+                D += J.T @ Dm @ J
+        for g in self.joints:
+            i = g.dofs.start
+            Q[i] -= g.stiffness * s.theta[g.coordinate]
+            D[i, i] += g.damping
+        if self.needs_bias:  # b(v) ~ B0 v - b(v0) (b is quadratic: B0 v0 = 2 b(v0)); B0's columns exactly from b's
+            b0, B = self.bias(s, v)
+            Q, D = Q + b0, D + B
+        return self.mass_matrix(pose), Q, D
+
+    def kick(self, s: SystemState, h: float) -> SystemState:
+        """v over h under M v_dot = Q0 - D v (linearised at s.v), solved exactly; each take-off's absorbed energy over it."""
+        M, Q, D = self.affine(s, s.v)
+        n = self.n_dofs
+        A = np.zeros((n + 1, n + 1))  # z = (v, 1): z_dot = A z
+        A[:n, :n] = -np.linalg.solve(M, D)
+        A[:n, n] = np.linalg.solve(M, Q)
+        z = np.append(s.v, 1.0)
+        # Van Loan: expm([[A, z z^T], [0, -A^T]] h) has e^{Ah} ... and the integral of z z^T over the step
+        big = np.zeros((2 * n + 2, 2 * n + 2))
+        big[: n + 1, : n + 1], big[: n + 1, n + 1 :], big[n + 1 :, n + 1 :] = A, np.outer(z, z), -A.T
+        E = expm(big * h)
+        gram = E[: n + 1, n + 1 :] @ E[: n + 1, : n + 1].T  # integral over the step of z z^T
+        v = (E[: n + 1, : n + 1] @ z)[:n]
+        absorbed = s.absorbed.copy()
+        for g in self.joints:
+            absorbed[g.coordinate] += g.damping * gram[g.dofs.start, g.dofs.start]
+        return SystemState(s.t, s.x_free, s.q_free, s.theta, v, absorbed)
+
+    def step(self, s: SystemState, h: float) -> SystemState:
+        """One Stormer-Verlet step: half kick, drift, half kick (at the step's end time)."""
+        half = self.kick(s, 0.5 * h)
+        moved = self.drifted(half, h)
+        moved = SystemState(s.t + h, moved.x_free, moved.q_free, moved.theta, moved.v, moved.absorbed)
+        return self.kick(moved, 0.5 * h)
+
+    # energies
+
+    def energies(self, s: SystemState) -> dict[str, float]:
+        """E_kin (1/2 v^T M_q v), E_grav, E_hyd (exact: each body's mesh clipped at the surface), E_spring (the take-offs' springs), J."""
+        pose = self.pose(s)
+        g = self.water.g
+        e_hyd = 0.0
+        from .forces import hydrostatic_energy
+
+        for m, x, R in zip(self.members, pose.x, pose.R):
+            if m.model.has("pressure"):
+                e_hyd += hydrostatic_energy(self.water, wet_panels(m.body, self.water, x, R, s.t))
+        return {"E_kin": 0.5 * float(s.v @ self.mass_matrix(pose) @ s.v),
+                "E_grav": float(sum(m.body.mass * g * x[2] for m, x in zip(self.members, pose.x))), "E_hyd": e_hyd,
+                "E_spring": float(sum(0.5 * j.stiffness * s.theta[j.coordinate] ** 2 for j in self.joints))}  # fmt: skip
+
+
+def _carried(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The Jacobian of the twist at a point r from the one J is at, on the same rigid frame: u + omega x r."""
+    out = J.copy()
+    out[:3] -= skew(r) @ J[3:]
+    return out
+
+
+def _body_mass(body: Body, R: np.ndarray) -> np.ndarray:
+    """6x6 mass of a body in world axes: diag(m I, R I R^T)."""
+    M = np.zeros((6, 6))
+    M[:3, :3] = body.mass * np.eye(3)
+    M[3:, 3:] = R @ np.diag(body.inertia) @ R.T
+    return M
+
+
+def build(scene: SceneConfig) -> tuple[System, SystemState]:
+    """The system and its starting state from a scene with [[bodies]]: groups of welded bodies, their
+    joints about the starting poses, the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
+    from dataclasses import replace
+
+    from .simulation import initial_state
+
+    water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current)
+    names = [e.name for e in scene.bodies]
+    starts, models = [], []
+    for e in scene.bodies:
+        fluid = replace(scene.fluid, forces=e.forces or scene.fluid.forces)
+        body = replace(make_body(e.body, scene.base_dir, fluid.forces == "panels"), name=e.name)
+        models.append(Model(body, water, fluid))
+        starts.append(initial_state(body, replace(scene, initial=e.initial)))
+    group_of: list[int] = []
+    heads: list[int] = []  # the first body of each group
+    for i, e in enumerate(scene.bodies):
+        if e.constraint.joint == "fixed" and e.parent != "world":
+            group_of.append(group_of[names.index(e.parent)])
+        else:
+            group_of.append(len(heads))
+            heads.append(i)
+    groups, order, dof, n_free, n_joints = [], [None] * len(names), 0, 0, 0
+    for gi, head in enumerate(heads):
+        e = scene.bodies[head]
+        idx = [i for i in range(len(names)) if group_of[i] == gi]
+        mass = sum(models[i].body.mass for i in idx)
+        origin = sum(models[i].body.mass * starts[i].x_world for i in idx) / mass
+        members = []
+        for k, i in enumerate(idx):
+            members.append(Member(names[i], models[i], starts[i].x_world - origin, starts[i].R_world_body))
+            order[i] = (gi, k)
+        c = e.constraint
+        parent = -1 if e.parent == "world" else group_of[names.index(e.parent)]
+        parent_origin = np.zeros(3) if parent < 0 else groups[parent].origin
+        axis = np.asarray(c.axis, float)
+        kind = c.joint
+        width = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1}[kind]
+        coordinate = n_free if kind == "free" else (n_joints if width else -1)
+        n_free += kind == "free"
+        n_joints += kind in ("prismatic", "revolute")
+        group = Group(e.name, tuple(members), kind, parent, axis / max(np.linalg.norm(axis), 1e-300),
+                      starts[head].x_world + np.asarray(c.pivot, float) - parent_origin, origin - parent_origin, float(c.pto_stiffness),
+                      float(c.pto_damping), slice(dof, dof + width), coordinate, origin)  # fmt: skip
+        groups.append(group)
+        dof += width
+    system = System(groups, order, water, scene.fluid)
+    x_free = np.array([g.origin for g in groups if g.kind == "free"]).reshape(-1, 3)
+    q_free = np.tile([1.0, 0.0, 0.0, 0.0], (n_free, 1))
+    rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints))
+    return system, replace(rest, v=_projected(system, rest, starts))
+
+
+def _projected(system: System, s: SystemState, starts) -> np.ndarray:
+    """The generalised velocities nearest the bodies' given twists in the kinetic-energy metric: M_q^-1 sum_b J_b^T M_b nu_b."""
+    if not system.n_dofs:
+        return np.zeros(0)
+    pose = system.pose(s)
+    rhs = np.zeros(system.n_dofs)
+    for m, R, J, st in zip(system.members, pose.R, pose.J, starts):
+        omega = R @ ((R.T @ st.L_world) / m.body.inertia)
+        rhs += J.T @ _body_mass(m.body, R) @ np.concatenate([st.u_world, omega])
+    return np.linalg.solve(system.mass_matrix(pose), rhs)
+
+
+def body_frames(system: System, s: SystemState) -> list[dict]:
+    """Each body's pose and twist: x, q (w, x, y, z), u, omega, world frame."""
+    pose = system.pose(s)
+    out = []
+    for m, x, R, J in zip(system.members, pose.x, pose.R, pose.J):
+        nu = J @ s.v
+        out.append({"name": m.name, "x": x, "q": normalized(matrix_to_quat(R)), "u": nu[:3], "omega": nu[3:]})
+    return out
+
+
+
+class Assembly:
+    """A running scene of several bodies: the system, its state and step; stops loudly on a non-finite state.
+    The counterpart of simulation.Simulation for [[bodies]] (numpy only for now)."""
+
+    def __init__(self, scene: SceneConfig):
+        self.scene = scene
+        self.system, self.state = build(scene)
+        self.dt = float(scene.step.dt)
+        self.notes: list[str] = []
+        if scene.step.integrator != "implicit":
+            self.notes.append(f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used")
+        self.notes.append("several bodies have no compiled twin yet: the scene runs on the numpy reference")
+        self._frame: tuple | None = None
+
+    def step(self, n: int = 1) -> SystemState:
+        from .errors import SimulationDiverged
+
+        for _ in range(n):
+            new = self.system.step(self.state, self.dt)
+            if not new.is_finite():
+                raise SimulationDiverged(f"the state became non-finite at t = {self.state.t + self.dt:.6g} s: try a smaller time step")
+            self.state = new
+        return self.state
+
+    def frame(self) -> AssemblyFrame:
+        if self._frame is None or self._frame[0] is not self.state:
+            s = self.state
+            joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
+                       float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
+            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s)))
+        return self._frame[1]
+
+    def columns(self) -> list[str]:
+        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the energies."""
+        cols = ["t"]
+        for m in self.system.members:
+            cols += [f"{m.name}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
+        for g in self.system.joints:
+            cols += [f"{g.name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
+        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total"]
+
+
+@dataclass(frozen=True, eq=False)
+class AssemblyFrame:
+    t: float
+    bodies: list
+    """Each body's dict: name, x, q, u, omega (body_frames)."""
+    joints: list
+    """Each joint's (name, theta, rate, P_pto, E_pto)."""
+    energies: dict
+
+    @property
+    def E_pto(self) -> float:
+        return sum(j[4] for j in self.joints)
+
+    @property
+    def E_total(self) -> float:
+        """Kinetic, gravity, hydrostatic and the take-offs' springs, J (E_total + E_pto is conserved without damping, drag and waves)."""
+        return sum(self.energies.values())
+
+    def row(self) -> list[float]:
+        out = [self.t]
+        for b in self.bodies:
+            out += [*b["x"], *b["q"], *b["u"], *b["omega"]]
+        for _, *values in self.joints:
+            out += values
+        e = self.energies
+        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total]

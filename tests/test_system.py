@@ -1,0 +1,272 @@
+"""Several bodies on joints (sim/system.py): checked against one-body runs, closed forms and the energy balance."""
+
+import dataclasses
+import textwrap
+
+import numpy as np
+import pytest
+
+from sim.body import Body
+from sim.config import ConfigError, load_scene
+from sim.forces import Model
+from sim.simulation import Simulation
+from sim.system import Member, System, body_frames, build
+
+
+def scene_file(tmp_path, text: str, name: str = "system.toml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return load_scene(str(path))
+
+
+SLIDE = """
+    [fluid]
+    forces = "panels"
+    damping = 50.0
+    [waves]
+    kind = "regular"
+    height = 0.1
+    period = 2.2
+    [[bodies]]
+    name = "cube"
+    shape = "cube"
+    density = 600.0
+    position = [0.0, 0.0, 0.1]
+    joint = "prismatic"
+    axis = [0.0, 0.0, 1.0]
+    pto_damping = 2000.0
+    pto_stiffness = 500.0
+    [step]
+    dt = 0.01
+"""
+
+
+def test_one_body_on_a_slide_steps_as_the_joint_to_the_world(tmp_path):
+    """The same scheme as joints.py: one body on a world slide, in waves with damping and a take-off, gives
+    the world joint's trajectory and absorbed energy to round-off."""
+    scene = scene_file(tmp_path, SLIDE)
+    system, s = build(scene)
+    e = scene.bodies[0]
+    sim = Simulation(dataclasses.replace(scene, bodies=(), body=e.body, initial=e.initial, constraint=e.constraint), backend="numpy")
+    for _ in range(200):
+        s = system.step(s, 0.01)
+    sim.step(200)
+    assert abs(s.theta[0] - sim.joint.coordinate(sim.state)) < 1e-12
+    assert abs(s.v[0] - sim.joint.rate(sim.body, sim.state)) < 1e-11
+    assert s.absorbed[0] == pytest.approx(sim.pto_energy, rel=1e-10) and sim.pto_energy > 10.0
+
+
+PAIR = """
+    [fluid]
+    forces = "panels"
+    damping = 200.0
+    [waves]
+    kind = "regular"
+    height = 0.2
+    period = 2.5
+    direction = 30.0
+    [[bodies]]
+    name = "hull"
+    shape = "box"
+    extents = [1.0, 0.6, 0.5]
+    density = 500.0
+    position = [0.0, 0.0, 0.0]
+    omega = [0.3, -0.2, 0.5]
+    velocity = [0.1, 0.0, 0.2]
+    [[bodies]]
+    name = "outrigger"
+    parent = "hull"
+    joint = "fixed"
+    shape = "cube"
+    size = 0.4
+    density = 300.0
+    position = [0.2, 0.9, 0.05]
+    orientation = [0.9659258262890683, 0.0, 0.0, 0.25881904510252074]
+"""
+
+
+def merged(members: list[Member], water, fluid) -> Member:
+    """One body of the members' surfaces, mass and inertia (parallel axes), about their common centre of mass."""
+    mass = sum(m.body.mass for m in members)
+    com = sum(m.body.mass * m.offset for m in members) / mass
+    tensor = np.zeros((3, 3))
+    for m in members:
+        c = m.offset - com
+        tensor += m.rotation @ np.diag(m.body.inertia) @ m.rotation.T + m.body.mass * (c @ c * np.eye(3) - np.outer(c, c))
+    moments, axes = np.linalg.eigh(tensor)
+    if np.linalg.det(axes) < 0:
+        axes[:, 2] *= -1
+
+    def world(m, a):  # body-frame points of a member in the merged body's frame
+        return (a @ m.rotation.T + (m.offset - com)) @ axes
+
+    faces, count = [], 0
+    for m in members:
+        faces.append(m.body.mesh_faces + count)
+        count += len(m.body.mesh_vertices)
+    body = Body(np.vstack([world(m, m.body.r_body) for m in members]), np.vstack([m.body.n_body @ m.rotation.T @ axes for m in members]),
+                np.concatenate([m.body.area for m in members]), mass, moments, sum(m.body.volume for m in members), 2.0,
+                np.vstack([world(m, m.body.mesh_vertices) for m in members]), np.vstack(faces), np.array([1.0, 0, 0, 0]),
+                np.vstack([world(m, m.body.cell_corners.reshape(-1, 3)).reshape(-1, 4, 3) for m in members]), "merged", True)  # fmt: skip
+    return Member("merged", Model(body, water, fluid), com, axes)
+
+
+def test_a_welded_pair_moves_as_one_body_of_their_combined_mass_and_inertia(tmp_path):
+    """Two bodies on a fixed joint, turning and drifting in oblique waves with damping, against one body made of
+    both surfaces with the combined mass and inertia: the same trajectory to 1e-9 m over 10 s."""
+    scene = scene_file(tmp_path, PAIR)
+    system, s = build(scene)
+    assert len(system.groups) == 1 and system.n_dofs == 6
+    group = system.groups[0]
+    one = merged(list(group.members), system.water, system.members[0].model.fluid)
+    single = System([dataclasses.replace(group, members=(one,))], [(0, 0)], system.water, system.fluid)
+    r = s
+    for _ in range(1000):
+        s, r = system.step(s, 0.01), single.step(r, 0.01)
+    assert np.abs(s.x_free - r.x_free).max() < 1e-9
+    assert np.abs(s.q_free - r.q_free).max() < 1e-9
+    moved = body_frames(system, s)[1]["x"] - np.array([0.2, 0.9, 0.05])
+    turned = 2 * np.arccos(min(1.0, abs(s.q_free[0, 0])))
+    assert np.linalg.norm(moved) > 0.1 and turned > 0.1  # it moved and turned: the check is not of a body at rest
+
+
+CHAIN = """
+    [fluid]
+    forces = "panels"
+    [[bodies]]
+    name = "barge"
+    shape = "box"
+    extents = [2.0, 1.0, 0.5]
+    density = 500.0
+    position = [0.0, 0.0, 0.05]
+    omega = [0.1, 0.3, 0.0]
+    velocity = [0.2, 0.0, 0.1]
+    [[bodies]]
+    name = "flap"
+    parent = "barge"
+    joint = "revolute"
+    axis = [0.0, 1.0, 0.0]
+    pivot = [-0.6, 0.0, 0.0]
+    pto_damping = 150.0
+    pto_stiffness = 80.0
+    shape = "box"
+    extents = [1.2, 0.8, 0.2]
+    density = 400.0
+    position = [1.6, 0.0, 0.0]
+    omega = [0.0, -0.5, 0.0]
+    [[bodies]]
+    name = "buoy"
+    parent = "barge"
+    joint = "prismatic"
+    axis = [0.0, 0.0, 1.0]
+    pto_damping = 400.0
+    shape = "cube"
+    size = 0.4
+    density = 300.0
+    position = [-1.3, 0.0, 0.1]
+"""
+
+
+def run_chain(scene, dt: float, t_end: float):
+    system, s = build(scene)
+    e0 = sum(system.energies(s).values())
+    frames = []
+    for _ in range(round(t_end / dt)):
+        s = system.step(s, dt)
+        frames.append(body_frames(system, s))
+    return system, s, e0, frames
+
+
+def test_energy_closes_with_the_take_offs_to_second_order(tmp_path):
+    """A barge with a hinged flap and a sliding buoy, both with take-offs, rocking in still water without damping:
+    kinetic + gravity + hydrostatic + spring energy plus what the take-offs absorbed stays constant, its error
+    falls as dt^2."""
+    scene = scene_file(tmp_path, CHAIN)
+    errors = []
+    for dt in (0.02, 0.01):
+        system, s, e0, _ = run_chain(scene, dt, 2.0)
+        errors.append(abs(sum(system.energies(s).values()) + s.absorbed.sum() - e0))
+        assert s.absorbed.min() > 0.05  # both take-offs worked
+    assert 3.0 < errors[0] / errors[1] < 5.5
+    assert errors[1] < 2e-3 * e0
+
+
+def test_joints_hold_to_round_off(tmp_path):
+    """Through the bodies' own poses: the flap's hinge point stays on the barge's, its axis the barge's; the buoy
+    stays on its slide (the line through its start, fixed in the barge) without turning against it."""
+    scene = scene_file(tmp_path, CHAIN)
+    _, _, _, frames = run_chain(scene, 0.02, 2.0)
+    from sim.rotation import quat_to_matrix
+
+    barge0, flap0, buoy0, pivot0 = np.array([0.0, 0.0, 0.05]), np.array([1.6, 0.0, 0.0]), np.array([-1.3, 0.0, 0.1]), np.array([1.0, 0.0, 0.0])
+    worst = 0.0
+    for barge, flap, buoy in frames:
+        Rb, Rf = quat_to_matrix(barge["q"]), quat_to_matrix(flap["q"])  # both start unturned
+        on_barge, on_flap = barge["x"] + Rb @ (pivot0 - barge0), flap["x"] + Rf @ (pivot0 - flap0)
+        worst = max(worst, np.abs(on_barge - on_flap).max(), np.abs(Rb[:, 1] - Rf[:, 1]).max())
+        slide = Rb.T @ (buoy["x"] - barge["x"]) - (buoy0 - barge0)  # along the barge's z only
+        worst = max(worst, abs(slide[0]), abs(slide[1]), np.abs(Rb - quat_to_matrix(buoy["q"])).max())
+    assert worst < 1e-12
+    assert abs(frames[-1][1]["omega"] - frames[-1][0]["omega"]).max() > 0.01  # the hinge did turn
+
+
+def sim_cli(*args: str):
+    import os
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "sim", *args], capture_output=True, text=True, timeout=120, check=False,
+                          env={**os.environ, "FLOATSIM_BACKEND": "numpy"})  # fmt: skip
+
+
+def test_run_writes_every_body_and_joint_to_csv(tmp_path):
+    """`python -m sim run` on a [[bodies]] scene: a column per body's pose and twist and per joint, the joints
+    holding in the rows (the float slides on the spar's vertical: same x, y), and the energy balance in the summary."""
+    (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDE.replace('name = "cube"', 'name = "spar"') + """
+        [[bodies]]
+        name = "float"
+        parent = "spar"
+        joint = "prismatic"
+        axis = [0.0, 0.0, 1.0]
+        pto_damping = 300.0
+        shape = "box"
+        extents = [0.6, 0.6, 0.3]
+        density = 400.0
+        position = [0.0, 0.0, 0.8]
+    """))  # fmt: skip
+    out = tmp_path / "pair.csv"
+    done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--t-end", "3", "--every", "10", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    header = out.read_text().splitlines()[0].split(",")
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert header[:4] == ["t", "spar_x", "spar_y", "spar_z"] and "float_P_pto" in header and header[-1] == "E_total"
+    col = {name: data[:, i] for i, name in enumerate(header)}
+    assert len(data) == 31 and np.isfinite(data).all()
+    assert np.abs(col["float_x"] - col["spar_x"]).max() < 1e-12 and np.abs(col["float_y"]).max() < 1e-12
+    rel = col["float_z"] - col["spar_z"] - 0.7
+    np.testing.assert_allclose(rel, col["float_theta"], atol=1e-12)  # its coordinate is the slide against the spar
+    np.testing.assert_allclose(col["float_P_pto"], 300.0 * col["float_rate"] ** 2, rtol=1e-9)
+    assert col["float_E_pto"][-1] > 0 and "2 bodies" in done.stdout and "no compiled twin" in done.stderr
+
+
+@pytest.mark.parametrize(("entry", "message"), [
+    ('name = "a"\nparent = "b"\njoint = "fixed"', "parent 'b' is not a body listed before it"),
+    ('name = "a"\nparent = "world"\njoint = "free"\n[[bodies]]\nname = "a"', "body names must be distinct"),
+    ('name = "a"\nparent = "world"\njoint = "free"\n[[bodies]]\nname = "b"\nparent = "a"', "a free body has no parent"),
+    ('name = "a"\njoint = "hinge"', "joint must be one of"),
+    ('name = "a"\nforces = "magic"', "forces must be one of"),
+    ('name = "a"\ncolour = "red"', "unknown key 'colour'"),
+    ('shape = "cube"', "give the body a name"),
+])  # fmt: skip
+def test_bad_bodies_are_one_line_errors(tmp_path, entry, message):
+    (tmp_path / "bad.toml").write_text("[[bodies]]\n" + entry + "\n")
+    done = sim_cli("run", "--scene", str(tmp_path / "bad.toml"))
+    assert done.returncode == 2 and message in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+def test_one_body_flags_do_not_apply_to_several_bodies(tmp_path):
+    (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDE))
+    done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--density", "300")
+    assert done.returncode == 2 and "[body] (and their flags) do not apply" in done.stderr
+    with pytest.raises(ConfigError, match="radiation with \\[\\[bodies\\]\\]"):
+        scene_file(tmp_path, SLIDE.replace("damping = 50.0", 'damping = 50.0\n    radiation = "bem"'), "rad.toml")

@@ -61,7 +61,8 @@ class Coefficients:
     panels: int
     """How many panels the wet surface had."""
     center: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
-    """(3,) the point the rotations are about (the centre of mass at rest), world frame, m."""
+    """(3,) the point the rotations are about (the centre of mass at rest), world frame, m; several bodies: (k, 3),
+    one per body (their dofs follow one another: 6 per body, the matrices 6k x 6k)."""
     headings: np.ndarray | None = None
     """(m,) wave headings beta of the excitation, rad, increasing in [0, 2 pi); None: not solved."""
     diffraction: np.ndarray | None = None
@@ -110,41 +111,58 @@ def check(c: Coefficients) -> None:
     w, A, B, Ainf = (np.asarray(a) for a in (c.omega, c.added_mass, c.damping, c.added_mass_inf))
     if w.ndim != 1 or len(w) < 3:
         raise ValueError(f"{w.size} frequencies, need at least 3")
-    n = len(w)
-    if A.shape != (n, 6, 6) or B.shape != (n, 6, 6) or Ainf.shape != (6, 6):
-        raise ValueError(f"added mass {A.shape}, damping {B.shape}, A_inf {Ainf.shape}: need ({n}, 6, 6) for {n} frequencies and (6, 6)")
+    n, d = len(w), (A.shape[1] if A.ndim == 3 else 0)
+    if d < 6 or d % 6 or A.shape != (n, d, d) or B.shape != (n, d, d) or Ainf.shape != (d, d):
+        raise ValueError(f"added mass {A.shape}, damping {B.shape}, A_inf {Ainf.shape}: need ({n}, 6k, 6k) for {n} frequencies and (6k, 6k), "
+                         "k bodies")  # fmt: skip
     if not all(np.isrealobj(a) and a.dtype.kind in "fiu" for a in (w, A, B, Ainf)):
         raise ValueError("not arrays of real numbers")
     if not all(np.isfinite(a).all() for a in (w, A, B, Ainf)) or not (math.isfinite(c.rho) and c.rho > 0 and c.depth > 0):
         raise ValueError("numbers that are not finite (or rho, depth not positive)")
     if w[0] <= 0 or np.any(np.diff(w) <= 0):
         raise ValueError("frequencies not positive and increasing")
-    diag = np.concatenate([np.diagonal(A, axis1=1, axis2=2), np.diag(Ainf)[None]])
-    if diag[:, :3].min() <= 0 or diag[:, 3:].min() < -1e-4 * diag.max():
+    diag = np.concatenate([np.diagonal(A, axis1=1, axis2=2), np.diag(Ainf)[None]]).reshape(n + 1, d // 6, 6)
+    if diag[..., :3].min() <= 0 or diag[..., 3:].min() < -1e-4 * diag.max():
         raise ValueError(f"added mass with a diagonal entry <= 0 ({diag.min():.3g})")
     scale = np.abs(B).max(axis=(1, 2))
     if np.any(np.abs(B - B.transpose(0, 2, 1)).max(axis=(1, 2)) > 0.1 * scale):
         raise ValueError("damping matrices not symmetric")
     if np.any(np.linalg.eigvalsh(0.5 * (B + B.transpose(0, 2, 1))).min(axis=1) < -0.02 * scale):
         raise ValueError("damping not positive semi-definite (the body would draw energy from the waves)")
-    if np.shape(c.center) != (3,) or not np.isfinite(c.center).all():
-        raise ValueError("the centre of rotation is not three finite numbers")
+    if np.shape(c.center) not in ((3,), (d // 6, 3)) or not np.isfinite(c.center).all():
+        raise ValueError("the centre of rotation is not three finite numbers (per body)")
     if c.headings is not None:
         beta = np.asarray(c.headings)
         if beta.ndim != 1 or not len(beta) or np.any(np.diff(beta) <= 0) or beta[0] < 0 or beta[-1] >= 2 * math.pi:
             raise ValueError("wave headings not increasing in [0, 2 pi)")
         for name in ("diffraction", "froude_krylov"):
             X = np.asarray(getattr(c, name))
-            if X.shape != (n, len(beta), 6) or X.dtype.kind != "c" or not np.isfinite(X).all():
-                raise ValueError(f"{name} force {X.shape}: need finite complex numbers, ({n}, {len(beta)}, 6)")
+            if X.shape != (n, len(beta), d) or X.dtype.kind != "c" or not np.isfinite(X).all():
+                raise ValueError(f"{name} force {X.shape}: need finite complex numbers, ({n}, {len(beta)}, {d})")
 
 
-def default_frequencies(length: float, g: float = 9.81, n: int = 60) -> np.ndarray:
+def passive(A: np.ndarray, B: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(A, B, change): the added mass made symmetric, the damping the nearest symmetric positive semi-definite matrix
+    (rotations scaled by the bodies' size, so units weigh alike), and the largest change of B relative to each
+    frequency's largest entry. The physical ones are both; coaxial bodies' damping is singular (they radiate the
+    same wave pattern), so the solve's small errors break it."""
+    d = B.shape[1]
+    S = np.diag(np.tile([1.0, 1.0, 1.0, 1.0 / length, 1.0 / length, 1.0 / length], d // 6))
+    Bs = S @ (0.5 * (B + B.transpose(0, 2, 1))) @ S
+    lam, V = np.linalg.eigh(Bs)
+    Si = np.linalg.inv(S)
+    fixed = Si @ ((V * np.maximum(lam, 0.0)[:, None, :]) @ V.transpose(0, 2, 1)) @ Si
+    change = float((np.abs(fixed - B).max(axis=(1, 2)) / np.maximum(np.abs(B).max(axis=(1, 2)), 1e-300)).max())
+    return 0.5 * (A + A.transpose(0, 2, 1)), fixed, change
+
+
+def default_frequencies(length: float, g: float = 9.81, n: int = 60, min_period: float | None = None) -> np.ndarray:
     """A grid for the radiation kernel of a body of size `length`, uniform in omega: from where its
     waves are 100 times longer than it to where they are half as long (the default panels, length/8,
-    still resolve them four times; the damping of heave and of the rotations has died out there)."""
+    still resolve them four times; the damping of heave and of the rotations has died out there), or
+    up to the period `min_period`."""
     lo, hi = math.sqrt(2 * math.pi * g / (100 * length)), math.sqrt(2 * math.pi * g / (0.5 * length))
-    return np.linspace(lo, hi, n)
+    return np.linspace(lo, hi if min_period is None else 2 * math.pi / min_period, n)
 
 
 HEADINGS = np.radians(np.arange(0.0, 360.0, 15.0))
@@ -195,10 +213,29 @@ def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float =
     cached). A file that fails `check` counts as absent, with a note; one without the excitation asked for is solved again."""
     vertices = np.asarray(vertices, float)
     size = float(np.ptp(vertices, axis=0).max())
-    panel = panel or size / 8
-    wv, wf = wet_mesh(vertices, faces, panel)
+    wv, wf = wet_mesh(vertices, faces, panel or size / 8)
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     key = cache_key(wv, wf, rho, g, depth, omega, center)
+    return _stored_or_solved(key, excitation, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None))
+
+
+def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf, omega: np.ndarray | None = None,
+                        panel: float | None = None, progress: bool = True, excitation: bool = False) -> Coefficients:  # fmt: skip
+    """The same for several bodies solved together (their waves act on one another): `parts` = [(vertices,
+    faces, center)] at rest, world frame; the matrices are 6k x 6k, body after body."""
+    if len(parts) == 1:
+        return radiation_coefficients(*parts[0][:2], rho, g, depth, omega, panel, progress, parts[0][2], excitation)
+    size = max(float(np.ptp(np.asarray(v, float), axis=0).max()) for v, _, _ in parts)
+    wet = [(*wet_mesh(np.asarray(v, float), f, panel or size / 8), np.asarray(c, float)) for v, f, c in parts]
+    omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
+    h = hashlib.sha256(b"bodies")
+    for wv, wf, c in wet:
+        h.update(cache_key(wv, wf, rho, g, depth, omega, c).encode())
+    return _stored_or_solved(h.hexdigest()[:20], excitation, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if excitation else None))
+
+
+def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
+    """The shipped file or the user's cached one for `key`, else `solve_now()` (kept in the cache)."""
     cached = user_cache() / f"{key}.npz"
     bad, partial = [], None
     for path in (SHIPPED / f"{key}.npz", cached):
@@ -217,7 +254,7 @@ def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float =
             import capytaine  # noqa: F401  (said before a solve of minutes starts, or instead of it)
 
             note(f"note: {bad[0]}: solving again" if bad else "note: the stored solve for this body has no wave excitation: solving again with it")
-        result = solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None)
+        result = solve_now()
     except (ImportError, MissingSolver):
         if partial is not None:
             raise MissingSolver(f"{what} for this body needs Capytaine (the stored solve has radiation only): pip install -e \".[bem]\"") from None
@@ -243,9 +280,15 @@ def keep(result: Coefficients, path: Path) -> None:
 
 def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True,
           center=(0.0, 0.0, 0.0), headings: np.ndarray | None = None) -> Coefficients:  # fmt: skip
-    """Capytaine on the wet mesh (vertices and triangles under z = 0): radiation in the six rigid
-    modes about `center` at every omega and at infinity, with a lid against irregular frequencies;
-    with `headings`, the diffraction problem (body held still) and the Froude-Krylov force for each."""
+    """Capytaine on one wet mesh (vertices and triangles under z = 0): `solve_parts` of one body."""
+    return solve_parts([(vertices, faces, np.asarray(center, float))], rho, g, depth, omega, progress, headings)
+
+
+def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True,
+                headings: np.ndarray | None = None) -> Coefficients:  # fmt: skip
+    """Capytaine on the wet meshes [(vertices, faces, center)] together: radiation in each body's six rigid
+    modes about its centre at every omega and at infinity, with a lid against irregular frequencies; with
+    `headings`, the diffraction problem (the bodies held still) and the Froude-Krylov force for each."""
     try:
         import capytaine as cpt
     except ImportError:
@@ -255,33 +298,46 @@ def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: 
     from capytaine.bem.airy_waves import froude_krylov_force
 
     logging.getLogger("capytaine").setLevel(logging.ERROR)  # its resolution warnings concern the top of the grid, where B has died out
-    center = tuple(float(c) for c in center)
-    mesh = cpt.Mesh(vertices, faces)
-    lid = mesh.generate_lid(z=-0.01 * float(np.ptp(vertices[:, 2])))  # just below the water line, as Capytaine advises
-    body = cpt.FloatingBody(mesh=mesh, lid_mesh=lid, dofs=cpt.rigid_body_dofs(rotation_center=center), center_of_mass=center)
+    bodies, centers, panels = [], [], 0
+    for k, (vertices, faces, center) in enumerate(parts):
+        center = tuple(float(c) for c in center)
+        mesh = cpt.Mesh(vertices, faces)
+        lid = mesh.generate_lid(z=-0.01 * float(np.ptp(vertices[:, 2])))  # just below the water line, as Capytaine advises
+        bodies.append(cpt.FloatingBody(mesh=mesh, lid_mesh=lid, dofs=cpt.rigid_body_dofs(rotation_center=center), center_of_mass=center,
+                                       name=f"b{k}"))  # fmt: skip
+        centers.append(center)
+        panels += int(mesh.nb_faces)
+    body = bodies[0] if len(bodies) == 1 else bodies[0].join_bodies(*bodies[1:])
+    names = list(DOFS) if len(bodies) == 1 else [f"b{k}__{d}" for k in range(len(bodies)) for d in DOFS]
+    n = len(names)
     solver = cpt.BEMSolver()
     water = {"rho": rho, "g": g, "water_depth": depth}
     freqs = [*omega, math.inf]
     betas = [] if headings is None else [float(b) for b in headings]
-    problems = [cpt.RadiationProblem(body=body, radiating_dof=dof, omega=w, **water) for w in freqs for dof in DOFS]
+    problems = [cpt.RadiationProblem(body=body, radiating_dof=dof, omega=w, **water) for w in freqs for dof in names]
     problems += [cpt.DiffractionProblem(body=body, wave_direction=b, omega=w, **water) for w in omega for b in betas]
     results = solver.solve_all(problems, progress_bar=progress)
-    A = np.zeros((len(freqs), 6, 6))
-    B = np.zeros((len(freqs), 6, 6))
-    Xd = np.zeros((len(omega), len(betas), 6), complex)
+    A = np.zeros((len(freqs), n, n))
+    B = np.zeros((len(freqs), n, n))
+    Xd = np.zeros((len(omega), len(betas), n), complex)
     Xfk = np.zeros_like(Xd)
     for r in results:
         i = freqs.index(r.omega)
         if isinstance(r.problem, cpt.DiffractionProblem):
             j = betas.index(r.problem.wave_direction)
             fk = froude_krylov_force(r.problem)
-            Xd[i, j] = [r.forces[name] for name in DOFS]
-            Xfk[i, j] = [fk[name] for name in DOFS]
+            Xd[i, j] = [r.forces[name] for name in names]
+            Xfk[i, j] = [fk[name] for name in names]
             continue
-        j = DOFS.index(r.radiating_dof)
-        for k, name in enumerate(DOFS):
+        j = names.index(r.radiating_dof)
+        for k, name in enumerate(names):
             A[i, k, j] = r.added_masses[name]
             B[i, k, j] = r.radiation_dampings[name]
     excitation = {} if headings is None else {"headings": np.asarray(betas), "diffraction": Xd, "froude_krylov": Xfk}
-    return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), int(mesh.nb_faces), np.asarray(center),
-                        **excitation)  # fmt: skip
+    center = np.asarray(centers[0] if len(centers) == 1 else centers, float)
+    if len(parts) > 1:
+        A, B, change = passive(A, B, max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts))
+        if change > 0.01:
+            note(f"note: the bodies' radiation damping made symmetric and passive (their coupling breaks both a little in the solve): "
+                 f"entries changed by up to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
+    return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), panels, center, **excitation)

@@ -48,6 +48,9 @@ FLUID = (
           "with each cell clipped at the water line: continuous wetting) or panels (exactly over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
     Param("fluid", "radiation", "none", "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
           "boundary-element solve about the rest pose, Cummins' equation)", kind="choice", choices=("none", "bem"), label="Radiation", gui=()),
+    Param("fluid", "bem_min_period", None, "Radiation: the shortest wave period of the BEM solve's frequency grid (unset: waves half as "
+          "long as the body); below a gap's sloshing resonance (a float around a spar) it keeps the solve clear of it", "s", lo=0.0,
+          lo_open=True, hi=1e3, kind="optional"),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (
@@ -306,8 +309,6 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
                           "do not apply; set them in the [[bodies]] entries")  # fmt: skip
     if moored(scene):
         raise ConfigError("mooring lines on a scene with [[bodies]] are not modelled yet: moor a one-body scene")
-    if scene.fluid.radiation != "none":
-        raise ConfigError("radiation with [[bodies]] needs the multi-body BEM solve, not there yet: set [fluid] radiation = \"none\"")
     return tuple(entries)
 
 

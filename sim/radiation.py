@@ -43,13 +43,13 @@ class EntryFit:
 
 @dataclass(frozen=True, eq=False)
 class RadiationMemory:
-    """Every fitted entry stacked: x' = F x + G nu, memory force (6,) = -H x."""
+    """Every fitted entry stacked: x' = F x + G nu, memory force (d,) = -H x (d = 6 per body)."""
 
     F: np.ndarray
     G: np.ndarray
-    """(states, 6)"""
+    """(states, d)"""
     H: np.ndarray
-    """(6, states)"""
+    """(d, states)"""
     entries: tuple[EntryFit, ...]
     added_mass_inf: np.ndarray
 
@@ -58,8 +58,9 @@ class RadiationMemory:
         return self.F.shape[0]
 
     def response(self, omega: np.ndarray) -> np.ndarray:
-        """(n, 6, 6) K(i omega) of the whole fitted system."""
-        out = np.zeros((len(omega), 6, 6), complex)
+        """(n, d, d) K(i omega) of the whole fitted system (d = 6 per body)."""
+        d = self.G.shape[1]
+        out = np.zeros((len(omega), d, d), complex)
         for e in self.entries:
             out[:, e.row, e.col] = e.response(omega)
         return out
@@ -121,13 +122,14 @@ def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, length: 
     (i, j) when both its diagonals matter and its peak is above 5 % of sqrt(B_ii B_jj). So no coupling
     is fitted without the damping that keeps the whole passive."""
     K = transfer(c)
+    d = K.shape[1]
     peak = np.abs(c.damping).max(axis=0)
     diag = np.diag(peak)
-    scale = diag[:3].max()
-    keep = diag > 1e-3 * scale * np.array([1.0, 1.0, 1.0, length**2, length**2, length**2])
+    scale = diag.reshape(-1, 6)[:, :3].max()
+    keep = diag > 1e-3 * scale * np.tile([1.0, 1.0, 1.0, length**2, length**2, length**2], d // 6)
     entries = []
-    for i in range(6):
-        for j in range(6):
+    for i in range(d):
+        for j in range(d):
             if not (keep[i] and keep[j]) or (i != j and peak[i, j] <= 0.05 * np.sqrt(diag[i] * diag[j])):
                 continue
             best = None
@@ -142,7 +144,7 @@ def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, length: 
                     break
             entries.append(best)
     n = sum(len(e.G) for e in entries)
-    F, G, H = np.zeros((n, n)), np.zeros((n, 6)), np.zeros((6, n))
+    F, G, H = np.zeros((n, n)), np.zeros((n, d)), np.zeros((d, n))
     k = 0
     for e in entries:
         m = len(e.G)
@@ -253,14 +255,16 @@ def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=Non
     """The body's radiation model about its rest pose at orientation R0 (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame. With `water` (waves),
     also the diffraction force in that sea, referenced to the rest position `rest_xy`."""
-    from .bem import radiation_coefficients
+    from .bem import default_frequencies, radiation_coefficients
     from .diffraction import Diffraction
     from .equilibrium import rest_height
     from .errors import ConfigError
 
     z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
-    c = radiation_coefficients(body.mesh_vertices @ R0.T + [0.0, 0.0, z], body.mesh_faces, fluid.rho, fluid.g, progress=progress,
-                               center=(0.0, 0.0, z), excitation=water is not None)  # fmt: skip
+    vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
+    omega = None if fluid.bem_min_period is None else default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period)
+    c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
+                               excitation=water is not None)  # fmt: skip
     memory = fit_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:

@@ -34,7 +34,7 @@ a compiled twin, the viewer.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.linalg import expm
@@ -108,6 +108,10 @@ class SystemState:
     """(d,) the generalised velocities."""
     absorbed: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """(j,) the energy each take-off has absorbed so far, J."""
+    memory: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """The radiation memory's states (empty without radiation)."""
+    E_rad: float = 0.0
+    """Energy the radiated waves have carried away so far, J."""
 
     def is_finite(self) -> bool:
         return bool(all(np.isfinite(a).all() for a in (self.x_free, self.q_free, self.theta, self.v)))
@@ -123,11 +127,80 @@ class Pose:
     """(6, d) each body's twist (u at its centre of mass, omega), world frame, per unit v."""
 
 
+class SystemRadiation:
+    """The radiation of several bodies solved together (Capytaine, 6 dofs per body about its starting centre of
+    mass): the added mass at infinite frequency and the memory (Cummins), coupling the bodies, and the
+    diffraction force on each. Linear about the starting poses (start the bodies at rest); as for one body,
+    the coefficients turn with each body (its block's axes ride with it)."""
+
+    def __init__(self, added_mass_inf: np.ndarray, memory, R0: list, diffraction=None, coefficients=None):
+        self.coefficients = coefficients
+        """bem.Coefficients of the solve (6k x 6k): for the frequency domain (system_frequency.py)."""
+        self.added_mass_inf = 0.5 * (added_mass_inf + added_mass_inf.T)
+        self.F, self.G, self.H = memory.F, memory.G, memory.H
+        self.memory = memory
+        self.R0 = R0
+        self.diffraction = diffraction
+        self._steps: dict = {}
+
+    @classmethod
+    def of(cls, models: list, starts: list, fluid, water=None) -> SystemRadiation:
+        from .bem import bodies_coefficients, default_frequencies
+        from .diffraction import Diffraction
+        from .radiation import fit_memory
+
+        parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
+        size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
+        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period)
+        c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
+        memory = fit_memory(c, length=max(m.body.radius for m in models))
+        return cls(c.added_mass_inf, memory, [s.R_world_body for s in starts], None if water is None else Diffraction(c, water, (0.0, 0.0)), c)
+
+    @property
+    def states(self) -> int:
+        return self.F.shape[0]
+
+    def frames(self, pose: Pose) -> np.ndarray:
+        """(6k, 6k) block diagonal: each body's turn from its starting pose, on its force and its moment."""
+        T = np.zeros((6 * len(pose.R), 6 * len(pose.R)))
+        for b, (R, R0) in enumerate(zip(pose.R, self.R0)):
+            T[6 * b : 6 * b + 3, 6 * b : 6 * b + 3] = T[6 * b + 3 : 6 * b + 6, 6 * b + 3 : 6 * b + 6] = R @ R0.T
+        return T
+
+    def load(self, T: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
+        """(6k,) the memory's loads (-mu, turned with the bodies) and the diffraction force, world frame."""
+        f = -T @ (self.H @ x)
+        return f if self.diffraction is None else f + self.diffraction.force(t)
+
+    def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
+        """The memory after dt with a constant twist (in the fit's axes), exactly."""
+        if dt not in self._steps:
+            n, d = self.states, self.G.shape[1]
+            aug = np.zeros((n + d, n + d))
+            aug[:n, :n], aug[:n, n:] = self.F, self.G
+            E = expm(aug * dt)
+            self._steps = {dt: (E[:n, :n], E[:n, n:])}
+        Phi, Gamma = self._steps[dt]
+        return Phi @ x + Gamma @ nu_fit
+
+    def drift(self, system: System, before: SystemState, after: SystemState, h: float) -> SystemState:
+        """The memory over a drift at the velocities v: driven by the twists in the fit's axes, averaged over both
+        ends; the radiated energy h nu . mu likewise (as joints.py does for one body)."""
+        p0, p1 = system.pose(before), system.pose(after)
+        T0, T1 = self.frames(p0), self.frames(p1)
+        nu0, nu1 = np.vstack(p0.J) @ before.v, np.vstack(p1.J) @ before.v
+        memory = self.advance(before.memory, 0.5 * (T0.T @ nu0 + T1.T @ nu1), h)
+        power = 0.5 * (nu0 @ T0 @ (self.H @ before.memory) + nu1 @ T1 @ (self.H @ memory))
+        return replace(after, memory=memory, E_rad=before.E_rad + h * power)
+
+
 class System:
     """The static description: groups in tree order, each body's model. `bodies[i]` follows the scene's order."""
 
-    def __init__(self, groups: list[Group], order: list[tuple[int, int]], water, fluid):
+    def __init__(self, groups: list[Group], order: list[tuple[int, int]], water, fluid, radiation: SystemRadiation | None = None):
         self.groups, self.water, self.fluid = groups, water, fluid
+        self.radiation = radiation
+        """The bodies' radiation together (added mass, memory and diffraction, 6 dofs per body), or None."""
         self.order = order
         """(group, member) of each body in the scene's order."""
         self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
@@ -199,7 +272,7 @@ class System:
                 q[g.coordinate] = rotate_world(q[g.coordinate], h * w)
             elif g.coordinate >= 0:
                 theta[g.coordinate] += h * v[g.dofs.start]
-        return SystemState(s.t, x, q, theta, s.v, s.absorbed)
+        return replace(s, x_free=x, q_free=q, theta=theta)
 
     # dynamics
 
@@ -250,10 +323,16 @@ class System:
             i = g.dofs.start
             Q[i] -= g.stiffness * s.theta[g.coordinate]
             D[i, i] += g.damping
+        M = self.mass_matrix(pose)
+        if self.radiation is not None:  # the added mass at infinite frequency, the memory's and the diffraction force
+            J = np.vstack(pose.J)
+            T = self.radiation.frames(pose)
+            M += J.T @ T @ self.radiation.added_mass_inf @ T.T @ J
+            Q += J.T @ self.radiation.load(T, s.memory, s.t)
         if self.needs_bias:  # b(v) ~ B0 v - b(v0) (b is quadratic: B0 v0 = 2 b(v0)); B0's columns exactly from b's
             b0, B = self.bias(s, v)
             Q, D = Q + b0, D + B
-        return self.mass_matrix(pose), Q, D
+        return M, Q, D
 
     def kick(self, s: SystemState, h: float) -> SystemState:
         """v over h under M v_dot = Q0 - D v (linearised at s.v), solved exactly; each take-off's absorbed energy over it."""
@@ -272,13 +351,14 @@ class System:
         absorbed = s.absorbed.copy()
         for g in self.joints:
             absorbed[g.coordinate] += g.damping * gram[g.dofs.start, g.dofs.start]
-        return SystemState(s.t, s.x_free, s.q_free, s.theta, v, absorbed)
+        return replace(s, v=v, absorbed=absorbed)
 
     def step(self, s: SystemState, h: float) -> SystemState:
-        """One Stormer-Verlet step: half kick, drift, half kick (at the step's end time)."""
+        """One Stormer-Verlet step: half kick, drift (the radiation memory advanced with it), half kick (at the step's end time)."""
         half = self.kick(s, 0.5 * h)
-        moved = self.drifted(half, h)
-        moved = SystemState(s.t + h, moved.x_free, moved.q_free, moved.theta, moved.v, moved.absorbed)
+        moved = replace(self.drifted(half, h), t=s.t + h)
+        if self.radiation is not None:
+            moved = self.radiation.drift(self, half, moved, h)
         return self.kick(moved, 0.5 * h)
 
     # energies
@@ -293,7 +373,11 @@ class System:
         for m, x, R in zip(self.members, pose.x, pose.R):
             if m.model.has("pressure"):
                 e_hyd += hydrostatic_energy(self.water, wet_panels(m.body, self.water, x, R, s.t))
-        return {"E_kin": 0.5 * float(s.v @ self.mass_matrix(pose) @ s.v),
+        M = self.mass_matrix(pose)
+        if self.radiation is not None:  # the water moving with the bodies: 1/2 nu^T A_inf nu
+            J, T = np.vstack(pose.J), self.radiation.frames(pose)
+            M = M + J.T @ T @ self.radiation.added_mass_inf @ T.T @ J
+        return {"E_kin": 0.5 * float(s.v @ M @ s.v),
                 "E_grav": float(sum(m.body.mass * g * x[2] for m, x in zip(self.members, pose.x))), "E_hyd": e_hyd,
                 "E_spring": float(sum(0.5 * j.stiffness * s.theta[j.coordinate] ** 2 for j in self.joints))}  # fmt: skip
 
@@ -316,8 +400,7 @@ def _body_mass(body: Body, R: np.ndarray) -> np.ndarray:
 def build(scene: SceneConfig) -> tuple[System, SystemState]:
     """The system and its starting state from a scene with [[bodies]]: groups of welded bodies, their
     joints about the starting poses, the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
-    from dataclasses import replace
-
+    from .config import diffracting
     from .simulation import initial_state
 
     water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current)
@@ -360,10 +443,14 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
                       float(c.pto_damping), slice(dof, dof + width), coordinate, origin)  # fmt: skip
         groups.append(group)
         dof += width
-    system = System(groups, order, water, scene.fluid)
+    radiation = None
+    if scene.fluid.radiation == "bem":
+        radiation = SystemRadiation.of(models, starts, scene.fluid, water if diffracting(scene) else None)
+    system = System(groups, order, water, scene.fluid, radiation)
     x_free = np.array([g.origin for g in groups if g.kind == "free"]).reshape(-1, 3)
     q_free = np.tile([1.0, 0.0, 0.0, 0.0], (n_free, 1))
-    rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints))
+    rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints),
+                       np.zeros(0 if radiation is None else radiation.states))  # fmt: skip
     return system, replace(rest, v=_projected(system, rest, starts))
 
 

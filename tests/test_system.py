@@ -268,5 +268,5 @@ def test_one_body_flags_do_not_apply_to_several_bodies(tmp_path):
     (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDE))
     done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--density", "300")
     assert done.returncode == 2 and "[body] (and their flags) do not apply" in done.stderr
-    with pytest.raises(ConfigError, match="radiation with \\[\\[bodies\\]\\]"):
-        scene_file(tmp_path, SLIDE.replace("damping = 50.0", 'damping = 50.0\n    radiation = "bem"'), "rad.toml")
+    with pytest.raises(ConfigError, match="mooring lines on a scene with \\[\\[bodies\\]\\]"):
+        scene_file(tmp_path, SLIDE + "\n    [moorings]\n    lines = 3\n", "moored.toml")

@@ -1,0 +1,85 @@
+"""The rm3 preset, a two-body point absorber, against linear theory with the same BEM coefficients (the shipped solve)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sim.config import load_scene, with_overrides
+from sim.system import build
+from sim.system_frequency import response, steady_start
+
+
+@pytest.fixture(autouse=True)
+def _shipped_only(monkeypatch, tmp_path):
+    """The preset's coefficients come from the shipped file: no user cache, no solve."""
+    import sim.bem as bem
+
+    monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
+    monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped rm3 coefficients were not found"))
+
+
+def rm3_in(period: float, amplitude: float):
+    """The rm3 preset in regular waves of this period (the solve's frequency nearest) and amplitude; (system, rest, i)."""
+    base = load_scene("rm3")
+    system, _ = build(base)  # the coefficients come from the shipped file: no solve here
+    c = system.radiation.coefficients
+    i = int(np.argmin(abs(c.omega - 2 * np.pi / period)))
+    scene = with_overrides(base, waves__height=2 * amplitude, waves__period=2 * np.pi / float(c.omega[i]))
+    system, rest = build(scene)
+    return system, rest, i
+
+
+def time_domain(system, start, omega: float, periods: int, per_period: int = 160):
+    """(first harmonic of each joint coordinate (complex, e^(-i omega t)), mean take-off power) over `periods` periods."""
+    T = 2 * np.pi / omega
+    dt = T / per_period
+    s = start
+    times, coords = [], []
+    for _ in range(periods * per_period):
+        s = system.step(s, dt)
+        times.append(s.t)
+        coords.append(s.theta.copy())
+    t, q = np.array(times), np.array(coords)
+    basis = np.column_stack([np.ones_like(t), np.cos(omega * t), np.sin(omega * t)])
+    coef, *_ = np.linalg.lstsq(basis, q, rcond=None)
+    return coef[1] + 1j * coef[2], (s.absorbed - start.absorbed) / (s.t - start.t)
+
+
+@pytest.mark.parametrize("period", [8.0, 6.0])
+def test_rm3_take_off_power_and_relative_heave_match_the_frequency_domain(period):
+    """Started on the linear steady state, six wave periods of the two-body system (radiation memory coupling
+    both bodies, diffraction, the exact clipped hydrostatics): the float's heave against the spar and the mean
+    power its take-off absorbs match the 2-dof frequency-domain solution of the 12x12 impedance within 2 %."""
+    a = 0.05
+    system, rest, i = rm3_in(period, a)
+    c = system.radiation.coefficients
+    w = float(c.omega[i])
+    xi = response(system, rest, i)
+    relative, power = time_domain(system, steady_start(system, rest, xi, w, a), w, periods=6)
+    float_joint = [g.name for g in system.joints].index("float")
+    c_pto = system.joints[float_joint].damping
+    expected_power = 0.5 * c_pto * w * w * abs(a * xi[float_joint]) ** 2
+    errors = (abs(relative[float_joint]) / abs(a * xi[float_joint]) - 1, power[float_joint] / expected_power - 1,
+              np.angle(relative[float_joint] / xi[float_joint]))  # fmt: skip
+    print(f"T = {2 * np.pi / w:.3f} s: relative heave {abs(a * xi[float_joint]):.4g} m, power {expected_power:.4g} W; errors {errors}")
+    assert abs(errors[0]) < 0.02 and abs(errors[1]) < 0.02 and abs(errors[2]) < 0.02
+    assert expected_power > 100.0  # hundreds of watts from 10 cm waves: a real check, not of a body at rest
+
+
+def test_rm3_energy_closes_with_the_radiated_waves():
+    """In still water, the float kicked upwards at 0.5 m/s from its rest: kinetic (with the added mass at infinite frequency),
+    gravity, hydrostatic energy, what the take-off absorbed and what the radiated waves carried away add up to the
+    start's, to second order in dt."""
+    scene = load_scene("rm3")
+    float_at = dataclasses.replace(scene.bodies[1], initial=dataclasses.replace(scene.bodies[1].initial, velocity=(0.0, 0.0, 0.5)))
+    scene = dataclasses.replace(with_overrides(scene, waves__kind="still"), bodies=(scene.bodies[0], float_at))
+    errors = []
+    for dt in (0.2, 0.1):
+        system, s = build(scene)
+        start, kinetic = sum(system.energies(s).values()), system.energies(s)["E_kin"]
+        for _ in range(round(30.0 / dt)):
+            s = system.step(s, dt)
+        errors.append(abs(sum(system.energies(s).values()) + s.absorbed.sum() + s.E_rad - start))
+        assert s.E_rad > 0.05 * s.absorbed.sum() > 0  # both took their share
+    assert 3.0 < errors[0] / errors[1] < 5.5 and errors[1] < 0.005 * kinetic  # (252 J of the kick's 1.9e5 J at dt = 0.1 s)

@@ -151,7 +151,7 @@ class SimLoop:
         self._budget = budget * self.period
         self._resync_after = resync_after
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
-        self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
+        self.scene_options = tuple(scene_options) or tuple(sim.config.one_body_scenes())
 
         self._background = background_compile and kernels and default_backend() == "numba"
         """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""

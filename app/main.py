@@ -13,7 +13,7 @@ from urllib.parse import parse_qsl, quote
 
 import viser
 
-from sim.config import ConfigError, available_scenes, load_scene
+from sim.config import ConfigError, load_scene, one_body_scenes
 from sim.hydrostatics import describe_rest
 
 from .about import About
@@ -206,7 +206,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
 
         load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
     port = check_address(args.host, args.port)
-    presets = available_scenes()
+    presets = one_body_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     quiet_repeated_tracebacks()
     big_blocks_go_back()

@@ -125,11 +125,11 @@ def load(spec) -> float:
 
 def preset_specs() -> list:
     """The kernels.Spec of every preset scene with a compiled twin, as shipped."""
-    from .config import available_scenes, load_scene
+    from .config import load_scene, one_body_scenes
     from .simulation import Simulation
 
     specs = []
-    for name in available_scenes():
+    for name in one_body_scenes():
         sim = Simulation(load_scene(name), backend="numpy")
         if sim.has_twin and sim.spec not in specs:  # (a jointed body runs on the reference)
             specs.append(sim.spec)

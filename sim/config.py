@@ -203,6 +203,11 @@ def available_scenes() -> list[str]:
     return sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
 
 
+def one_body_scenes() -> list[str]:
+    """The presets of one body (the viewer, sweeps and the compiled kernels take these; [[bodies]] run headless)."""
+    return [name for name in available_scenes() if not load_scene(name).bodies]
+
+
 def load_scene(name_or_path: str) -> SceneConfig:
     """A preset by name (assets/scenes/NAME.toml) or a TOML file by path, validated."""
     path = Path(name_or_path)

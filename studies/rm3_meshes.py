@@ -3,8 +3,8 @@
 WEC-Sim's RM3 (Reference Model 3, Neary et al. 2014): a float 20 m across around a spar 6 m across that ends in a
 heave plate 30 m across; both at hydrostatic equilibrium (WEC-Sim's mass = 'equilibrium'): float 727.01 t,
 spar and plate 878.30 t. Here, as surfaces of revolution (24 sections, points every 3 m along the outline): the float an annulus 20 m across with a
-10 m hole (a 2 m gap around the spar: a narrower one rings as a piston
-mode in the BEM solve, with negative heave added mass), 3.1 m draft and 1.7 m freeboard (its area centroid, the centre of mass here, at z = -0.7 m: WEC-Sim's
+10 m hole (a 2 m gap around the spar; the water in it sloshes, with the
+float's heave added mass negative near 1.39 rad/s: the preset's bem_min_period keeps the solve below that), 3.1 m draft and 1.7 m freeboard (its area centroid, the centre of mass here, at z = -0.7 m: WEC-Sim's
 -0.72 m); the spar 6 m across from 6 m above the water to 21 m below it, on a plate 30 m across and 3 m thick
 (RM3's is thin; Capytaine's constant panels, 3.75 m here, cannot resolve a plate much thinner than they are:
 a 0.4 m plate broke the reciprocity of the bodies' coupling damping by 12 % and its passivity by 15 %, a 3 m one by 6 %

@@ -111,6 +111,7 @@ def merged(members: list[Member], water, fluid) -> Member:
     return Member("merged", Model(body, water, fluid), com, axes)
 
 
+@pytest.mark.slow
 def test_a_welded_pair_moves_as_one_body_of_their_combined_mass_and_inertia(tmp_path):
     """Two bodies on a fixed joint, turning and drifting in oblique waves with damping, against one body made of
     both surfaces with the combined mass and inertia: the same trajectory to 1e-9 m over 10 s."""

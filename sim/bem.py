@@ -186,8 +186,8 @@ def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.
 def cache_key(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, center=(0.0, 0.0, 0.0)) -> str:
     """The solve's inputs hashed (a centre at the origin adds nothing: the keys of files solved before it was a choice stand)."""
     h = hashlib.sha256()
-    center = np.round(np.asarray(center, float), 9)
-    for a in (np.round(np.asarray(vertices, float), 9), np.asarray(faces, np.int64), np.array([rho, g, depth]), np.asarray(omega, float),
+    center = np.round(np.asarray(center, float), 9) + 0.0  # + 0.0: -0.0 becomes 0.0 (a vertex on the water line may come out either)
+    for a in (np.round(np.asarray(vertices, float), 9) + 0.0, np.asarray(faces, np.int64), np.array([rho, g, depth]), np.asarray(omega, float),
               *([center] if center.any() else [])):  # fmt: skip
         h.update(np.ascontiguousarray(a).tobytes())
     return h.hexdigest()[:20]

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RUN = ["run", "--scene", "sphere", "--density", "400", "--t-end", "0.1"]
 """The sphere preset made lighter: a rest pose whose coefficients are not shipped, so the cache is asked."""
 FAKE_SOLVE = ("import sys, sim.bem as bem\n"
-              "bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '53091b72e92df34a7ed0.npz')\n"
+              "bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '93e1185fc4180b9518dc.npz')\n"
               "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
 
 
@@ -50,7 +50,7 @@ def key_name(no_solver, tmp_path_factory) -> str:
 
 
 def sphere(**changes) -> Coefficients:
-    c = Coefficients.load(SHIPPED / "53091b72e92df34a7ed0.npz")
+    c = Coefficients.load(SHIPPED / "93e1185fc4180b9518dc.npz")
     fields = {k: getattr(c, k) for k in ("omega", "added_mass", "damping", "added_mass_inf", "rho", "depth", "panels")}
     return Coefficients(**{**fields, **changes})
 
@@ -113,3 +113,25 @@ def test_an_unwritable_cache_costs_a_warning_not_the_run(tmp_path):
     warnings = [line for line in done.stderr.splitlines() if line.startswith("floatsim:")]
     assert len(warnings) == 1 and "warning: cannot cache the radiation coefficients" in warnings[0] and "Traceback" not in done.stderr
     assert "t = 0.1 s:" in done.stdout and "E_rad" in done.stdout  # the run went on with the solved coefficients
+
+
+def test_every_preset_with_radiation_finds_its_shipped_solve(monkeypatch, tmp_path):
+    """A fresh machine solves nothing for the presets: each one with radiation (still water, and in waves with the
+    diffraction) finds its coefficients shipped. (The sphere's key once hashed a -0.0 on its water line: every new
+    machine re-solved it, and a viewer switching the sphere to waves waited on the solve.)"""
+    import sim.bem as bem
+    from sim.config import available_scenes, load_scene, with_overrides
+    from sim.simulation import Simulation
+    from sim.system import build
+
+    monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
+    monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("a preset's coefficients were solved, not found shipped"))
+    with_radiation = [name for name in available_scenes() if load_scene(name).fluid.radiation == "bem"]
+    assert {"sphere", "point-absorber", "moored-buoy", "rm3"} <= set(with_radiation)
+    for name in with_radiation:
+        scene = load_scene(name)
+        for kind in ("still", "regular"):
+            waved = with_overrides(scene, waves__kind=kind, waves__height=0.01, waves__period=3.0)
+            model = build(waved)[0] if scene.bodies else Simulation(waved, backend="numpy").model
+            assert (model.radiation.diffraction is not None) == (kind == "regular")
+    assert not list(tmp_path.glob("*.npz"))  # nothing solved, nothing cached

@@ -41,6 +41,9 @@ class BenchArgs:
     moorings: bool = True
     """Also time the moored-buoy preset (3 lines x 20 segments on MoorDyn, a 64-component sea, radiation and diffraction):
     with its lines against without, and the split between the body's step and MoorDyn (needs the .[moorings] extra)."""
+    systems: bool = True
+    """Also time the rm3 preset (two bodies on slides, radiation 12 x 12 with the memory coupling them, diffraction;
+    numpy, dt = 0.05 s) and the split between the bodies' hydrodynamics, the radiation and the joints' stepping."""
     startup: bool = False
     """Instead of the above: how long `python -m sim run --scene NAME --t-end 1` takes in a fresh process from an
     empty kernel cache (a first run on a machine) and from the cache it left, for each preset (minutes each, cold)."""
@@ -121,6 +124,7 @@ def bench(args: BenchArgs) -> int:
     radiation_rows = _radiation_rows(base, args) if args.radiation else []
     wave_rows = _wave_rows(base, args, bar) if args.waves else []
     mooring_rows = _mooring_rows(args) if args.moorings else []
+    system_rows = _system_rows(args) if args.systems else []
     bar.close()
     sweep_rows = _sweep_rows(args.sweep_cases) if args.sweep_cases else []
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
@@ -145,6 +149,10 @@ def bench(args: BenchArgs) -> int:
         print()
         print("the moored-buoy preset (compiled, implicit, dt = 0.01 s): the body's step with and without its lines, and where a moored step's time goes")
         _table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
+    if system_rows:
+        print()
+        print("several bodies (numpy reference: no compiled twin yet): the rm3 preset's step and where its time goes")
+        _table(("case", "us/step", "x real time", "hydrodynamics us", "radiation us", "joints and stepping us"), system_rows)
     return 0
 
 
@@ -204,6 +212,46 @@ def _mooring_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     return [("without lines", f"{body * 1e6:.0f}", f"{dt / body:.0f}", f"{body * 1e6:.0f}", "-", "-"),
             (f"{len(moored.moorings.lines())} lines x {base.moorings.segments} segments", f"{cost * 1e6:.0f}", f"{dt / cost:.0f}",
              f"{body * 1e6:.0f}", f"{line * 1e6:.0f}", f"{(cost - body - line) * 1e6:.0f}")]  # fmt: skip
+
+
+def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
+    """The rm3 preset's step (numpy) split by timing its parts in place: each body's wet surface and loads
+    (hydrodynamics), the radiation memory and diffraction (radiation), and the rest (kinematics, the
+    velocity-product terms, the kicks' matrix exponentials)."""
+    from ..system import build
+
+    scene = load_scene("rm3")
+    system, s = build(scene)
+    spent = {"hydro": 0.0, "radiation": 0.0}
+
+    def timed(fn, key):
+        def wrapper(*a, **k):
+            t0 = time.perf_counter()
+            try:
+                return fn(*a, **k)
+            finally:
+                spent[key] += time.perf_counter() - t0
+
+        return wrapper
+
+    for m in system.members:
+        m.model.wetted, m.model.linearised = timed(m.model.wetted, "hydro"), timed(m.model.linearised, "hydro")
+    rad = system.radiation
+    rad.drift, rad.load = timed(rad.drift, "radiation"), timed(rad.load, "radiation")
+    dt = float(scene.step.dt)
+    for _ in range(5):
+        s = system.step(s, dt)
+    totals, hydro, radiation = [], [], []
+    for _ in range(args.repeats):
+        before, h0, r0 = time.perf_counter(), spent["hydro"], spent["radiation"]
+        for _ in range(40):
+            s = system.step(s, dt)
+        totals.append((time.perf_counter() - before) / 40)
+        hydro.append((spent["hydro"] - h0) / 40)
+        radiation.append((spent["radiation"] - r0) / 40)
+    t, h, r = statistics.median(totals), statistics.median(hydro), statistics.median(radiation)
+    return [(f"rm3: {len(system.members)} bodies, {system.n_dofs} dofs, {rad.states} memory states, dt {dt:g} s", f"{t * 1e6:.0f}", f"{dt / t:.1f}",
+             f"{h * 1e6:.0f}", f"{r * 1e6:.0f}", f"{(t - h - r) * 1e6:.0f}")]  # fmt: skip
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:

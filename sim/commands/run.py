@@ -186,42 +186,11 @@ def run(args: RunArgs, watch=None) -> int:
     if (seconds := step_time(sim.body.n_samples, n_steps)) > 600:
         print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.body.n_samples:,} samples x {n_steps:,} steps); "
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
-    out = open(args.out, "w") if args.out else None
-    bar = progress_bar(n_steps, flag=args.progress)
     first = sim.frame()
-    rows = 0
-
-    def write(frame):
-        nonlocal rows
-        if out:
-            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")  # one call per whole line
-            rows += 1
-
-    if out:
-        out.write(",".join(CSV_COLUMNS) + "\n")
-    write(first)
-    if watch is not None:
-        watch(sim)
     started = time.perf_counter()
-    try:  # numpy's overflow warnings would only repeat what the divergence message says better
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
-            error = _advance(sim, n_steps, args.every, bar, write, watch, stop)
-    except OSError as e:  # the disk filled up or went away mid-run
-        print(f"floatsim: cannot write {args.out}: {e.strerror} (kept {rows} whole rows)", file=sys.stderr)
-        return 2
-    finally:
-        bar.close()
-        if out:
-            try:
-                out.close()
-            except OSError:
-                pass
-    if error == INTERRUPTED:
-        kept = f"kept {rows} rows in {args.out}" if out else "nothing written"
-        print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {scene.step.t_end:g} s: {kept}", file=sys.stderr)
-        return EXIT
-    if error:
-        print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
+    error, rows = stream(sim, CSV_COLUMNS, args, n_steps, watch)
+    if error in (WRITE_FAILED, INTERRUPTED):
+        return 2 if error == WRITE_FAILED else EXIT
     for note in sim.validity_notes():
         print(f"floatsim: note: {note}", file=sys.stderr)
     wall = time.perf_counter() - started
@@ -246,11 +215,52 @@ def run(args: RunArgs, watch=None) -> int:
               f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
     rate = steps / wall if wall > 0 else math.inf
     print(f"{steps} steps in {wall:.3g} s wall ({rate:.0f} steps/s, {last.t / wall if wall > 0 else math.inf:.3g}x real time)"
-          + (f"; {rows} rows -> {args.out}" if out else ""))  # fmt: skip
+          + (f"; {rows} rows -> {args.out}" if args.out else ""))  # fmt: skip
     return 3 if error else 0
 
 
 INTERRUPTED = "interrupted"
+WRITE_FAILED = "write failed"
+
+
+def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int]:
+    """Step `sim` (a Simulation, or anything with step, frame and state.t) to n_steps, writing `columns` and a row
+    every args.every steps to args.out (if given), with a progress bar. (error, rows): error is the divergence
+    message, INTERRUPTED after Ctrl-C or WRITE_FAILED (said here, with the rows kept), or None."""
+    out = open(args.out, "w") if args.out else None
+    bar = progress_bar(n_steps, flag=args.progress)
+    rows = 0
+
+    def write(frame):
+        nonlocal rows
+        if out:
+            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")  # one call per whole line
+            rows += 1
+
+    try:  # numpy's overflow warnings would only repeat what the divergence message says better
+        if out:
+            out.write(",".join(columns) + "\n")
+        write(sim.frame())
+        if watch is not None:
+            watch(sim)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
+            error = _advance(sim, n_steps, args.every, bar, write, watch, stop)
+    except OSError as e:  # the disk filled up or went away mid-run
+        print(f"floatsim: cannot write {args.out}: {e.strerror} (kept {rows} whole rows)", file=sys.stderr)
+        return WRITE_FAILED, rows
+    finally:
+        bar.close()
+        if out:
+            try:
+                out.close()
+            except OSError:
+                pass
+    if error == INTERRUPTED:
+        kept = f"kept {rows} rows in {args.out}" if out else "nothing written"
+        print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {n_steps * sim.dt:g} s: {kept}", file=sys.stderr)
+    elif error:
+        print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
+    return error, rows
 
 
 class Pace:

@@ -9,13 +9,12 @@ import time
 import numpy as np
 
 from ..config import ConfigError, SceneConfig
-from .interrupt import EXIT, StopOnCtrlC
-from .progress import progress_bar
+from .interrupt import EXIT
 
 
 def run_bodies(args, scene: SceneConfig) -> int:
     from ..system import Assembly
-    from .run import INTERRUPTED, _advance
+    from .run import INTERRUPTED, WRITE_FAILED, stream
 
     run = Assembly(scene)
     n_steps = max(0, round(scene.step.t_end / run.dt))
@@ -24,40 +23,11 @@ def run_bodies(args, scene: SceneConfig) -> int:
                           "give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
     for note in run.notes:
         print(f"floatsim: note: {note}", file=sys.stderr)
-    out = open(args.out, "w") if args.out else None
-    rows = 0
-
-    def write(frame):
-        nonlocal rows
-        if out:
-            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")
-            rows += 1
-
-    if out:
-        out.write(",".join(run.columns()) + "\n")
     first = run.frame()
-    write(first)
-    bar = progress_bar(n_steps, flag=args.progress)
     started = time.perf_counter()
-    try:
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
-            error = _advance(run, n_steps, args.every, bar, write, None, stop)
-    except OSError as e:
-        print(f"floatsim: cannot write {args.out}: {e.strerror} (kept {rows} whole rows)", file=sys.stderr)
-        return 2
-    finally:
-        bar.close()
-        if out:
-            try:
-                out.close()
-            except OSError:
-                pass
-    if error == INTERRUPTED:
-        kept = f"kept {rows} rows in {args.out}" if out else "nothing written"
-        print(f"floatsim: interrupted (Ctrl-C) at t = {run.state.t:.6g} s of {scene.step.t_end:g} s: {kept}", file=sys.stderr)
-        return EXIT
-    if error:
-        print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
+    error, rows = stream(run, run.columns(), args, n_steps)
+    if error in (WRITE_FAILED, INTERRUPTED):
+        return 2 if error == WRITE_FAILED else EXIT
     wall = time.perf_counter() - started
     last = run.frame()
     system = run.system
@@ -71,5 +41,5 @@ def run_bodies(args, scene: SceneConfig) -> int:
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     steps = round(last.t / run.dt)
     print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J; {steps} steps in {wall:.3g} s wall "
-          f"({last.t / wall if wall > 0 else math.inf:.3g}x real time)" + (f"; {rows} rows -> {args.out}" if out else ""))  # fmt: skip
+          f"({last.t / wall if wall > 0 else math.inf:.3g}x real time)" + (f"; {rows} rows -> {args.out}" if args.out else ""))  # fmt: skip
     return 3 if error else 0

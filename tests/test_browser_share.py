@@ -130,6 +130,11 @@ def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
     time.sleep(1.5)
     assert float(slider.get_attribute("aria-valuenow")) == pytest.approx(seek, abs=0.05)
     later = picture(canvas.screenshot())
+    for _ in range(16):  # software WebGL on a loaded machine may draw the seek a few frames late: look again for 8 s
+        if np.abs(later - start).mean() > 0.3:
+            break
+        time.sleep(0.5)
+        later = picture(canvas.screenshot())
     assert later.std() > 10.0 and np.abs(later - start).mean() > 0.3  # the body moved
 
 

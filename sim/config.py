@@ -278,6 +278,22 @@ def _body_entry(data: dict, where: str) -> BodyEntry:
                      data.get("forces"))  # fmt: skip
 
 
+def _check_body(b, i, c, where: str = "") -> None:
+    """The rules between a body's fields, its pose's and its joint's (one body, or each of [[bodies]], prefixed by `where`)."""
+    if b.shape == "mesh" and not b.mesh:
+        raise ConfigError(f"{where}body shape 'mesh' needs a mesh file")
+    if b.mass is None and b.density is None:
+        raise ConfigError(f"{where}give the body a density or a mass")
+    samples, flag = (b.samples, "--samples ([body] samples)") if b.shape == "mesh" else (6 * b.points_per_edge**2, "--points-per-edge")
+    check_samples(samples, flag)  # before any array is made
+    if c.joint != "free" and not any(c.axis):
+        raise ConfigError(f"{where}[constraint] axis must not be zero")
+    norm = math.sqrt(sum(q * q for q in i.orientation))
+    if abs(norm - 1.0) > QUATERNION_SLACK:
+        raise ConfigError(f"{where}initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
+                          f"(one within {QUATERNION_SLACK:g} of 1 is normalised)")
+
+
 def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
     """Each [[bodies]] entry checked as its tables are, then the tree: unique names, parents listed first."""
     entries, seen = [], []
@@ -294,18 +310,9 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
                       for name in ENTRY_SECTIONS}  # fmt: skip
         except ConfigError as err:
             raise ConfigError(f"{where}: {err}") from None
-        b, c = tables["body"], tables["constraint"]
-        if b.shape == "mesh" and not b.mesh:
-            raise ConfigError(f"{where}: body shape 'mesh' needs a mesh file")
-        if b.mass is None and b.density is None:
-            raise ConfigError(f"{where}: give the body a density or a mass")
-        if c.joint == "free" and e.parent != "world":
+        _check_body(tables["body"], tables["initial"], tables["constraint"], f"{where}: ")
+        if tables["constraint"].joint == "free" and e.parent != "world":
             raise ConfigError(f"{where}: a free body has no parent (give it a joint: fixed, prismatic or revolute)")
-        if c.joint != "free" and not any(c.axis):
-            raise ConfigError(f"{where}: the joint's axis must not be zero")
-        norm = math.sqrt(sum(q * q for q in tables["initial"].orientation))
-        if abs(norm - 1.0) > QUATERNION_SLACK:
-            raise ConfigError(f"{where}: initial orientation must be a unit quaternion (w, x, y, z), got norm {norm:.6g}")
         entries.append(dataclasses.replace(e, **tables))
         seen.append(e.name)
     untouched = [f"[{name}]" for name in ENTRY_SECTIONS if getattr(scene, name) != SECTION_TYPES[name]()]
@@ -324,13 +331,7 @@ def validate(scene: SceneConfig) -> SceneConfig:
     for name, params in SECTIONS.items():
         section = getattr(scene, name)
         checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
-    b, i = checked["body"], checked["initial"]
-    if b.shape == "mesh" and not b.mesh:
-        raise ConfigError("body shape 'mesh' needs a mesh file")
-    if b.mass is None and b.density is None:
-        raise ConfigError("give the body a density or a mass")
-    samples, flag = (b.samples, "--samples ([body] samples)") if b.shape == "mesh" else (6 * b.points_per_edge**2, "--points-per-edge")
-    check_samples(samples, flag)  # before any array is made
+    _check_body(checked["body"], checked["initial"], checked["constraint"])
     _check_steepness(checked["waves"], checked["fluid"].g)
     if checked["fluid"].radiation != "none" and any(checked["water"].current):
         raise ConfigError("a current with radiation is not modelled (the radiation memory assumes water at rest): "
@@ -340,14 +341,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):
         raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
-    if checked["constraint"].joint != "free" and not any(checked["constraint"].axis):
-        raise ConfigError("[constraint] axis must not be zero")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
-    norm = math.sqrt(sum(c * c for c in i.orientation))
-    if abs(norm - 1.0) > QUATERNION_SLACK:
-        raise ConfigError(f"initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
-                          f"(one within {QUATERNION_SLACK:g} of 1 is normalised)")
     checked = dataclasses.replace(scene, **checked)
     return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked
 

@@ -155,6 +155,17 @@ def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, length: 
     return RadiationMemory(F, G, H, tuple(entries), c.added_mass_inf)
 
 
+def held_step(F: np.ndarray, G: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Phi, Gamma): x' = F x + G nu over dt with nu held constant, exactly: x(dt) = Phi x + Gamma nu."""
+    from scipy.linalg import expm
+
+    n, d = G.shape
+    aug = np.zeros((n + d, n + d))
+    aug[:n, :n], aug[:n, n:] = F, G
+    E = expm(aug * dt)
+    return E[:n, :n], E[:n, n:]
+
+
 class Radiation:
     """A body's added mass and radiation memory in its own frame, for the integrators.
 
@@ -208,13 +219,7 @@ class Radiation:
     def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
         """The memory after dt with a constant twist (in the fit's axes), exactly (zero-order hold)."""
         if dt not in self._steps:
-            from scipy.linalg import expm
-
-            n = self.states
-            aug = np.zeros((n + 6, n + 6))
-            aug[:n, :n], aug[:n, n:] = self.F, self.G
-            E = expm(aug * dt)
-            self._steps = {dt: (E[:n, :n], E[:n, n:])}  # one dt at a time
+            self._steps = {dt: held_step(self.F, self.G, dt)}  # one dt at a time
         Phi, Gamma = self._steps[dt]
         return Phi @ x + Gamma @ nu_fit
 

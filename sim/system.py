@@ -175,11 +175,9 @@ class SystemRadiation:
     def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
         """The memory after dt with a constant twist (in the fit's axes), exactly."""
         if dt not in self._steps:
-            n, d = self.states, self.G.shape[1]
-            aug = np.zeros((n + d, n + d))
-            aug[:n, :n], aug[:n, n:] = self.F, self.G
-            E = expm(aug * dt)
-            self._steps = {dt: (E[:n, :n], E[:n, n:])}
+            from .radiation import held_step
+
+            self._steps = {dt: held_step(self.F, self.G, dt)}
         Phi, Gamma = self._steps[dt]
         return Phi @ x + Gamma @ nu_fit
 

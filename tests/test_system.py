@@ -258,6 +258,8 @@ def test_run_writes_every_body_and_joint_to_csv(tmp_path):
     ('name = "a"\nforces = "magic"', "forces must be one of"),
     ('name = "a"\ncolour = "red"', "unknown key 'colour'"),
     ('shape = "cube"', "give the body a name"),
+    ('name = "a"\npoints_per_edge = 1000', "6,000,000 surface samples"),  # the one-body limits hold for each
+    ('name = "a"\njoint = "prismatic"\naxis = [0.0, 0.0, 0.0]', "[[bodies]] a: [constraint] axis must not be zero"),
 ])  # fmt: skip
 def test_bad_bodies_are_one_line_errors(tmp_path, entry, message):
     (tmp_path / "bad.toml").write_text("[[bodies]]\n" + entry + "\n")

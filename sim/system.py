@@ -28,8 +28,8 @@ damping, as the one-body implicit scheme and the joint to the world are.
 
 The velocity-product term J_dot v is a central difference of J v along the motion (its error ~1e-10
 relative); it is left out where every Jacobian is constant (slides on slides to the world).
-Not yet: radiation coupling between bodies (the multi-body BEM solve), moorings on several bodies,
-a compiled twin, the viewer.
+Each body's loads come from the numpy reference or its compiled twin (body_loads.py); the kinematics and the
+kicks are numpy. Not yet: moorings on several bodies.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from .body import Body, make_body
+from .body_loads import BodyLoads
 from .config import SceneConfig
 from .forces import Model
 from .joints import _rotation
@@ -125,6 +126,15 @@ class Pose:
     R: list
     J: list
     """(6, d) each body's twist (u at its centre of mass, omega), world frame, per unit v."""
+    cache: dict = field(default_factory=dict)
+    """What depends on this configuration only (the mass matrix, the radiation's frames), once computed."""
+
+    @property
+    def stacked(self) -> np.ndarray:
+        """(6k, d) every body's Jacobian, one under the other."""
+        if "stacked" not in self.cache:
+            self.cache["stacked"] = np.vstack(self.J)
+        return self.cache["stacked"]
 
 
 class SystemRadiation:
@@ -162,7 +172,9 @@ class SystemRadiation:
 
     def frames(self, pose: Pose) -> np.ndarray:
         """(6k, 6k) block diagonal: each body's turn from its starting pose, on its force and its moment."""
-        T = np.zeros((6 * len(pose.R), 6 * len(pose.R)))
+        if "T" in pose.cache:
+            return pose.cache["T"]
+        T = pose.cache["T"] = np.zeros((6 * len(pose.R), 6 * len(pose.R)))
         for b, (R, R0) in enumerate(zip(pose.R, self.R0)):
             T[6 * b : 6 * b + 3, 6 * b : 6 * b + 3] = T[6 * b + 3 : 6 * b + 6, 6 * b + 3 : 6 * b + 6] = R @ R0.T
         return T
@@ -186,7 +198,7 @@ class SystemRadiation:
         ends; the radiated energy h nu . mu likewise (as joints.py does for one body)."""
         p0, p1 = system.pose(before), system.pose(after)
         T0, T1 = self.frames(p0), self.frames(p1)
-        nu0, nu1 = np.vstack(p0.J) @ before.v, np.vstack(p1.J) @ before.v
+        nu0, nu1 = p0.stacked @ before.v, p1.stacked @ before.v
         memory = self.advance(before.memory, 0.5 * (T0.T @ nu0 + T1.T @ nu1), h)
         power = 0.5 * (nu0 @ T0 @ (self.H @ before.memory) + nu1 @ T1 @ (self.H @ memory))
         return replace(after, memory=memory, E_rad=before.E_rad + h * power)
@@ -201,6 +213,9 @@ class System:
         """The bodies' radiation together (added mass, memory and diffraction, 6 dofs per body), or None."""
         self.order = order
         """(group, member) of each body in the scene's order."""
+        self._pose: tuple = (None, None)
+        self.loads = [BodyLoads(m.model) for m in self.members]
+        """Each body's loads near a twist (the numpy reference, or its compiled twin: use_kernels)."""
         self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
         self.joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
         self.n_free = sum(g.kind == "free" for g in groups)
@@ -213,6 +228,21 @@ class System:
     @property
     def members(self) -> list[Member]:
         return [self.groups[g].members[m] for g, m in self.order]
+
+    @property
+    def has_twin(self) -> bool:
+        """Whether every body's loads have a compiled twin (the kinematics and kicks are numpy either way)."""
+        return all(loads.has_twin for loads in self.loads)
+
+    @property
+    def specs(self) -> list:
+        """The kernels.Spec of the bodies' loads, each once."""
+        return list(dict.fromkeys(loads.spec for loads in self.loads))
+
+    def use_kernels(self, on: bool, expand: bool = True) -> None:
+        """The bodies' loads from their compiled twins (loaded from the disk cache, or compiled now) or, off, numpy."""
+        for loads in self.loads:
+            loads.use_kernels(on, expand)
 
     # kinematics
 
@@ -248,7 +278,14 @@ class System:
         return xs, Rs, Js
 
     def pose(self, s: SystemState) -> Pose:
-        """Each body's pose and twist Jacobian (the scene's order)."""
+        """Each body's pose and twist Jacobian (the scene's order). A step asks for each configuration several times:
+        the last one is kept."""
+        key = (s.x_free.tobytes(), s.q_free.tobytes(), s.theta.tobytes())
+        if self._pose[0] != key:
+            self._pose = (key, self._pose_of(s))
+        return self._pose[1]
+
+    def _pose_of(self, s: SystemState) -> Pose:
         xg, Rg, Jg = self.group_poses(s)
         x, R, J = [], [], []
         for gi, mi in self.order:
@@ -276,10 +313,21 @@ class System:
 
     def mass_matrix(self, pose: Pose) -> np.ndarray:
         """M_q = sum_b J_b^T M_b J_b."""
-        M = np.zeros((self.n_dofs, self.n_dofs))
-        for m, R, J in zip(self.members, pose.R, pose.J):
-            M += J.T @ _body_mass(m.body, R) @ J
-        return M
+        if "M" not in pose.cache:
+            M = pose.cache["M"] = np.zeros((self.n_dofs, self.n_dofs))
+            for m, R, J in zip(self.members, pose.R, pose.J):
+                M += J.T @ _body_mass(m.body, R) @ J
+        return pose.cache["M"]
+
+    def inertia(self, pose: Pose) -> np.ndarray:
+        """M_q with the radiation's added mass at infinite frequency, J^T T A_inf T^T J (the water moving with the bodies)."""
+        if "inertia" not in pose.cache:
+            M = self.mass_matrix(pose)
+            if self.radiation is not None:
+                J, T = pose.stacked, self.radiation.frames(pose)
+                M = M + J.T @ T @ self.radiation.added_mass_inf @ T.T @ J
+            pose.cache["inertia"] = M
+        return pose.cache["inertia"]
 
     def bias(self, s: SystemState, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(b(v), db/dv): the velocity-product load b(v) = sum_b J_b^T (M_b J_b_dot v + (0, omega x I omega)) and
@@ -291,7 +339,7 @@ class System:
 
         def rate(w: np.ndarray) -> list[np.ndarray]:  # d J_b / dt while moving at w
             eps = 1e-5 / max(1.0, float(np.abs(w).max(initial=0.0)))
-            ahead, behind = self.pose(self.drifted(s, eps, w)), self.pose(self.drifted(s, -eps, w))
+            ahead, behind = self._pose_of(self.drifted(s, eps, w)), self._pose_of(self.drifted(s, -eps, w))
             return [(a - c) / (2 * eps) for a, c in zip(ahead.J, behind.J)]
 
         along_v, along_e = rate(v), [rate(e) for e in np.eye(n)]
@@ -311,9 +359,8 @@ class System:
         pose = self.pose(s)
         n = self.n_dofs
         Q, D = np.zeros(n), np.zeros((n, n))
-        for m, x, R, J in zip(self.members, pose.x, pose.R, pose.J):
-            wet = m.model.wetted(x, R, s.t)
-            f, Dm = m.model.linearised(wet, J @ v, s.t)
+        for loads, x, R, J in zip(self.loads, pose.x, pose.R, pose.J):
+            f, Dm = loads(x, R, s.t, J @ v)
             Q += J.T @ f
             if Dm is not None:
                 D += J.T @ Dm @ J
@@ -321,12 +368,9 @@ class System:
             i = g.dofs.start
             Q[i] -= g.stiffness * s.theta[g.coordinate]
             D[i, i] += g.damping
-        M = self.mass_matrix(pose)
-        if self.radiation is not None:  # the added mass at infinite frequency, the memory's and the diffraction force
-            J = np.vstack(pose.J)
-            T = self.radiation.frames(pose)
-            M += J.T @ T @ self.radiation.added_mass_inf @ T.T @ J
-            Q += J.T @ self.radiation.load(T, s.memory, s.t)
+        M = self.inertia(pose)
+        if self.radiation is not None:  # the memory's and the diffraction force
+            Q += pose.stacked.T @ self.radiation.load(self.radiation.frames(pose), s.memory, s.t)
         if self.needs_bias:  # b(v) ~ B0 v - b(v0) (b is quadratic: B0 v0 = 2 b(v0)); B0's columns exactly from b's
             b0, B = self.bias(s, v)
             Q, D = Q + b0, D + B
@@ -371,10 +415,7 @@ class System:
         for m, x, R in zip(self.members, pose.x, pose.R):
             if m.model.has("pressure"):
                 e_hyd += hydrostatic_energy(self.water, wet_panels(m.body, self.water, x, R, s.t))
-        M = self.mass_matrix(pose)
-        if self.radiation is not None:  # the water moving with the bodies: 1/2 nu^T A_inf nu
-            J, T = np.vstack(pose.J), self.radiation.frames(pose)
-            M = M + J.T @ T @ self.radiation.added_mass_inf @ T.T @ J
+        M = self.inertia(pose)
         return {"E_kin": 0.5 * float(s.v @ M @ s.v),
                 "E_grav": float(sum(m.body.mass * g * x[2] for m, x in zip(self.members, pose.x))), "E_hyd": e_hyd,
                 "E_spring": float(sum(0.5 * j.stiffness * s.theta[j.coordinate] ** 2 for j in self.joints))}  # fmt: skip
@@ -477,17 +518,49 @@ def body_frames(system: System, s: SystemState) -> list[dict]:
 
 class Assembly:
     """A running scene of several bodies: the system, its state and step; stops loudly on a non-finite state.
-    The counterpart of simulation.Simulation for [[bodies]] (numpy only for now)."""
+    The counterpart of simulation.Simulation for [[bodies]]. On the numba backend the bodies' loads come from their
+    compiled twins when this machine has them (`kernels_ready`; `use_backend` loads or compiles them)."""
 
-    def __init__(self, scene: SceneConfig):
+    def __init__(self, scene: SceneConfig, backend: str | None = None):
+        from .compiling import kernels_ready
+        from .simulation import default_backend
+
         self.scene = scene
         self.system, self.state = build(scene)
         self.dt = float(scene.step.dt)
         self.notes: list[str] = []
         if scene.step.integrator != "implicit":
             self.notes.append(f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used")
-        self.notes.append("several bodies have no compiled twin yet: the scene runs on the numpy reference")
+        self.backend = "numpy"
+        wanted = backend or default_backend()
+        if wanted == "numba" and not self.system.has_twin:
+            self.notes.append("a body's force model or term has no compiled twin: the scene runs on the numpy reference (slower)")
+        elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs):
+            self.use_backend("numba")
         self._frame: tuple | None = None
+
+    @property
+    def compiled(self) -> bool:
+        return self.backend == "numba"
+
+    @property
+    def kernels_ready(self) -> bool:
+        """Whether the bodies' compiled loads can be loaded at once (this machine compiled them before)."""
+        from .compiling import kernels_ready
+
+        return self.system.has_twin and all(kernels_ready(spec) for spec in self.system.specs)
+
+    def use_backend(self, backend: str) -> None:
+        """The bodies' loads from their compiled twins ('numba': loaded from the disk cache, or compiled now) or numpy,
+        from the next step on; the state is kept as it is. Without a twin for every body's loads, numpy."""
+        from .kernels import warm_up
+
+        backend = backend if self.system.has_twin else "numpy"
+        if backend == "numba":
+            for spec in self.system.specs:
+                warm_up(spec)
+        self.system.use_kernels(backend == "numba")
+        self.backend = backend
 
     def step(self, n: int = 1) -> SystemState:
         from .errors import SimulationDiverged

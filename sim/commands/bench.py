@@ -42,8 +42,9 @@ class BenchArgs:
     """Also time the moored-buoy preset (3 lines x 20 segments on MoorDyn, a 64-component sea, radiation and diffraction):
     with its lines against without, and the split between the body's step and MoorDyn (needs the .[moorings] extra)."""
     systems: bool = True
-    """Also time the rm3 preset (two bodies on slides, radiation 12 x 12 with the memory coupling them, diffraction;
-    numpy, dt = 0.05 s) and the split between the bodies' hydrodynamics, the radiation and the joints' stepping."""
+    """Also time the rm3 preset (two bodies on slides, radiation 12 x 12 with the memory coupling them, diffraction) as
+    shipped and in a 64-component sea at dt = 0.01 s, numpy and compiled, and the split between the bodies' loads
+    (hydrodynamics), the radiation and the joints' stepping."""
     startup: bool = False
     """Instead of the above: how long `python -m sim run --scene NAME --t-end 1` takes in a fresh process from an
     empty kernel cache (a first run on a machine) and from the cache it left, for each preset (minutes each, cold)."""
@@ -151,8 +152,9 @@ def bench(args: BenchArgs) -> int:
         _table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
     if system_rows:
         print()
-        print("several bodies (numpy reference: no compiled twin yet): the rm3 preset's step and where its time goes")
-        _table(("case", "us/step", "x real time", "hydrodynamics us", "radiation us", "joints and stepping us"), system_rows)
+        print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
+              "its time goes; compiled: the bodies' loads (the kinematics and kicks are numpy)")  # fmt: skip
+        _table(("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "joints and stepping us"), system_rows)
     return 0
 
 
@@ -215,13 +217,28 @@ def _mooring_rows(args: BenchArgs) -> list[tuple[str, ...]]:
 
 
 def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
-    """The rm3 preset's step (numpy) split by timing its parts in place: each body's wet surface and loads
-    (hydrodynamics), the radiation memory and diffraction (radiation), and the rest (kinematics, the
-    velocity-product terms, the kicks' matrix exponentials)."""
-    from ..system import build
+    """The rm3 preset's step, as shipped (regular waves, dt 0.05 s) and in a 64-component sea at dt 0.01 s, on the numpy
+    reference and with the bodies' loads compiled; split by timing its parts in place: each body's loads
+    (hydrodynamics), the radiation memory and diffraction (radiation), and the rest (kinematics, the kicks'
+    matrix exponentials)."""
+    from ..config import with_overrides
+    from ..system import Assembly
 
-    scene = load_scene("rm3")
-    system, s = build(scene)
+    preset = load_scene("rm3")
+    sea = with_overrides(preset, waves__kind="jonswap", waves__height=2.5, waves__period=8.0, waves__components=64, step__dt=0.01)
+    rows = []
+    for label, scene in (("regular waves, dt 0.05 s", preset), ("JONSWAP, 64 components, dt 0.01 s", sea)):
+        for backend in ("numpy", "numba"):
+            run = Assembly(scene, backend=backend)
+            t, h, r = _system_split(run, args.repeats)
+            rows.append((f"rm3, {label}", "compiled" if run.compiled else "numpy", f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{h * 1e6:.0f}",
+                         f"{r * 1e6:.0f}", f"{(t - h - r) * 1e6:.0f}"))  # fmt: skip
+    return rows
+
+
+def _system_split(run, repeats: int) -> tuple[float, float, float]:
+    """Median seconds a step, and of it in the bodies' loads and in the radiation."""
+    system, dt = run.system, run.dt
     spent = {"hydro": 0.0, "radiation": 0.0}
 
     def timed(fn, key):
@@ -234,24 +251,18 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
 
         return wrapper
 
-    for m in system.members:
-        m.model.wetted, m.model.linearised = timed(m.model.wetted, "hydro"), timed(m.model.linearised, "hydro")
+    system.loads = [timed(loads, "hydro") for loads in system.loads]
     rad = system.radiation
     rad.drift, rad.load = timed(rad.drift, "radiation"), timed(rad.load, "radiation")
-    dt = float(scene.step.dt)
-    for _ in range(5):
-        s = system.step(s, dt)
+    run.step(5)
     totals, hydro, radiation = [], [], []
-    for _ in range(args.repeats):
+    for _ in range(repeats):
         before, h0, r0 = time.perf_counter(), spent["hydro"], spent["radiation"]
-        for _ in range(40):
-            s = system.step(s, dt)
+        run.step(40)
         totals.append((time.perf_counter() - before) / 40)
         hydro.append((spent["hydro"] - h0) / 40)
         radiation.append((spent["radiation"] - r0) / 40)
-    t, h, r = statistics.median(totals), statistics.median(hydro), statistics.median(radiation)
-    return [(f"rm3: {len(system.members)} bodies, {system.n_dofs} dofs, {rad.states} memory states, dt {dt:g} s", f"{t * 1e6:.0f}", f"{dt / t:.1f}",
-             f"{h * 1e6:.0f}", f"{r * 1e6:.0f}", f"{(t - h - r) * 1e6:.0f}")]  # fmt: skip
+    return statistics.median(totals), statistics.median(hydro), statistics.median(radiation)
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:

@@ -51,12 +51,14 @@ class Spec(NamedTuple):
     current: bool = False
     held: bool = False
     """Whether another model gives the body a load held over each step (the mooring lines)."""
+    system: bool = False
+    """Whether the body is one of several on joints (system.py): only its loads are compiled, no scheme's step."""
 
     @property
     def key(self) -> str:
         """A name for this specialisation, usable in a module name."""
         mask = sum(1 << i for i, name in enumerate(COMPILED_TERMS) if name in self.terms)
-        return f"{self.scheme}_{self.model}_t{mask:x}_{self._water}{'_rad' if self.radiating else ''}{'_held' if self.held else ''}"
+        return f"{self.scheme}_{self.model}_t{mask:x}_{self._water}{'_rad' if self.radiating else ''}{'_held' if self.held else ''}{'_sys' if self.system else ''}"
 
     @property
     def _water(self) -> str:
@@ -65,7 +67,7 @@ class Spec(NamedTuple):
     def describe(self) -> str:
         terms = " + ".join(self.terms) or "no forces"
         water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
-        return f"{self.scheme} scheme, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
+        return f"{'the loads of one of several bodies' if self.system else self.scheme + ' scheme'}, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
 
 
 def spec_of(model, scheme: str) -> Spec:
@@ -146,7 +148,7 @@ _import_shared()
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
-    return {"schemes.advance", "simulation.observe"} <= found
+    return ({"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}) <= found
 
 
 def warm_up(spec: Spec) -> float:

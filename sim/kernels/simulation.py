@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .forces import nonlinear_loads, pose_loads, twist_loads
+from .forces import linearised, nonlinear_loads, pose_loads, twist_loads
 from .jit import JIT, njit
 from .layout import RHO, G, Scratch
 from .spec import CELLS, CURRENT, DAMPING, GRAVITY, HAS_NONLINEAR, MODEL, POINTS, PRESSURE, USED, WAVES, WET_TERMS
@@ -26,6 +26,15 @@ def observe(x, R, t, u, w, model, sea, wet):
     if MODEL == CELLS:
         return observe_cells(x, R, u, w, model, wet)
     return observe_panels(x, R, u, w, model, wet)
+
+
+@njit(**JIT)
+def linearised_loads(x, R, t, u, w, model, sea):
+    """(f, D): one body's loads near its twist (u, w) as f - D (u, w), at a pose and time, as forces.Model.linearised
+    (the kick of several bodies on joints, system.py)."""
+    s = Scratch(np.zeros(model.geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(model.geom))
+    F, T, D, is_wet = pose_loads(x, R, t, model, s, sea)
+    return linearised(x, R, u, w, model, F, T, D, is_wet, s)
 
 
 @njit(**JIT)

@@ -201,6 +201,8 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
     no compile child killed a few seconds later, no load fighting the simulation thread for the GIL).
     """
     scene = load_scene(args.scene)
+    if scene.bodies:
+        return start_bodies(args, scene, publish_hz=publish_hz, kernels=kernels)
     if args.mesh is not None:
         from sim.body import load_mesh
 
@@ -218,6 +220,26 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
         server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
         return ViewerApp(server, loop, args.host, args.token, args.share)
+    except BaseException:
+        loop.stop()
+        server.stop()
+        raise
+
+
+def start_bodies(args: ViewArgs, scene, *, publish_hz: float = 30.0, kernels: bool = True):
+    """The viewer of a scene of several bodies (app/bodies.py)."""
+    from .bodies import BodiesApp, BodiesLoop
+
+    for flag, given in (("--mesh", args.mesh is not None), ("--token", args.token), ("--share", args.share)):
+        if given:
+            raise ConfigError(f"{flag} is for one-body scenes: the viewer of several bodies ({args.scene}) has no such control yet")
+    port = check_address(args.host, args.port)
+    loop = BodiesLoop(scene, args.scene, publish_hz=publish_hz, kernels=kernels)
+    with own_origin_only(args.host):
+        server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
+    refuse_share(server, Refusals(lambda text: loop.post("notice", text), "request for a public share link"))
+    try:
+        return BodiesApp(server, loop, args.host)
     except BaseException:
         loop.stop()
         server.stop()

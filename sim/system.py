@@ -296,6 +296,17 @@ class System:
             J.append(_carried(Jg[gi], xm - xg[gi]))
         return Pose(x, R, J)
 
+    def joint_axes(self, s: SystemState) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each one-dof joint's axis now, (a point on it, its unit direction), world frame: a slide's through its group's
+        origin, a hinge's through its pivot."""
+        xs, Rs, _ = self.group_poses(s)
+        out = []
+        for g in self.joints:
+            xp, Rp = (np.zeros(3), np.eye(3)) if g.parent < 0 else (xs[g.parent], Rs[g.parent])
+            i = self.groups.index(g)
+            out.append((xs[i] if g.kind == "prismatic" else xp + Rp @ g.pivot, Rp @ g.axis))
+        return out
+
     def drifted(self, s: SystemState, h: float, v: np.ndarray | None = None) -> SystemState:
         """The coordinates moved at velocity v (default s.v) for time h: free groups translated and turned by exp(h omega)."""
         v = s.v if v is None else v
@@ -527,6 +538,7 @@ class Assembly:
 
         self.scene = scene
         self.system, self.state = build(scene)
+        self.start = self.state
         self.dt = float(scene.step.dt)
         self.notes: list[str] = []
         if scene.step.integrator != "implicit":
@@ -562,6 +574,10 @@ class Assembly:
         self.system.use_kernels(backend == "numba")
         self.backend = backend
 
+    def reset(self) -> None:
+        """Back to the starting state (the system, its coefficients and kernels kept)."""
+        self.state = self.start
+
     def step(self, n: int = 1) -> SystemState:
         from .errors import SimulationDiverged
 
@@ -577,7 +593,7 @@ class Assembly:
             s = self.state
             joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
                        float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
-            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s)))
+            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s)))
         return self._frame[1]
 
     def columns(self) -> list[str]:
@@ -598,6 +614,8 @@ class AssemblyFrame:
     joints: list
     """Each joint's (name, theta, rate, P_pto, E_pto)."""
     energies: dict
+    joint_axes: list = field(default_factory=list)
+    """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
 
     @property
     def E_pto(self) -> float:

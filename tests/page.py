@@ -35,6 +35,8 @@ class Page:
         self.messages: list[dict] = []
         self.texts: dict[str, str] = {}
         """Every markdown block's content as the page shows it, by uuid."""
+        self.nodes: dict[str, dict] = {}
+        """Every scene node's last properties as the page has them (position, wxyz, ...), by name."""
 
     @classmethod
     @contextlib.asynccontextmanager
@@ -79,6 +81,12 @@ class Page:
     def _take(self, m: dict) -> None:
         self.messages.append({k: v for k, v in m.items() if k == "type" or k in ("uuid", "updates", "share_url")})
         kind = m.get("type", "")
+        if "name" in m and isinstance(m.get("props"), dict):  # a scene node made
+            self.nodes[m["name"]] = dict(m["props"])
+        elif kind == "SceneNodeUpdateMessage" and m.get("name") in self.nodes:
+            self.nodes[m["name"]].update(m.get("updates", {}))
+        elif kind in ("SetPositionMessage", "SetOrientationMessage"):
+            self.nodes.setdefault(m["name"], {}).update({k: m[k] for k in ("position", "wxyz") if k in m})
         if kind == "GuiMarkdownMessage" and isinstance(m.get("props"), dict):
             self.texts[m["uuid"]] = m["props"].get("_markdown", "")  # viser 1.1.1's name for the content
         elif kind == "GuiUpdateMessage" and m.get("uuid") in self.texts and "_markdown" in m.get("updates", {}):

@@ -238,7 +238,7 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
 
 def _system_split(run, repeats: int) -> tuple[float, float, float]:
     """Median seconds a step, and of it in the bodies' loads and in the radiation."""
-    system, dt = run.system, run.dt
+    system = run.system
     spent = {"hydro": 0.0, "radiation": 0.0}
 
     def timed(fn, key):

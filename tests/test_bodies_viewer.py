@@ -1,0 +1,105 @@
+"""The viewer of several bodies (app/bodies.py) on the rm3 preset, through viser's real websocket protocol: every body
+drawn where the run has it, the joint's axis, the take-off's numbers; Pause, Step, Reset and Speed from the page."""
+
+import asyncio
+import contextlib
+import io
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tests.page import Page
+from tests.viewer import wait_for
+
+
+@contextlib.contextmanager
+def viewer(kernels: bool = False):
+    from app.args import ViewArgs
+    from app.main import start
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = start(ViewArgs(scene="rm3", port=0), kernels=kernels, publish_hz=20.0)
+    try:
+        yield app
+    finally:
+        app.stop()
+
+
+def test_every_body_is_drawn_where_the_run_has_it_and_the_controls_drive_it():
+    with viewer() as app:
+
+        async def watch():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Pause" in p.controls)
+                await page.camera()
+                await page.read(0.5)  # viser runs a page's callbacks once its camera message is in
+                await page.update("Pause", True)
+                await page.read(1.0)
+                snap = app.sync()
+                await page.read(1.0)  # what the paused run drew last has arrived
+                return page, snap
+
+        page, snap = asyncio.run(watch())
+        assert snap.paused and snap.frame.t > 0
+        frame = snap.frame
+        for body in frame.bodies:  # each body's frame node is where the run has it (viser sends float32)
+            node = page.nodes[f"/bodies/{body['name']}"]
+            np.testing.assert_allclose(node["position"], body["x"], atol=1e-4)
+            np.testing.assert_allclose(node.get("wxyz", (1.0, 0.0, 0.0, 0.0)), body["q"], atol=1e-6)  # (unsent while unturned)
+        spar, floater = (b["x"] for b in frame.bodies)
+        assert abs(floater[2] - spar[2] - 17.9743 - frame.joints[1][1]) < 1e-9  # the float slides on the spar: its stroke
+        assert "/bodies/spar/mesh" in page.nodes and "/bodies/float/mesh" in page.nodes and "/joints" in page.nodes
+        text = page.text("joint float")
+        assert f"t = {frame.t:.2f} s" in text and "paused" in text and "take-off power" in text and "joint spar: stroke" in text
+        t_paused = app.sync().frame.t
+        assert app.sync().frame.t == t_paused  # paused: the run stands still
+
+        async def drive():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Pause" in p.controls)
+                await page.camera()
+                await page.read(0.5)
+                assert page.value("Pause") is True  # a new page is shown the run's own state
+                await page.send({"type": "GuiUpdateMessage", "uuid": page.control("Step")["uuid"], "updates": {"value": True}})
+                await page.read(0.5)
+                stepped = app.sync().frame.t
+                await page.send({"type": "GuiUpdateMessage", "uuid": page.control("Reset")["uuid"], "updates": {"value": True}})
+                await page.read(0.5)
+                reset = app.sync()
+                await page.update("Speed", 1000.0)
+                await page.update("Pause", False)
+                await page.read(0.5)
+                return stepped, reset
+
+        stepped, reset = asyncio.run(drive())
+        assert stepped == pytest.approx(t_paused + app.loop.run.dt)
+        assert reset.frame.t == 0.0 and reset.epoch == 1
+        snap = wait_for(app, lambda s: "Speed must be within" in s.notice and s.frame.t > 0.5, what="the clamped speed and the run going on")
+        assert snap.speed == 100.0
+
+
+def test_the_run_moves_to_the_compiled_loads_without_a_jump():
+    """With the bodies' kernels on disk the loop loads them on a thread and moves to them between two steps: the
+    run goes on from the same state (its time never goes back), now compiled."""
+    from sim.config import load_scene
+    from sim.kernels import warm_up
+    from sim.system import build
+
+    system, _ = build(load_scene("rm3"))
+    for spec in system.specs:
+        warm_up(spec)
+    with viewer(kernels=True) as app:
+        times = []
+        snap = wait_for(app, lambda s: times.append(s.frame.t) or s.engine == "compiled", what="the compiled loads")
+        assert times == sorted(times) and "ready" in snap.notice
+        later = wait_for(app, lambda s: s.frame.t > snap.frame.t + 1.0, what="the run going on")
+        assert later.engine == "compiled" and np.isfinite(later.frame.E_total)
+
+
+@pytest.mark.parametrize("flag", [["--mesh", "assets/meshes/rm3_float.stl"], ["--token", "x"]])
+def test_one_body_flags_are_one_line_errors(flag):
+    done = subprocess.run([sys.executable, "-m", "app", "--scene", "rm3", *flag], capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 2 and "for one-body scenes" in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

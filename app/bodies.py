@@ -27,6 +27,7 @@ from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
 from sim.system import Assembly, AssemblyFrame
 
+from .scene import LINE_COLOUR, LINES_HZ
 from .water import WaterView
 
 JOINT_COLOUR = (250, 170, 40)
@@ -116,6 +117,8 @@ class BodiesLoop:
         self.post("_wake")
         if self._thread is not None:
             self._thread.join(timeout)
+        if self._thread is None or not self._thread.is_alive():
+            self.run.close()  # MoorDyn's lines, if any
 
     # ---- the simulation thread
 
@@ -303,6 +306,7 @@ class BodiesView:
         self.speed.on_update(lambda _: loop.post("speed", self.speed.value))
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._plotted, self._epoch, self._notice_id = -math.inf, -1, 0
+        self.lines, self._lines_time = None, -math.inf
 
     def show(self, snap: BodiesSnapshot) -> None:
         frame = snap.frame
@@ -315,6 +319,13 @@ class BodiesView:
                     self.joints = self.server.scene.add_line_segments("/joints", segments, JOINT_COLOUR, thickness=0.04)
                 else:
                     self.joints.points = segments
+            if frame.lines and time.monotonic() - self._lines_time >= 1.0 / LINES_HZ:  # the mooring lines, throttled
+                self._lines_time = time.monotonic()
+                segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in frame.lines]).astype(np.float32)
+                if self.lines is None:
+                    self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
+                else:
+                    self.lines.points = segments
             centre = np.mean([b["x"] for b in frame.bodies], axis=0)
             self.water.show(snap.water, frame.t, centre, True)
             if self.pause.value != snap.paused:
@@ -348,6 +359,8 @@ def describe(snap: BodiesSnapshot, takeoffs: list[str]) -> str:
     rate = "paused" if snap.paused else ("-" if math.isnan(snap.real_time_factor) else f"{snap.real_time_factor:.2f}x real time")
     lines = [f"**{snap.scene_name}** &nbsp; t = {f.t:.2f} s ({rate}; {snap.engine})", ""]
     lines += [f"- {b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in f.bodies]
+    if f.mooring:
+        lines += [f"- mooring lines: pull {np.linalg.norm(f.mooring[:3]) / 1e3:.2f} kN, largest fairlead tension {f.mooring[3] / 1e3:.2f} kN"]
     for name, theta, _, p, e in f.joints:
         taken = f", take-off power {p / 1e3:.1f} kW, absorbed {e / 1e6:.3f} MJ ({e / f.t / 1e3 if f.t > 0 else 0:.1f} kW mean)" if name in takeoffs else ""
         lines.append(f"- joint {name}: stroke {theta:+.3f}{taken}")

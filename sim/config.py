@@ -115,6 +115,8 @@ MOORINGS = (
           lo=-1e5, hi=1e5, kind="points", size=64, flag=False),
     Param("moorings", "fairleads", (), "Fairlead points for the anchors given, relative to the centre of mass in the scene's input frame "
           "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
+    Param("moorings", "body", "", "A scene of several bodies: the name of the one the lines hold (default: the first listed)", kind="text",
+          name="moored body", flag=False),
 )
 CONSTRAINT = (
     Param("constraint", "joint", "free", "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
@@ -319,8 +321,8 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
     if untouched:
         raise ConfigError(f"a scene with [[bodies]] gives each body its own shape, pose and joint: {', '.join(untouched)} (and their flags) "
                           "do not apply; set them in the [[bodies]] entries")  # fmt: skip
-    if moored(scene):
-        raise ConfigError("mooring lines on a scene with [[bodies]] are not modelled yet: moor a one-body scene")
+    if moored(scene) and scene.moorings.body not in ("", *seen):
+        raise ConfigError(f"[moorings] body = {scene.moorings.body!r} is not one of the [[bodies]]: {', '.join(seen)}")
     return tuple(entries)
 
 
@@ -344,6 +346,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
     checked = dataclasses.replace(scene, **checked)
+    if not scene.bodies and checked.moorings.body:
+        raise ConfigError(f"[moorings] body = {checked.moorings.body!r} names one of several bodies: this scene has one ([body])")
     return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked
 
 

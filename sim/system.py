@@ -29,7 +29,8 @@ damping, as the one-body implicit scheme and the joint to the world are.
 The velocity-product term J_dot v is a central difference of J v along the motion (its error ~1e-10
 relative); it is left out where every Jacobian is constant (slides on slides to the world).
 Each body's loads come from the numpy reference or its compiled twin (body_loads.py); the kinematics and the
-kicks are numpy. Not yet: moorings on several bodies.
+kicks are numpy. Mooring lines (MoorDyn, moorings.py) hold one of the bodies ([moorings] body): the Assembly
+advances them over each step and holds their mean pull on that body over it, as for one body.
 """
 
 from __future__ import annotations
@@ -214,6 +215,8 @@ class System:
         self.order = order
         """(group, member) of each body in the scene's order."""
         self._pose: tuple = (None, None)
+        self.held: list = [None] * len(order)
+        """Each body's load another model gives it, held over the next step ((6,) world frame, or None): the mooring lines'."""
         self.loads = [BodyLoads(m.model) for m in self.members]
         """Each body's loads near a twist (the numpy reference, or its compiled twin: use_kernels)."""
         self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
@@ -370,9 +373,9 @@ class System:
         pose = self.pose(s)
         n = self.n_dofs
         Q, D = np.zeros(n), np.zeros((n, n))
-        for loads, x, R, J in zip(self.loads, pose.x, pose.R, pose.J):
+        for loads, x, R, J, held in zip(self.loads, pose.x, pose.R, pose.J, self.held):
             f, Dm = loads(x, R, s.t, J @ v)
-            Q += J.T @ f
+            Q += J.T @ (f if held is None else f + held)
             if Dm is not None:
                 D += J.T @ Dm @ J
         for g in self.joints:
@@ -534,12 +537,17 @@ class Assembly:
 
     def __init__(self, scene: SceneConfig, backend: str | None = None):
         from .compiling import kernels_ready
+        from .config import moored
         from .simulation import default_backend
 
         self.scene = scene
         self.system, self.state = build(scene)
         self.start = self.state
         self.dt = float(scene.step.dt)
+        names = [m.name for m in self.system.members]
+        self.moored = (names.index(scene.moorings.body) if scene.moorings.body else 0) if moored(scene) else None
+        """The index of the body the mooring lines hold (None: no lines)."""
+        self.moorings = self._moorings()
         self.notes: list[str] = []
         if scene.step.integrator != "implicit":
             self.notes.append(f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used")
@@ -574,14 +582,39 @@ class Assembly:
         self.system.use_kernels(backend == "numba")
         self.backend = backend
 
+    def _moorings(self):
+        """The lines in MoorDyn at the starting state (moorings.py), or None."""
+        if self.moored is None:
+            return None
+        from .moorings import Moorings
+
+        k, s = self.moored, self.start
+        pose = self.system.pose(s)
+        nu = pose.J[k] @ s.v
+        lines = Moorings.of_scene(replace(self.scene, initial=self.scene.bodies[k].initial), pose.x[k], pose.R[k], nu[:3], nu[3:])
+        self.system.held[k] = lines.load.copy()
+        return lines
+
     def reset(self) -> None:
-        """Back to the starting state (the system, its coefficients and kernels kept)."""
+        """Back to the starting state (the system, its coefficients and kernels kept; the lines start afresh)."""
         self.state = self.start
+        if self.moorings is not None:
+            self.moorings.close()
+            self.moorings = self._moorings()
+        self._frame = None
+
+    def close(self) -> None:
+        if self.moorings is not None:
+            self.moorings.close()
 
     def step(self, n: int = 1) -> SystemState:
         from .errors import SimulationDiverged
 
         for _ in range(n):
+            if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
+                k, pose = self.moored, self.system.pose(self.state)
+                nu = pose.J[k] @ self.state.v
+                self.system.held[k] = self.moorings.advance(pose.x[k], pose.R[k], nu[:3], nu[3:], self.dt)
             new = self.system.step(self.state, self.dt)
             if not new.is_finite():
                 raise SimulationDiverged(f"the state became non-finite at t = {self.state.t + self.dt:.6g} s: try a smaller time step")
@@ -593,7 +626,12 @@ class Assembly:
             s = self.state
             joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
                        float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
-            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s)))
+            lines, pull = (), ()
+            if self.moorings is not None:
+                lines = tuple(self.moorings.lines())
+                pull = (*self.moorings.load[:3], float(self.moorings.fairlead_tensions().max()))
+            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
+                                            pull))  # fmt: skip
         return self._frame[1]
 
     def columns(self) -> list[str]:
@@ -603,6 +641,8 @@ class Assembly:
             cols += [f"{m.name}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
         for g in self.system.joints:
             cols += [f"{g.name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
+        if self.moorings is not None:
+            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
         return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total"]
 
 
@@ -616,6 +656,10 @@ class AssemblyFrame:
     energies: dict
     joint_axes: list = field(default_factory=list)
     """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
+    lines: tuple = ()
+    """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
+    mooring: tuple = ()
+    """The lines' pull on the moored body (Fx, Fy, Fz, N) and the largest fairlead tension (N); empty without lines."""
 
     @property
     def E_pto(self) -> float:
@@ -632,5 +676,6 @@ class AssemblyFrame:
             out += [*b["x"], *b["q"], *b["u"], *b["omega"]]
         for _, *values in self.joints:
             out += values
+        out += list(self.mooring)
         e = self.energies
         return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total]

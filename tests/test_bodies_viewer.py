@@ -15,12 +15,12 @@ from tests.viewer import wait_for
 
 
 @contextlib.contextmanager
-def viewer(kernels: bool = False):
+def viewer(kernels: bool = False, scene: str = "rm3"):
     from app.args import ViewArgs
     from app.main import start
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="rm3", port=0), kernels=kernels, publish_hz=20.0)
+        app = start(ViewArgs(scene=scene, port=0), kernels=kernels, publish_hz=20.0)
     try:
         yield app
     finally:
@@ -103,3 +103,24 @@ def test_one_body_flags_are_one_line_errors(flag):
     done = subprocess.run([sys.executable, "-m", "app", "--scene", "rm3", *flag], capture_output=True, text=True, timeout=60, check=False)
     assert done.returncode == 2 and "for one-body scenes" in done.stderr and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_the_mooring_lines_of_a_body_among_several_are_drawn(tmp_path):
+    """A moored [[bodies]] scene (tests/test_system.py's pontoon): the lines' node and the pull in the numbers."""
+    pytest.importorskip("moordyn")
+    import textwrap
+
+    from tests.test_system import MOORED
+
+    (tmp_path / "moored.toml").write_text(textwrap.dedent(MOORED))
+    with viewer(scene=str(tmp_path / "moored.toml")) as app:
+
+        async def watch():
+            async with Page.open(app.port) as page:
+                await page.read(2.0, until=lambda p: "/moorings" in p.nodes and p.text("mooring lines"))
+                return page
+
+        page = asyncio.run(watch())
+        snap = app.sync()
+        assert "/moorings" in page.nodes and len(snap.frame.lines) == 3
+        assert "largest fairlead tension" in page.text("mooring lines")

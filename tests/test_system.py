@@ -328,3 +328,78 @@ def test_one_body_flags_do_not_apply_to_several_bodies(tmp_path):
     assert done.returncode == 2 and "[body] (and their flags) do not apply" in done.stderr
     with pytest.raises(ConfigError, match="mooring lines on a scene with \\[\\[bodies\\]\\]"):
         scene_file(tmp_path, SLIDE + "\n    [moorings]\n    lines = 3\n", "moored.toml")
+
+
+MOORED = """
+    [fluid]
+    forces = "panels"
+    damping = 100.0
+    [waves]
+    kind = "regular"
+    height = 0.1
+    period = 2.0
+    [moorings]
+    lines = 3
+    anchor_radius = 25.0
+    anchor_depth = 10.0
+    fairlead_radius = 0.5
+    fairlead_height = -0.3
+    line_length = 28.0
+    line_mass = 1.0
+    line_diameter = 0.02
+    line_stiffness = 1.0e5
+    segments = 10
+    [[bodies]]
+    name = "pontoon"
+    shape = "cube"
+    density = 900.0
+    position = [0.3, 0.0, -0.4]
+    joint = "prismatic"
+    axis = [1.0, 0.0, 0.0]
+    pto_damping = 50.0
+    [step]
+    dt = 0.01
+"""
+
+
+def test_mooring_lines_on_one_of_several_bodies_pull_as_on_one_body(tmp_path):
+    """A pontoon on a surge slide held by three MoorDyn lines, as a [[bodies]] entry and as a one-body scene with the
+    same joint: the same lines' pull held over each step, so the same surge and take-off energy to round-off; the lines
+    pull it back towards the middle (it starts 0.3 m off)."""
+    pytest.importorskip("moordyn")
+    from sim.system import Assembly
+
+    scene = scene_file(tmp_path, MOORED)
+    run = Assembly(scene, backend="numpy")
+    e = scene.bodies[0]
+    sim = Simulation(dataclasses.replace(scene, bodies=(), body=e.body, initial=e.initial, constraint=e.constraint), backend="numpy")
+    try:
+        run.step(300)
+        sim.step(300)
+        assert abs(run.state.theta[0] - sim.joint.coordinate(sim.state)) < 1e-10
+        assert run.state.absorbed[0] == pytest.approx(sim.pto_energy, rel=1e-8)
+        assert run.state.theta[0] < -0.05  # pulled back
+        frame = run.frame()
+        np.testing.assert_allclose(frame.mooring[:3], sim.frame().mooring_force, rtol=1e-8)
+        assert len(frame.lines) == 3 and frame.lines[0].shape == (11, 3)
+    finally:
+        run.close()
+        sim.moorings.close()
+
+
+def test_run_writes_the_lines_pull_for_several_bodies(tmp_path):
+    """The CLI on a moored [[bodies]] scene: the one-body scene's mooring columns, the pull along the slide's axis the
+    one that moves it; a [moorings] body that is not one of the bodies is a one-line error."""
+    pytest.importorskip("moordyn")
+    (tmp_path / "moored.toml").write_text(textwrap.dedent(MOORED))
+    out = tmp_path / "moored.csv"
+    done = sim_cli("run", "--scene", str(tmp_path / "moored.toml"), "--t-end", "1", "--every", "10", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    header = out.read_text().splitlines()[0].split(",")
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    col = {name: data[:, i] for i, name in enumerate(header)}
+    assert {"Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"} <= col.keys()
+    assert (col["Fx_moor"][1:] < 0).all() and (col["T_fair_max"] > np.abs(col["Fx_moor"]) / 3).all()
+    (tmp_path / "bad.toml").write_text(textwrap.dedent(MOORED).replace("[moorings]\n", '[moorings]\nbody = "buoy"\n'))
+    done = sim_cli("run", "--scene", str(tmp_path / "bad.toml"))
+    assert done.returncode == 2 and "[moorings] body = 'buoy' is not one of the [[bodies]]: pontoon" in done.stderr

@@ -27,7 +27,9 @@ from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
 from sim.system import Assembly, AssemblyFrame
 
+from .recorder import RecordPanel
 from .scene import LINE_COLOUR, LINES_HZ
+from .take import MAX_SHOTS, Take
 from .water import WaterView
 
 JOINT_COLOUR = (250, 170, 40)
@@ -269,24 +271,87 @@ class BodiesLoop:
                 print(f"floatsim viewer: drawing failed: {type(e).__name__}: {e}", file=sys.stderr)
 
 
+class BodiesScene:
+    """The 3D nodes of a system: each body's frame and mesh, the joints' axes, the mooring lines, the water. `show`
+    moves them to a snapshot (the live viewer's, a recording's: replay=True keeps every pose exactly and counts the
+    throttles in the time given)."""
+
+    def __init__(self, server: viser.ViserServer, system, replay: bool = False):
+        self.server, self.replay = server, replay
+        bodies = [m.body for m in system.members]
+        size = max(max(float(np.ptp(b.mesh_vertices, axis=0).max()) for b in bodies), 2.0)
+        self.water = WaterView(server, 2.0 * size, lighter=replay)
+        self.frames = []
+        for k, m in enumerate(system.members):
+            self.frames.append(server.scene.add_frame(f"/bodies/{m.name}", axes_length=0.3 * m.body.radius, axes_radius=0.01 * m.body.radius))
+            server.scene.add_mesh_simple(f"/bodies/{m.name}/mesh", m.body.mesh_vertices, m.body.mesh_faces, color=BODY_COLOURS[k % len(BODY_COLOURS)],
+                                         flat_shading=True)  # fmt: skip
+        self._reach = 0.6 * size
+        self.joints = self.lines = None
+        self._lines_time = -math.inf
+        server.initial_camera.position = (1.6 * size, -2.2 * size, 0.9 * size)
+        server.initial_camera.look_at = (0.0, 0.0, -0.25 * size)
+
+    def show(self, snap: BodiesSnapshot, now: float | None = None) -> None:
+        now = time.monotonic() if now is None else now
+        frame = snap.frame
+        with self.server.atomic():
+            for node, body in zip(self.frames, frame.bodies):
+                if self.replay:  # viser skips a pose within 1e-5 of the last one sent: a replay keeps every pose exactly
+                    node._impl.position[:] = np.nan
+                    node._impl.wxyz[:] = np.nan
+                node.position, node.wxyz = body["x"], body["q"]
+            if frame.joint_axes:
+                segments = np.array([[p - self._reach * a, p + self._reach * a] for p, a in frame.joint_axes], np.float32)
+                if self.joints is None:
+                    self.joints = self.server.scene.add_line_segments("/joints", segments, JOINT_COLOUR, thickness=0.04)
+                else:
+                    self.joints.points = segments
+            if frame.lines and now - self._lines_time >= 1.0 / LINES_HZ:  # the mooring lines, throttled
+                self._lines_time = now
+                segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in frame.lines]).astype(np.float32)
+                if self.lines is None:
+                    self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
+                else:
+                    self.lines.points = segments
+            self.water.show(snap.water, frame.t, np.mean([b["x"] for b in frame.bodies], axis=0), True, now)
+
+
+class BodiesTake(Take):
+    """A recording of a system's run: its snapshots on the take clock (app/take.py), the run's CSV, and its scene for a
+    replay page or a video (app/replay.py, app/video.py)."""
+
+    def __init__(self, system, columns: list[str], limit: int = MAX_SHOTS):
+        super().__init__(limit)
+        self.system, self.columns = system, columns
+
+    def add(self, snap: BodiesSnapshot) -> bool:
+        if len(self._shots) >= self.limit:
+            return False
+        if self._tick(snap.frame.t):
+            self._shots.append(snap)
+        return True
+
+    def __getitem__(self, i: int) -> BodiesSnapshot:
+        return self._shots[i]
+
+    def csv(self) -> str:
+        rows = [",".join(self.columns)] + [",".join(f"{v:.12g}" for v in shot.frame.row()) for shot in self._shots]
+        return "\n".join(rows) + "\n"
+
+    def stage(self, server: viser.ViserServer) -> BodiesScene:
+        view = BodiesScene(server, self.system, replay=True)
+        view.show(self[0], now=0.0)
+        return view
+
+
 class BodiesView:
-    """The 3D scene and the panel for a BodiesLoop; `show` runs on the simulation thread."""
+    """The live viewer's scene and panel for a BodiesLoop; `show` runs on the simulation thread."""
 
     def __init__(self, server: viser.ViserServer, loop: BodiesLoop):
         self.server = server
         system = loop.run.system
-        bodies = [m.body for m in system.members]
-        size = max(max(float(np.ptp(b.mesh_vertices, axis=0).max()) for b in bodies), 2.0)
-        self.water = WaterView(server, 2.0 * size)
-        self.frames, self.meshes = [], []
-        for k, m in enumerate(system.members):
-            self.frames.append(server.scene.add_frame(f"/bodies/{m.name}", axes_length=0.3 * m.body.radius, axes_radius=0.01 * m.body.radius))
-            self.meshes.append(server.scene.add_mesh_simple(f"/bodies/{m.name}/mesh", m.body.mesh_vertices, m.body.mesh_faces,
-                                                            color=BODY_COLOURS[k % len(BODY_COLOURS)], flat_shading=True))  # fmt: skip
-        self._reach = 0.6 * size
-        self.joints = None
-        server.initial_camera.position = (1.6 * size, -2.2 * size, 0.9 * size)
-        server.initial_camera.look_at = (0.0, 0.0, -0.25 * size)
+        self.scene = BodiesScene(server, system)
         gui = server.gui
         with gui.add_folder("Run"):
             self.pause = gui.add_checkbox("Pause", False)
@@ -300,34 +365,19 @@ class BodiesView:
                                   ({"label": "t (s)"}, *({"label": f"take-off {n} power (kW)", "stroke": c, "width": 1.5}
                                                           for n, c in zip(names, ("#d62728", "#1f77b4", "#2ca02c", "#9467bd")))),
                                   scales={"x": {"time": False}}, legend={"show": True}, aspect=2.2, visible=bool(names))  # fmt: skip
+        self.recorder = RecordPanel(server, lambda text, client=None, error=False: loop.post("notice", text),
+                                    new_take=lambda: BodiesTake(system, loop.run.columns()))  # fmt: skip
         self.pause.on_update(lambda _: loop.post("pause", self.pause.value))
         self.step.on_click(lambda _: loop.post("step"))
         self.reset.on_click(lambda _: loop.post("reset"))
         self.speed.on_update(lambda _: loop.post("speed", self.speed.value))
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._plotted, self._epoch, self._notice_id = -math.inf, -1, 0
-        self.lines, self._lines_time = None, -math.inf
 
     def show(self, snap: BodiesSnapshot) -> None:
-        frame = snap.frame
+        self.recorder.capture(snap)
         with self.server.atomic():
-            for node, body in zip(self.frames, frame.bodies):
-                node.position, node.wxyz = body["x"], body["q"]
-            if frame.joint_axes:
-                segments = np.array([[p - self._reach * a, p + self._reach * a] for p, a in frame.joint_axes], np.float32)
-                if self.joints is None:
-                    self.joints = self.server.scene.add_line_segments("/joints", segments, JOINT_COLOUR, thickness=0.04)
-                else:
-                    self.joints.points = segments
-            if frame.lines and time.monotonic() - self._lines_time >= 1.0 / LINES_HZ:  # the mooring lines, throttled
-                self._lines_time = time.monotonic()
-                segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in frame.lines]).astype(np.float32)
-                if self.lines is None:
-                    self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
-                else:
-                    self.lines.points = segments
-            centre = np.mean([b["x"] for b in frame.bodies], axis=0)
-            self.water.show(snap.water, frame.t, centre, True)
+            self.scene.show(snap)
             if self.pause.value != snap.paused:
                 self.pause.value = snap.paused
             self._readouts(snap)
@@ -378,6 +428,7 @@ class BodiesApp:
         shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
         self.url = f"http://{shown}:{self.port}"
         self.view = BodiesView(server, loop)
+        self.recorder = self.view.recorder
         loop.publish = self.view.show
         loop.start()
 

@@ -76,9 +76,11 @@ def prune_recordings(folder: Path, keep: set[str], takes: int | None = None, siz
 
 
 class RecordPanel:
-    def __init__(self, server: viser.ViserServer, notify: Callable[[str, object, bool], None], folder: Path | None = None):
+    def __init__(self, server: viser.ViserServer, notify: Callable[[str, object, bool], None], folder: Path | None = None,
+                 new_take: Callable[[], Take] = Take):  # fmt: skip
+        """new_take: what a recording keeps (app/take.py: one body's shots; app/bodies.py: a system's)."""
         gui = server.gui
-        self.server, self._notify = server, notify
+        self.server, self._notify, self._new_take = server, notify, new_take
         self.folder = folder or Path.cwd() / "floatsim-recordings"
         self._lock = threading.Lock()
         self._take: Take | None = None  # being recorded
@@ -122,7 +124,7 @@ class RecordPanel:
 
     def start(self) -> None:
         with self._lock:
-            self._take = Take()
+            self._take = self._new_take()
         self.record.label, self.record.icon = "Stop recording", viser.Icon.PLAYER_STOP
         self.status.content = "**● Recording…** press *Stop recording* to keep it."
 

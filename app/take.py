@@ -48,17 +48,23 @@ class Take:
         """Keep a shot (a repeat of the last simulated time, as while paused, is skipped); False once full."""
         if len(self._shots) >= self.limit:
             return False
-        if self._shots:
-            step = shot.frame.t - self._shots[-1].frame.t
-            if step == 0.0:
-                return True
-            self.times.append(self.times[-1] + (step if step > 0 else 1.0 / 30.0))  # after a reset: one frame on
-        else:
-            self.times.append(0.0)
+        if not self._tick(shot.frame.t):
+            return True
         mask = np.zeros(shot.body.n_samples, bool)
         mask[shot.frame.wet_index] = True
         frame = dataclasses.replace(shot.frame, wet_index=np.packbits(mask))
         self._shots.append(Shot(frame, shot.body, shot.water, shot.params))
+        return True
+
+    def _tick(self, t: float) -> bool:
+        """Put a shot at simulated time t on the take clock; False for a repeat of the last one's time (a paused run)."""
+        if self._shots:
+            step = t - self._shots[-1].frame.t
+            if step == 0.0:
+                return False
+            self.times.append(self.times[-1] + (step if step > 0 else 1.0 / 30.0))  # after a reset: one frame on
+        else:
+            self.times.append(0.0)
         return True
 
     def __len__(self) -> int:

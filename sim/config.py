@@ -120,7 +120,8 @@ MOORINGS = (
 )
 CONSTRAINT = (
     Param("constraint", "joint", "free", "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
-          "turning) or revolute (turns about axis through the pivot)", kind="choice", choices=JOINTS, label="Joint", gui=()),
+          "turning), revolute (turns about axis through the pivot) or, for a [[bodies]] entry, planar (moves in the plane normal to axis "
+          "and turns about it: surge, heave and pitch for axis y)", kind="choice", choices=JOINTS, label="Joint", gui=()),
     Param("constraint", "axis", (0.0, 0.0, 1.0), "The joint's axis, world frame (normalised)", lo=-1e3, hi=1e3, kind="vector", size=3,
           name="joint axis"),
     Param("constraint", "pivot", (0.0, 0.0, 0.0), "A point on a revolute joint's axis, from the starting centre of mass, world frame", "m",
@@ -290,6 +291,8 @@ def _check_body(b, i, c, where: str = "") -> None:
     check_samples(samples, flag)  # before any array is made
     if c.joint != "free" and not any(c.axis):
         raise ConfigError(f"{where}[constraint] axis must not be zero")
+    if c.joint == "planar" and (c.pto_damping or c.pto_stiffness):
+        raise ConfigError(f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one")
     norm = math.sqrt(sum(q * q for q in i.orientation))
     if abs(norm - 1.0) > QUATERNION_SLACK:
         raise ConfigError(f"{where}initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
@@ -346,6 +349,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
     checked = dataclasses.replace(scene, **checked)
+    if not scene.bodies and checked.constraint.joint == "planar":
+        raise ConfigError("[constraint] joint 'planar' is for a [[bodies]] entry: one body takes fixed, prismatic or revolute")
     if not scene.bodies and checked.moorings.body:
         raise ConfigError(f"[moorings] body = {checked.moorings.body!r} names one of several bodies: this scene has one ([body])")
     return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked

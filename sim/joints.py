@@ -35,7 +35,7 @@ import numpy as np
 from .rotation import matrix_to_quat
 from .state import State, angular_momentum, angular_velocity
 
-JOINTS = ("free", "fixed", "prismatic", "revolute")
+JOINTS = ("free", "fixed", "prismatic", "revolute", "planar")
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:

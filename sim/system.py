@@ -91,6 +91,8 @@ class Group:
     """Index of theta (one-dof joints) or of its free pose (free groups) in the state."""
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     """(3,) its origin at the start, world frame, m."""
+    plane: tuple = ()
+    """A planar joint's two directions of sliding, parent frame (_in_plane)."""
 
     @property
     def mass(self) -> float:
@@ -261,6 +263,14 @@ class System:
                 x, R = s.x_free[g.coordinate].copy(), quat_to_matrix(s.q_free[g.coordinate])
                 J = np.zeros((6, self.n_dofs))
                 J[:, g.dofs] = np.eye(6)
+            elif g.kind == "planar":  # in the plane normal to the axis, turning about it through the group's origin
+                e1, e2 = g.plane
+                a, b, phi = s.theta[g.coordinate : g.coordinate + 3]
+                x, R = xp + Rp @ (g.offset + a * e1 + b * e2), Rp @ _rotation(g.axis, phi)
+                J = _carried(Jp, x - xp)
+                J[:3, g.dofs.start] += Rp @ e1
+                J[:3, g.dofs.start + 1] += Rp @ e2
+                J[3:, g.dofs.start + 2] += Rp @ g.axis
             else:
                 theta = s.theta[g.coordinate] if g.coordinate >= 0 else 0.0
                 a = Rp @ g.axis
@@ -273,7 +283,7 @@ class System:
                 if g.kind == "prismatic":
                     J[:3, g.dofs.start] += a
                 elif g.kind == "revolute":
-                    J[:3, g.dofs.start] += np.cross(a, x - (xp + Rp @ g.pivot))
+                    J[:3, g.dofs.start] += skew(a) @ (x - (xp + Rp @ g.pivot))
                     J[3:, g.dofs.start] += a
             xs.append(x)
             Rs.append(R)
@@ -319,8 +329,9 @@ class System:
                 u, w = v[g.dofs][:3], v[g.dofs][3:]
                 x[g.coordinate] += h * u
                 q[g.coordinate] = rotate_world(q[g.coordinate], h * w)
-            elif g.coordinate >= 0:
-                theta[g.coordinate] += h * v[g.dofs.start]
+            elif g.coordinate >= 0:  # a one-dof joint's coordinate, or a planar joint's three
+                width = g.dofs.stop - g.dofs.start
+                theta[g.coordinate : g.coordinate + width] += h * v[g.dofs]
         return replace(s, x_free=x, q_free=q, theta=theta)
 
     # dynamics
@@ -345,24 +356,26 @@ class System:
 
     def bias(self, s: SystemState, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(b(v), db/dv): the velocity-product load b(v) = sum_b J_b^T (M_b J_b_dot v + (0, omega x I omega)) and
-        its Jacobian. J_b_dot w along a direction of motion is a central difference of J_b there; b is quadratic in v."""
+        its Jacobian. J_b_dot is linear in the velocity: sum_i v_i dJ_b/dt along the i-th unit velocity, each a central
+        difference of J_b there, once per configuration (the two kicks at a step's end and the next one's start share
+        it); b is quadratic in v."""
         n = self.n_dofs
         if not self.needs_bias:
             return np.zeros(n), np.zeros((n, n))
         pose = self.pose(s)
-
-        def rate(w: np.ndarray) -> list[np.ndarray]:  # d J_b / dt while moving at w
-            eps = 1e-5 / max(1.0, float(np.abs(w).max(initial=0.0)))
-            ahead, behind = self._pose_of(self.drifted(s, eps, w)), self._pose_of(self.drifted(s, -eps, w))
-            return [(a - c) / (2 * eps) for a, c in zip(ahead.J, behind.J)]
-
-        along_v, along_e = rate(v), [rate(e) for e in np.eye(n)]
+        if "rates" not in pose.cache:
+            eps = 1e-5
+            ahead = [self._pose_of(self.drifted(s, eps, e)) for e in np.eye(n)]
+            behind = [self._pose_of(self.drifted(s, -eps, e)) for e in np.eye(n)]
+            pose.cache["rates"] = [[(a - c) / (2 * eps) for a, c in zip(p.J, q.J)] for p, q in zip(ahead, behind)]
+        along_e = pose.cache["rates"]  # [dof][body]: d J_b / dt while moving at the dof's unit velocity
+        along_v = [sum(v[i] * along_e[i][k] for i in range(n)) for k in range(len(pose.J))]
         b, B = np.zeros(n), np.zeros((n, n))
         for k, (m, R, J) in enumerate(zip(self.members, pose.R, pose.J)):
             Mb = _body_mass(m.body, R)
             inertia = Mb[3:, 3:]
             omega = J[3:] @ v
-            b += J.T @ (Mb @ (along_v[k] @ v) + np.concatenate([np.zeros(3), np.cross(omega, inertia @ omega)]))
+            b += J.T @ (Mb @ (along_v[k] @ v) + np.concatenate([np.zeros(3), skew(omega) @ (inertia @ omega)]))
             cross = along_v[k] + np.column_stack([d[k] @ v for d in along_e])  # d(J_dot(v) v)/dv
             gyro = (skew(omega) @ inertia - skew(inertia @ omega)) @ J[3:]  # d(omega x I omega)/dv
             B += J.T @ (Mb @ cross + np.vstack([np.zeros((3, n)), gyro]))
@@ -435,6 +448,15 @@ class System:
                 "E_spring": float(sum(0.5 * j.stiffness * s.theta[j.coordinate] ** 2 for j in self.joints))}  # fmt: skip
 
 
+def _in_plane(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A planar joint's two directions of sliding: e1 the x axis projected on the plane normal to `normal` (y where x is
+    normal to it), e2 = e1 x normal. For a normal along y: x and z (surge and heave; the turn about y is pitch)."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = helper - (helper @ normal) * normal
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(e1, normal)
+
+
 def _carried(J: np.ndarray, r: np.ndarray) -> np.ndarray:
     """The Jacobian of the twist at a point r from the one J is at, on the same rigid frame: u + omega x r."""
     out = J.copy()
@@ -487,13 +509,14 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
         parent_origin = np.zeros(3) if parent < 0 else groups[parent].origin
         axis = np.asarray(c.axis, float)
         kind = c.joint
-        width = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1}[kind]
+        width = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1, "planar": 3}[kind]
         coordinate = n_free if kind == "free" else (n_joints if width else -1)
         n_free += kind == "free"
-        n_joints += kind in ("prismatic", "revolute")
+        n_joints += width if kind != "free" else 0
         group = Group(e.name, tuple(members), kind, parent, axis / max(np.linalg.norm(axis), 1e-300),
                       starts[head].x_world + np.asarray(c.pivot, float) - parent_origin, origin - parent_origin, float(c.pto_stiffness),
-                      float(c.pto_damping), slice(dof, dof + width), coordinate, origin)  # fmt: skip
+                      float(c.pto_damping), slice(dof, dof + width), coordinate, origin,
+                      _in_plane(axis / np.linalg.norm(axis)) if kind == "planar" else ())  # fmt: skip
         groups.append(group)
         dof += width
     radiation = None

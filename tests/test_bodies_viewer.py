@@ -124,3 +124,36 @@ def test_the_mooring_lines_of_a_body_among_several_are_drawn(tmp_path):
         snap = app.sync()
         assert "/moorings" in page.nodes and len(snap.frame.lines) == 3
         assert "largest fairlead tension" in page.text("mooring lines")
+
+
+def embedded_messages(html: str) -> list:
+    """The messages of a replay page's recording (viser's serialised scene, inline), binary buffers left out."""
+    import base64
+    import re
+
+    import msgspec
+    import zstandard
+
+    raw = base64.b64decode(re.search(r'window.__VISER_EMBED_DATA__="([^"]+)"', html).group(1))
+    inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=int.from_bytes(raw[:8], "little"))
+    n = int.from_bytes(inner[:8], "little")
+    return msgspec.msgpack.decode(inner[8 : 8 + n])["messages"]
+
+
+def test_a_recording_of_several_bodies_replays_every_pose_and_writes_the_run_csv(tmp_path, monkeypatch):
+    """Record and Stop from the page's buttons: the take's CSV has the run's columns and each recorded snapshot's
+    row; its replay page moves every body through every recorded pose (the float's last one exactly, float32)."""
+    from tests.test_recordings import record_takes
+
+    monkeypatch.chdir(tmp_path)
+    with viewer() as app:
+        record_takes(app, 1, seconds=1.0)
+        take, files = app.recorder.last, app.recorder.files
+        header = files["csv"].read_text().splitlines()[0].split(",")
+        assert header == app.loop.run.columns()
+        data = np.loadtxt(files["csv"], delimiter=",", skiprows=1)
+        assert len(data) == len(take) > 10 and np.all(np.diff(data[:, 0]) > 0)
+        np.testing.assert_allclose(data[:, header.index("float_z")], [shot.frame.bodies[1]["x"][2] for shot in take.shots], atol=1e-9)
+        moves = [m[1] for m in embedded_messages(files["html"].read_text()) if m[1].get("name") == "/bodies/float" and "position" in m[1]]
+        assert len(moves) >= len(take)  # every pose, none skipped as too close to the last
+        np.testing.assert_allclose(moves[-1]["position"], take[len(take) - 1].frame.bodies[1]["x"], atol=1e-4)

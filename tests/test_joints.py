@@ -160,6 +160,7 @@ def test_the_csv_carries_the_take_off_power_and_energy(tmp_path):
     (("--joint", "hinge"), "unknown joint 'hinge'"),
     (("--joint", "prismatic", "--axis", "0", "0", "0"), "axis must not be zero"),
     (("--joint", "prismatic", "--pto-damping", "-1"), "PTO damping must be >= 0"),
+    (("--joint", "planar", "--axis", "0", "1", "0"), "joint 'planar' is for a [[bodies]] entry"),
 ])  # fmt: skip
 def test_mistakes_are_one_line_and_exit_2(args, message):
     done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "drop", "--t-end", "0.1", *args], cwd=ROOT, capture_output=True,

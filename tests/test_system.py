@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sim.body import Body
-from sim.config import ConfigError, load_scene
+from sim.config import load_scene
 from sim.forces import Model
 from sim.simulation import Simulation
 from sim.system import Member, System, body_frames, build
@@ -178,16 +178,21 @@ def run_chain(scene, dt: float, t_end: float):
     return system, s, e0, frames
 
 
-def test_energy_closes_with_the_take_offs_to_second_order(tmp_path):
+PLANAR_CHAIN = CHAIN.replace("    omega = [0.1, 0.3, 0.0]\n", '    omega = [0.0, 0.3, 0.0]\n    joint = "planar"\n    axis = [0.0, 1.0, 0.0]\n')
+"""The chain with the barge on a planar joint to the world (surge, heave and pitch, as WEC-Sim's RM3 spar), rocking in its plane."""
+
+
+@pytest.mark.parametrize("chain", [CHAIN, PLANAR_CHAIN], ids=["free", "planar"])
+def test_energy_closes_with_the_take_offs_to_second_order(tmp_path, chain):
     """A barge with a hinged flap and a sliding buoy, both with take-offs, rocking in still water without damping:
     kinetic + gravity + hydrostatic + spring energy plus what the take-offs absorbed stays constant, its error
     falls as dt^2."""
-    scene = scene_file(tmp_path, CHAIN)
+    scene = scene_file(tmp_path, chain)
     errors = []
     for dt in (0.02, 0.01):
         system, s, e0, _ = run_chain(scene, dt, 2.0)
         errors.append(abs(sum(system.energies(s).values()) + s.absorbed.sum() - e0))
-        assert s.absorbed.min() > 0.05  # both take-offs worked
+        assert min(s.absorbed[g.coordinate] for g in system.joints) > 0.05  # both take-offs worked
     assert 3.0 < errors[0] / errors[1] < 5.5
     assert errors[1] < 2e-3 * e0
 
@@ -209,6 +214,27 @@ def test_joints_hold_to_round_off(tmp_path):
         worst = max(worst, abs(slide[0]), abs(slide[1]), np.abs(Rb - quat_to_matrix(buoy["q"])).max())
     assert worst < 1e-12
     assert abs(frames[-1][1]["omega"] - frames[-1][0]["omega"]).max() > 0.01  # the hinge did turn
+
+
+def test_a_planar_joint_moves_as_a_free_body_kept_in_its_plane_by_symmetry(tmp_path):
+    """The chain rocking in the x-z plane (every body symmetric about it, still water, started in-plane): with the
+    barge free it stays in the plane by symmetry; on a planar joint it must move the same, every body to 1e-10 m,
+    the hinge's and the slide's coordinates likewise; the planar joint's three coordinates are the barge's surge,
+    heave and pitch."""
+    free = scene_file(tmp_path, PLANAR_CHAIN.replace('    joint = "planar"\n    axis = [0.0, 1.0, 0.0]\n', ""), "free.toml")
+    _, a, _, frames_free = run_chain(free, 0.01, 2.0)
+    system, b, _, frames_planar = run_chain(scene_file(tmp_path, PLANAR_CHAIN), 0.01, 2.0)
+    assert system.n_dofs == 5 and max(abs(f[0]["x"][1]) for f in frames_free) < 1e-12  # in the plane: symmetry holds
+    for f, p in zip(frames_free, frames_planar):
+        for body_free, body_planar in zip(f, p):
+            assert np.abs(body_free["x"] - body_planar["x"]).max() < 1e-10
+            assert np.abs(body_free["q"] - body_planar["q"]).max() < 1e-10
+    np.testing.assert_allclose(a.theta, b.theta[3:], atol=1e-10)
+    barge = frames_planar[-1][0]
+    pitch = 2 * np.arctan2(barge["q"][2], barge["q"][0])
+    np.testing.assert_allclose(b.theta[:3], [barge["x"][0], barge["x"][2] - 0.05, pitch], atol=1e-12)
+    pitches = [abs(2 * np.arctan2(f[0]["q"][2], f[0]["q"][0])) for f in frames_planar]
+    assert max(pitches) > 0.03 and max(abs(f[0]["x"][0]) for f in frames_planar) > 0.05  # it pitched (2.5 degrees) and surged
 
 
 def sim_cli(*args: str, backend: str = "numpy"):
@@ -315,6 +341,7 @@ def test_run_compiles_the_bodies_loads_and_says_so(tmp_path):
     ('shape = "cube"', "give the body a name"),
     ('name = "a"\npoints_per_edge = 1000', "6,000,000 surface samples"),  # the one-body limits hold for each
     ('name = "a"\njoint = "prismatic"\naxis = [0.0, 0.0, 0.0]', "[[bodies]] a: [constraint] axis must not be zero"),
+    ('name = "a"\njoint = "planar"\naxis = [0.0, 1.0, 0.0]\npto_damping = 5.0', "a: a planar joint has three coordinates"),
 ])  # fmt: skip
 def test_bad_bodies_are_one_line_errors(tmp_path, entry, message):
     (tmp_path / "bad.toml").write_text("[[bodies]]\n" + entry + "\n")
@@ -326,8 +353,6 @@ def test_one_body_flags_do_not_apply_to_several_bodies(tmp_path):
     (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDE))
     done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--density", "300")
     assert done.returncode == 2 and "[body] (and their flags) do not apply" in done.stderr
-    with pytest.raises(ConfigError, match="mooring lines on a scene with \\[\\[bodies\\]\\]"):
-        scene_file(tmp_path, SLIDE + "\n    [moorings]\n    lines = 3\n", "moored.toml")
 
 
 MOORED = """

@@ -229,6 +229,14 @@ class System:
             constant.append(g.kind in ("fixed", "prismatic") and (g.parent < 0 or constant[g.parent]))
         lone_hinge = [g.kind == "revolute" and g.parent < 0 and not any(h.parent == i for h in groups) for i, g in enumerate(groups)]
         self.needs_bias = not all(c or h for c, h in zip(constant, lone_hinge))
+        # the velocities that change some Jacobian: not a slide of a group whose parent never turns (it moves the group and
+        # what hangs on it rigidly, in the parent's unturning axes: no lever arm against a turning frame changes)
+        unturning = []
+        for g in groups:
+            unturning.append(g.kind in ("fixed", "prismatic") and (g.parent < 0 or unturning[g.parent]))
+        slides = {"free": 3, "prismatic": 1, "planar": 2}
+        self._turning_dofs = [i for g in groups for k, i in enumerate(range(g.dofs.start, g.dofs.stop))
+                              if not (k < slides.get(g.kind, 0) and (g.parent < 0 or unturning[g.parent]))]  # fmt: skip
 
     @property
     def members(self) -> list[Member]:
@@ -364,12 +372,15 @@ class System:
             return np.zeros(n), np.zeros((n, n))
         pose = self.pose(s)
         if "rates" not in pose.cache:
-            eps = 1e-5
-            ahead = [self._pose_of(self.drifted(s, eps, e)) for e in np.eye(n)]
-            behind = [self._pose_of(self.drifted(s, -eps, e)) for e in np.eye(n)]
-            pose.cache["rates"] = [[(a - c) / (2 * eps) for a, c in zip(p.J, q.J)] for p, q in zip(ahead, behind)]
+            eps, rates = 1e-5, [[np.zeros_like(J) for J in pose.J] for _ in range(n)]
+            for i in self._turning_dofs:
+                e = np.zeros(n)
+                e[i] = 1.0
+                ahead, behind = self._pose_of(self.drifted(s, eps, e)), self._pose_of(self.drifted(s, -eps, e))
+                rates[i] = [(a - c) / (2 * eps) for a, c in zip(ahead.J, behind.J)]
+            pose.cache["rates"] = rates
         along_e = pose.cache["rates"]  # [dof][body]: d J_b / dt while moving at the dof's unit velocity
-        along_v = [sum(v[i] * along_e[i][k] for i in range(n)) for k in range(len(pose.J))]
+        along_v = [sum(v[i] * along_e[i][k] for i in self._turning_dofs) for k in range(len(pose.J))]
         b, B = np.zeros(n), np.zeros((n, n))
         for k, (m, R, J) in enumerate(zip(self.members, pose.R, pose.J)):
             Mb = _body_mass(m.body, R)

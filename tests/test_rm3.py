@@ -19,9 +19,14 @@ def _shipped_only(monkeypatch, tmp_path):
     monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped rm3 coefficients were not found"))
 
 
-def rm3_in(period: float, amplitude: float):
-    """The rm3 preset in regular waves of this period (the solve's frequency nearest) and amplitude; (system, rest, i)."""
+def rm3_in(period: float, amplitude: float, joint: str = "prismatic"):
+    """The rm3 preset in regular waves of this period (the solve's frequency nearest) and amplitude, its spar on a vertical
+    slide (prismatic) or free to surge, heave and pitch (planar, WEC-Sim's floating constraint); (system, rest, i)."""
     base = load_scene("rm3")
+    if joint == "planar":
+        spar = base.bodies[0]
+        spar = dataclasses.replace(spar, constraint=dataclasses.replace(spar.constraint, joint="planar", axis=(0.0, 1.0, 0.0)))
+        base = dataclasses.replace(base, bodies=(spar, *base.bodies[1:]))
     system, _ = build(base)  # the coefficients come from the shipped file: no solve here
     c = system.radiation.coefficients
     i = int(np.argmin(abs(c.omega - 2 * np.pi / period)))
@@ -46,13 +51,14 @@ def time_domain(system, start, omega: float, periods: int, per_period: int = 160
     return coef[1] + 1j * coef[2], (s.absorbed - start.absorbed) / (s.t - start.t)
 
 
+@pytest.mark.parametrize("joint", ["prismatic", "planar"])
 @pytest.mark.parametrize("period", [8.0, pytest.param(6.0, marks=pytest.mark.slow)])
-def test_rm3_take_off_power_and_relative_heave_match_the_frequency_domain(period):
+def test_rm3_take_off_power_and_relative_heave_match_the_frequency_domain(period, joint):
     """Started on the linear steady state, six wave periods of the two-body system (radiation memory coupling
     both bodies, diffraction, the exact clipped hydrostatics): the float's heave against the spar and the mean
     power its take-off absorbs match the 2-dof frequency-domain solution of the 12x12 impedance within 2 %."""
     a = 0.05
-    system, rest, i = rm3_in(period, a)
+    system, rest, i = rm3_in(period, a, joint)
     c = system.radiation.coefficients
     w = float(c.omega[i])
     xi = response(system, rest, i)
@@ -82,3 +88,24 @@ def test_rm3_energy_closes_with_the_radiated_waves():
         errors.append(abs(sum(system.energies(s).values()) + s.absorbed.sum() + s.E_rad - start))
         assert s.E_rad > 0.05 * s.absorbed.sum() > 0  # both took their share
     assert 3.0 < errors[0] / errors[1] < 5.5 and errors[1] < 0.005 * kinetic  # (252 J of the kick's 1.9e5 J at dt = 0.1 s)
+
+
+def test_the_moored_rm3_starts_at_rest_on_its_lines():
+    """rm3-moored in still water: the chains' hanging weight is what the spar's mass was reduced by, so the system
+    starts in equilibrium: over 20 s nothing moves by more than 1 cm, the lines' pull staying within 1 % of its start."""
+    pytest.importorskip("moordyn")
+    from sim.system import Assembly
+
+    run = Assembly(with_overrides(load_scene("rm3-moored"), waves__kind="still"), backend="numpy")
+    try:
+        start = run.frame()
+        worst, pulls = 0.0, []
+        for _ in range(20):
+            run.step(20)
+            frame = run.frame()
+            worst = max(worst, *(np.abs(b["x"] - a["x"]).max() for a, b in zip(start.bodies, frame.bodies)))
+            pulls.append(frame.mooring[2])
+        assert worst < 0.01 and np.abs(np.array(pulls) / start.mooring[2] - 1).max() < 0.01
+        assert start.mooring[2] < -2e5  # the chains do hang on it (228 kN)
+    finally:
+        run.close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import platform
 import statistics
@@ -154,7 +155,7 @@ def bench(args: BenchArgs) -> int:
         print()
         print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
               "its time goes; compiled: the bodies' loads (the kinematics and kicks are numpy)")  # fmt: skip
-        _table(("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "joints and stepping us"), system_rows)
+        _table(("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "MoorDyn us", "joints and stepping us"), system_rows)
     return 0
 
 
@@ -226,18 +227,22 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
 
     preset = load_scene("rm3")
     sea = with_overrides(preset, waves__kind="jonswap", waves__height=2.5, waves__period=8.0, waves__components=64, step__dt=0.01)
+    cases = [("rm3, regular waves, dt 0.05 s", preset), ("rm3, JONSWAP, 64 components, dt 0.01 s", sea)]
+    if importlib.util.find_spec("moordyn") is not None:
+        cases.append(("rm3-moored (planar spar, 3 chains x 20 segments), dt 0.05 s", load_scene("rm3-moored")))
     rows = []
-    for label, scene in (("regular waves, dt 0.05 s", preset), ("JONSWAP, 64 components, dt 0.01 s", sea)):
+    for label, scene in cases:
         for backend in ("numpy", "numba"):
             run = Assembly(scene, backend=backend)
-            t, h, r = _system_split(run, args.repeats)
-            rows.append((f"rm3, {label}", "compiled" if run.compiled else "numpy", f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{h * 1e6:.0f}",
-                         f"{r * 1e6:.0f}", f"{(t - h - r) * 1e6:.0f}"))  # fmt: skip
+            t, h, r, m = _system_split(run, args.repeats)
+            run.close()
+            rows.append((label, "compiled" if run.compiled else "numpy", f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{h * 1e6:.0f}", f"{r * 1e6:.0f}",
+                         f"{m * 1e6:.0f}" if run.moorings else "-", f"{(t - h - r - m) * 1e6:.0f}"))  # fmt: skip
     return rows
 
 
-def _system_split(run, repeats: int) -> tuple[float, float, float]:
-    """Median seconds a step, and of it in the bodies' loads and in the radiation."""
+def _system_split(run, repeats: int) -> tuple[float, float, float, float]:
+    """Median seconds a step, and of it in the bodies' loads, in the radiation and in MoorDyn."""
     system = run.system
     spent = {"hydro": 0.0, "radiation": 0.0}
 
@@ -255,14 +260,16 @@ def _system_split(run, repeats: int) -> tuple[float, float, float]:
     rad = system.radiation
     rad.drift, rad.load = timed(rad.drift, "radiation"), timed(rad.load, "radiation")
     run.step(5)
-    totals, hydro, radiation = [], [], []
+    lines = lambda: run.moorings.seconds if run.moorings else 0.0  # noqa: E731
+    totals, hydro, radiation, moordyn = [], [], [], []
     for _ in range(repeats):
-        before, h0, r0 = time.perf_counter(), spent["hydro"], spent["radiation"]
+        before, h0, r0, m0 = time.perf_counter(), spent["hydro"], spent["radiation"], lines()
         run.step(40)
         totals.append((time.perf_counter() - before) / 40)
         hydro.append((spent["hydro"] - h0) / 40)
         radiation.append((spent["radiation"] - r0) / 40)
-    return statistics.median(totals), statistics.median(hydro), statistics.median(radiation)
+        moordyn.append((lines() - m0) / 40)
+    return statistics.median(totals), statistics.median(hydro), statistics.median(radiation), statistics.median(moordyn)
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:

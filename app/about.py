@@ -32,7 +32,7 @@ class About:
     def __init__(self, server: viser.ViserServer):
         gui = server.gui
         gui.add_markdown(ABOUT)  # in the panel's first tab (app/main.py)
-        self.readme = gui.add_button("Read the README", icon=viser.Icon.BOOK, hint="The full guide: models, flags, accuracy, speed")
+        self.readme = gui.add_button("Read the README", icon=viser.Icon.BOOK, hint="What it is, the main commands and where the docs are")
         self.readme.on_click(lambda event: self.show_readme(event.client))
 
     @staticmethod

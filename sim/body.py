@@ -57,6 +57,7 @@ class Body:
 
     @property
     def n_samples(self) -> int:
+        """How many surface samples (the panels model: mesh triangles) the body has."""
         return len(self.area)
 
     @cached_property

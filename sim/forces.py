@@ -175,12 +175,16 @@ class Model:
 
     @property
     def term_names(self) -> tuple[str, ...]:
+        """The names of the terms in use, in the registry's order."""
         return tuple(term.name for term in self.terms)
 
     def has(self, name: str) -> bool:
+        """Whether the term `name` is in use."""
         return any(term.name == name for term in self.terms)
 
     def wetted(self, x: np.ndarray, R: np.ndarray, t: float = 0.0) -> WetSurface:
+        """The wet part of the surface at a pose (x: centre of mass, R: body to world) and time, which the terms integrate over
+        (the last one is kept: several terms ask for the same)."""
         if not self.needs_wet:
             return empty_surface(x)
         key = (x.tobytes(), R.tobytes(), t if not self.water.flat else 0.0)
@@ -235,6 +239,7 @@ class Model:
         return damping_matrix(self.fluid, wet)
 
     def hydrostatic_energy(self, wet: WetSurface) -> float:
+        """The potential of the pressure over this wet surface, J (0 without the pressure term)."""
         return hydrostatic_energy(self.water, wet) if self.has("pressure") else 0.0
 
 

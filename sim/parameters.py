@@ -62,10 +62,12 @@ class Param:
 
     @property
     def cli(self) -> str:
+        """The command-line flag's name, underscores for dashes (e.g. 'wave_height' for --wave-height)."""
         return self.flag_name or self.key
 
     @property
     def what(self) -> str:
+        """How error messages call it."""
         return self.name or self.key
 
     @property
@@ -76,6 +78,7 @@ class Param:
         return f"{text} ({unit})" if unit else text
 
     def describe(self, value) -> str:
+        """A value as the summaries print it, with its unit ('100 N s/m^3', 'on')."""
         if self.kind == "switch":
             return {True: "on", False: "off", None: "auto"}.get(value, str(value))
         return f"{value:g} {self.unit}".strip() if isinstance(value, (int, float)) else str(value)

@@ -81,10 +81,12 @@ class Frame:
 
     @property
     def E_hyd_of_model(self) -> float:
+        """The hydrostatic energy the running force model conserves (the sampled models' own), J."""
         return self.E_hyd if self.E_hyd_model is None else self.E_hyd_model
 
     @property
     def E_total(self) -> float:
+        """Kinetic, gravity and exact hydrostatic energy, J (constant without damping, drag, waves or radiation)."""
         return self.E_kin + self.E_grav + self.E_hyd
 
     def row(self) -> list[float]:
@@ -305,6 +307,7 @@ class Simulation:
 
     @property
     def body(self) -> Body:
+        """The running body (its samples, mass, inertia and mesh)."""
         return self.model.body
 
     @property
@@ -314,6 +317,7 @@ class Simulation:
 
     @property
     def dt(self) -> float:
+        """The time step, s."""
         return float(self.scene.step.dt)
 
     def frame(self) -> Frame:
@@ -467,6 +471,7 @@ class Simulation:
         self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
 
     def stability_numbers(self) -> dict[str, float]:
+        """The step's dimensionless numbers against the integrator's stability limits (sim/stability.py)."""
         return stability.numbers(self.model, self.dt)
 
     def validity_notes(self) -> list[str]:
@@ -483,6 +488,7 @@ class Simulation:
         return stability.warnings(self.stability_numbers(), self.integrator, self.dt) + ([leak] if leak else [])
 
     def diagnose(self, t: float, what: str) -> str:
+        """A one-line cause of a blow-up at time t ('what' went wrong) and the setting to change."""
         return stability.diagnosis(self.stability_numbers(), self.integrator, self.dt, t, what)
 
     # Changes between steps (the viewer's commands). Each replaces whole objects, never patches arrays.
@@ -560,9 +566,11 @@ class Simulation:
         self.update(body__density=density)
 
     def set_dt(self, dt: float) -> None:
+        """A new time step from the next step on (update(step__dt=dt))."""
         self.update(step__dt=dt)
 
     def set_integrator(self, name: str) -> None:
+        """Another integrator from the next step on (update(step__integrator=name))."""
         self.update(step__integrator=name)
 
     def reset(self, state: State | None = None) -> None:

@@ -29,9 +29,11 @@ class State:
 
     @property
     def R_world_body(self) -> np.ndarray:
+        """The orientation as a rotation matrix, body to world."""
         return quat_to_matrix(self.q_world_body)
 
     def is_finite(self) -> bool:
+        """Whether every number of the state is finite."""
         return bool(np.isfinite(self.as_vector()).all())
 
     def as_vector(self) -> np.ndarray:

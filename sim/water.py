@@ -38,6 +38,7 @@ class StillWater:
 
     @property
     def at_rest(self) -> bool:
+        """Whether the water does not flow (no current)."""
         return self.current == (0.0, 0.0)
 
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:

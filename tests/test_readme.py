@@ -1,4 +1,4 @@
-"""The README's examples, run as a newcomer would paste them (shortened in simulated time)."""
+"""The README's and the docs' examples, run as a newcomer would paste them (shortened in simulated time)."""
 
 import re
 import shlex
@@ -8,19 +8,23 @@ import pytest
 
 from sim.commands import main
 
-README = (Path(__file__).resolve().parent.parent / "README.md").read_text()
-SLOW = ("--record", "--video", "hull.stl", "--radiation", "sphere")
-"""Lines left to their own tests: a browser, a file the reader brings, a boundary-element solve."""
+ROOT = Path(__file__).resolve().parent.parent
+README = (ROOT / "README.md").read_text()
+HEADLESS = (ROOT / "docs" / "headless.md").read_text()
+API = (ROOT / "docs" / "api.md").read_text()
+SLOW = ("--record", "--video", "hull.stl", "--radiation", "sphere", "rm3", "moored")
+"""Lines left to their own tests: a browser, a file the reader brings, a boundary-element solve, several bodies, MoorDyn."""
 
 
 def run_lines() -> list[str]:
-    block = README.split("## Headless runs")[1].split("```bash")[1].split("```")[0]
-    lines = [line.split("#")[0].strip() for line in block.splitlines()]
+    """The `run` lines of the README's tour and of the docs' Headless runs page (their first bash block each)."""
+    blocks = [README.split("## A tour")[1].split("```bash")[1].split("```")[0], HEADLESS.split("```bash")[1].split("```")[0]]
+    lines = [line.split("#")[0].strip() for block in blocks for line in block.splitlines()]
     return [line for line in lines if re.match(r"(python -m sim|floatsim) run ", line) and not any(s in line for s in SLOW)]
 
 
 def test_the_readme_lists_run_examples():
-    assert len(run_lines()) >= 6
+    assert len(run_lines()) >= 8
 
 
 @pytest.mark.parametrize("line", run_lines())
@@ -32,6 +36,36 @@ def test_every_run_example_in_the_readme_works(line, tmp_path, monkeypatch, caps
 
 
 def test_the_api_example_in_the_readme_runs(capsys):
-    code = README.split("### Python API")[1].split("```python")[1].split("```")[0]
-    exec(compile(code, "README.md (Python API)", "exec"), {})
+    code = API.split("```python")[1].split("```")[0]
+    exec(compile(code, "docs/api.md (Python API)", "exec"), {})
     assert re.search(r"\[.*\] \d", capsys.readouterr().out)  # the position and the energy printed
+
+
+def test_the_readme_is_a_front_door():
+    """At most about 150 lines, the two quick-start lines first among its commands, and every page it links there."""
+    assert len(README.splitlines()) <= 150
+    quick = README.split("## Quick start")[1].split("```bash")[1].split("```")[0].strip().splitlines()
+    assert quick[0].startswith('pip install -e . && python -m app') and quick[1].startswith('pip install -e ".[test]" && python -m pytest -q -n 2')
+    for link in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", README):
+        assert link.startswith("http") or (ROOT / link).exists(), link
+
+
+def test_every_public_name_has_a_docstring():
+    """What `import sim` exports, and the public methods of its classes, say what they are (the API reference is made
+    from these)."""
+    import inspect
+
+    import sim
+
+    missing = []
+    for name in sim.__all__:
+        obj = getattr(sim, name)
+        if not (inspect.isclass(obj) or inspect.isfunction(obj)):
+            continue  # data (PARAMS, TERMS, CSV_COLUMNS, ...): the pages say what they hold
+        if not (obj.__doc__ or "").strip():
+            missing.append(name)
+        if inspect.isclass(obj):
+            for attr, member in vars(obj).items():
+                if not attr.startswith("_") and (inspect.isfunction(member) or isinstance(member, property)) and not (member.__doc__ or "").strip():
+                    missing.append(f"{name}.{attr}")
+    assert not missing, f"no docstring: {', '.join(missing)}"

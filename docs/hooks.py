@@ -1,0 +1,53 @@
+"""mkdocs hooks: the parameter reference made from the `Param` declarations (never written by hand), and the
+generated reports (reports/: the accuracy and stability pages and their figures) served beside the docs."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from mkdocs.structure.files import File
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def parameter_table() -> str:
+    """Every scene parameter by table: key, default, unit, valid range, CLI flag and what it does."""
+    from sim.config import SECTIONS
+
+    out = ["# Parameter reference", "",
+           "Every key a scene file takes, by table, with its command-line flag (`python -m sim run --help` lists the same).",
+           "Generated from the `Param` declarations in `sim/config.py` when the docs are built.", ""]  # fmt: skip
+    for section, params in SECTIONS.items():
+        out += [f"## [{section}]", "", "| key | default | unit | valid | flag | what it does |", "| --- | --- | --- | --- | --- | --- |"]
+        for p in params:
+            out.append(f"| `{p.key}` | {_default(p)} | {p.unit or ''} | {_valid(p)} | {('`--' + p.cli.replace('_', '-') + '`') if p.flag else ''} | "
+                       f"{p.help.replace('|', '/')} |")  # fmt: skip
+        out.append("")
+    return "\n".join(out)
+
+
+def _default(p) -> str:
+    value = p.default
+    if value in ((), "", None):
+        return "-"
+    return f"`{value}`"
+
+
+def _valid(p) -> str:
+    if p.kind == "choice":
+        return ", ".join(f"`{c}`" for c in p.choices)
+    if p.kind in ("text", "switch", "optional") and math.isinf(p.lo) and math.isinf(p.hi):
+        return ""
+    lo = "" if math.isinf(p.lo) else f"{'>' if p.lo_open else '≥'} {p.lo:g}"
+    hi = "" if math.isinf(p.hi) else f"≤ {p.hi:g}"
+    return ", ".join(x for x in (lo, hi) if x)
+
+
+def on_files(files, config):
+    for path in sorted((ROOT / "reports").rglob("*")):
+        if path.is_file() and path.suffix in (".md", ".png", ".svg", ".gif"):
+            files.append(File(str(path.relative_to(ROOT)), str(ROOT), config["site_dir"], config["use_directory_urls"]))
+    files.append(File.generated(config, "parameters.md", content=parameter_table()))
+    files.append(File.generated(config, "changelog.md", content=(ROOT / "CHANGELOG.md").read_text()))
+    return files

@@ -44,10 +44,29 @@ def _valid(p) -> str:
     return ", ".join(x for x in (lo, hi) if x)
 
 
+def examples_page() -> str:
+    """examples/: each script's title and story (its docstring), how to run it, its picture (docs/examples/NN.png, made
+    with its --plot flag) and its code."""
+    import ast
+
+    out = ["# Examples", "", "Numbered, runnable scripts in `examples/`, each a typed `main` run by tyro (`--help` lists its flags). "
+           "`tests/test_examples.py` runs every one with short flags and checks the physics it prints.", ""]  # fmt: skip
+    for path in sorted((ROOT / "examples").glob("[0-9][0-9]_*.py")):
+        code = path.read_text()
+        title, _, story = ast.get_docstring(ast.parse(code)).partition("\n")
+        out += [f"## {path.stem[:2]}. {title}", "", story.strip(), "", "```bash", f"python examples/{path.name}", "```", ""]
+        picture = ROOT / "docs" / "examples" / f"{path.stem[:2]}.png"
+        if picture.exists():
+            out += [f"![{title}](examples/{picture.name})", ""]
+        out += ["??? example \"The code\"", "    ```python"] + [f"    {line}" if line else "" for line in code.splitlines()] + ["    ```", ""]
+    return "\n".join(out)
+
+
 def on_files(files, config):
     for path in sorted((ROOT / "reports").rglob("*")):
         if path.is_file() and path.suffix in (".md", ".png", ".svg", ".gif"):
             files.append(File(str(path.relative_to(ROOT)), str(ROOT), config["site_dir"], config["use_directory_urls"]))
     files.append(File.generated(config, "parameters.md", content=parameter_table()))
     files.append(File.generated(config, "changelog.md", content=(ROOT / "CHANGELOG.md").read_text()))
+    files.append(File.generated(config, "examples.md", content=examples_page()))
     return files

@@ -1,0 +1,81 @@
+"""Every script in examples/ runs as a reader would run it (a subprocess, short flags), and prints the physics it
+promises: Archimedes, a known period, the radiation's effect, a custom term's closed form."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = sorted((ROOT / "examples").glob("[0-9][0-9]_*.py"))
+
+
+def run(name: str, *flags: str) -> str:
+    done = subprocess.run([sys.executable, str(ROOT / "examples" / name), *flags], capture_output=True, text=True, timeout=600, cwd=ROOT, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def numbers(text: str) -> list[float]:
+    return [float(v) for v in re.findall(r"-?\d+\.\d+", text)]
+
+
+def test_every_example_is_numbered_titled_and_tested():
+    """Numbered in order, each with a docstring title and a tyro main, and each one run below."""
+    names = [p.name for p in EXAMPLES]
+    assert [n[:2] for n in names] == [f"{i:02d}" for i in range(1, len(names) + 1)] and len(names) >= 7
+    tested = Path(__file__).read_text()
+    for path in EXAMPLES:
+        text = path.read_text()
+        assert text.startswith('"""') and "tyro.cli(" in text and "def main(" in text, path.name
+        assert f'"{path.name}"' in tested, f"{path.name} has no test"
+
+
+def test_01_drop_cube_settles_at_its_archimedes_draft():
+    z, archimedes = numbers(run("01_drop_cube.py", "--t-end", "30"))[1:3]
+    assert abs(z - archimedes) < 2e-3
+
+
+def test_02_your_mesh_floats_half_submerged_at_half_the_density():
+    out = run("02_your_mesh.py", "--t-end", "10")
+    under, archimedes = (float(v) for v in re.findall(r"(\d+\.\d)%", out))
+    assert abs(under - archimedes) < 0.5
+
+
+def test_03_density_sweep_finds_each_draft_face_up_and_the_unstable_band_tilted():
+    out = run("03_density_sweep.py", "--densities", "150", "400", "850", "--t-end", "30")
+    for line in out.strip().splitlines():
+        tilt, draft, archimedes = numbers(line)[-3:]
+        if "  400 kg" in line:  # inside the band where face up is unstable: it turned
+            assert tilt > 10.0, line
+        else:
+            assert tilt < 0.1 and abs(draft - archimedes) < 3e-3, line
+
+
+def test_04_decay_test_rings_at_the_added_mass_period():
+    period, dry, start, end = numbers(run("04_decay_test.py", "--t-end", "6"))[:4]
+    assert abs(period - 1.38) < 0.03 and period > dry * 1.1 and end < start / 3  # the water's mass, and the waves it radiates
+
+
+@pytest.mark.slow
+def test_05_radiation_tames_the_heave_resonance():
+    out = run("05_waves_and_radiation.py", "--t-end", "15")
+    ratio = float(out.rsplit("x", 1)[1])
+    assert ratio < 0.8  # near resonance, the radiated waves damp the heave
+
+
+def test_06_a_custom_term_gives_its_closed_form_period():
+    out = run("06_custom_force_term.py", "--t-end", "20")
+    assert "tether term has no compiled twin" in out
+    period, closed = numbers(out.splitlines()[-1])[:2]
+    assert abs(period / closed - 1) < 0.01
+
+
+@pytest.mark.slow
+def test_07_dask_sweep_runs_on_a_cluster_and_finds_the_linear_period():
+    out = run("07_dask_sweep.py", "--t-end", "8", "--heights", "0.02:0.2:3")
+    first = next(line for line in out.splitlines() if line.startswith("dropped"))
+    period, linear = numbers(first)[-2:]
+    assert "backend dask" in out and abs(period / linear - 1) < 0.01

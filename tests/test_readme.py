@@ -69,3 +69,20 @@ def test_every_public_name_has_a_docstring():
                 if not attr.startswith("_") and (inspect.isfunction(member) or isinstance(member, property)) and not (member.__doc__ or "").strip():
                     missing.append(f"{name}.{attr}")
     assert not missing, f"no docstring: {', '.join(missing)}"
+
+
+def tour_lines(command: str) -> list[str]:
+    block = README.split("## A tour")[1].split("```bash")[1].split("```")[0]
+    return [line.split("#")[0].strip() for line in block.splitlines() if line.startswith(f"python -m sim {command} ")]
+
+
+@pytest.mark.parametrize("line", tour_lines("sweep") + [pytest.param(line, marks=pytest.mark.slow) for line in tour_lines("compare")])
+def test_the_tours_sweep_and_compare_lines_work(line, tmp_path, monkeypatch, capsys):
+    """Shortened in simulated time; `bench` and the viewer lines have their own tests (the benchmark takes minutes)."""
+    monkeypatch.chdir(tmp_path)
+    args = shlex.split(line)[3:]
+    if "--t-end" in args:
+        args[args.index("--t-end") + 1] = "0.5"
+    else:
+        args += ["--t-end", "0.5"]
+    assert main(args) == 0, capsys.readouterr().err

@@ -283,7 +283,9 @@ class BodiesScene:
         self.water = WaterView(server, 2.0 * size, lighter=replay)
         self.frames = []
         for k, m in enumerate(system.members):
-            self.frames.append(server.scene.add_frame(f"/bodies/{m.name}", axes_length=0.3 * m.body.radius, axes_radius=0.01 * m.body.radius))
+            self.frames.append(
+                server.scene.add_frame(f"/bodies/{m.name}", axes_length=0.3 * m.body.radius, axes_radius=0.01 * m.body.radius)
+            )
             server.scene.add_mesh_simple(f"/bodies/{m.name}/mesh", m.body.mesh_vertices, m.body.mesh_faces, color=BODY_COLOURS[k % len(BODY_COLOURS)],
                                          flat_shading=True)  # fmt: skip
         self._reach = 0.6 * size
@@ -410,9 +412,15 @@ def describe(snap: BodiesSnapshot, takeoffs: list[str]) -> str:
     lines = [f"**{snap.scene_name}** &nbsp; t = {f.t:.2f} s ({rate}; {snap.engine})", ""]
     lines += [f"- {b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in f.bodies]
     if f.mooring:
-        lines += [f"- mooring lines: pull {np.linalg.norm(f.mooring[:3]) / 1e3:.2f} kN, largest fairlead tension {f.mooring[3] / 1e3:.2f} kN"]
+        lines += [
+            f"- mooring lines: pull {np.linalg.norm(f.mooring[:3]) / 1e3:.2f} kN, largest fairlead tension {f.mooring[3] / 1e3:.2f} kN"
+        ]
     for name, theta, _, p, e in f.joints:
-        taken = f", take-off power {p / 1e3:.1f} kW, absorbed {e / 1e6:.3f} MJ ({e / f.t / 1e3 if f.t > 0 else 0:.1f} kW mean)" if name in takeoffs else ""
+        taken = (
+            f", take-off power {p / 1e3:.1f} kW, absorbed {e / 1e6:.3f} MJ ({e / f.t / 1e3 if f.t > 0 else 0:.1f} kW mean)"
+            if name in takeoffs
+            else ""
+        )
         lines.append(f"- joint {name}: stroke {theta:+.3f}{taken}")
     if snap.notice:
         lines += ["", f"_{snap.notice}_"]

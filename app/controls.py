@@ -17,7 +17,14 @@ from sim.parameters import Param
 
 from .loop import CONTROLLED, SPEED, Settings
 
-FOLDERS = {"Body": ("body",), "Water": ("fluid", "water"), "Waves": ("waves",), "Joint": ("constraint",), "Start": ("initial",), "Integration": ("step",)}
+FOLDERS = {
+    "Body": ("body",),
+    "Water": ("fluid", "water"),
+    "Waves": ("waves",),
+    "Joint": ("constraint",),
+    "Start": ("initial",),
+    "Integration": ("step",),
+}
 """The folders of controls, each holding the scene sections named."""
 VECTOR_STEP = 0.1
 
@@ -38,7 +45,9 @@ class Controls:
             self.step = gui.add_button("Step", hint="Advance one time step")
             self.reset = gui.add_button("Reset", hint="Back to the scene's initial state, keeping these parameters")
             self.speed = _control(gui, SPEED, settings.speed)
-            self.scene = gui.add_dropdown("Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters")
+            self.scene = gui.add_dropdown(
+                "Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters"
+            )
         for title, sections in FOLDERS.items():
             params = [p for p in CONTROLLED.values() if p.section in sections]
             if params:
@@ -123,6 +132,9 @@ class Layers:
             self.points = server.gui.add_checkbox("Show points", True, hint="Samples: blue under water, orange above")
             self.water = server.gui.add_checkbox("Show water", True)
             self.forces = server.gui.add_checkbox("Show force and torque", True, hint="Red: net force (1 m = body weight); green: torque")
-            self.markers = server.gui.add_checkbox("Show B, M, waterline", True,
-                                                   hint="Why it floats: centre of buoyancy B, metacentre M (GM > 0: rights itself), waterline")
-            self.axes = server.gui.add_checkbox("Show body axes", False, hint="The body's principal axes at its centre of mass G (x red, y green, z blue)")
+            self.markers = server.gui.add_checkbox(
+                "Show B, M, waterline", True, hint="Why it floats: centre of buoyancy B, metacentre M (GM > 0: rights itself), waterline"
+            )
+            self.axes = server.gui.add_checkbox(
+                "Show body axes", False, hint="The body's principal axes at its centre of mass G (x red, y green, z blue)"
+            )

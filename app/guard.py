@@ -40,7 +40,9 @@ class OncePerKind(logging.Filter):
                 record.exc_info = None
             return True
         if n % 100 == 0:
-            print(f"floatsim viewer: {record.getMessage()} ({kind or record.levelname}) x{n} so far (tracebacks shown once)", file=sys.stderr)
+            print(
+                f"floatsim viewer: {record.getMessage()} ({kind or record.levelname}) x{n} so far (tracebacks shown once)", file=sys.stderr
+            )
         return False
 
 

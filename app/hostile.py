@@ -134,8 +134,9 @@ def _upload(button_uuid: str, name: str, content: bytes, declared: int | None = 
     start = {"type": "FileTransferStartUpload", "source_component_uuid": button_uuid, "transfer_uuid": transfer, "filename": name,
              "mime_type": "", "part_count": parts or len(pieces), "size_bytes": declared or len(content)}  # fmt: skip
     return [msgspec.msgpack.encode(start)] + [
-        msgspec.msgpack.encode({"type": "FileTransferPart", "source_component_uuid": button_uuid, "transfer_uuid": transfer,
-                                "part_index": i, "content": p})  # fmt: skip
+        msgspec.msgpack.encode(
+            {"type": "FileTransferPart", "source_component_uuid": button_uuid, "transfer_uuid": transfer, "part_index": i, "content": p}
+        )  # fmt: skip
         for i, p in enumerate(pieces)
     ]
 

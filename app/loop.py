@@ -309,7 +309,9 @@ class SimLoop:
                 return
             self._loaded.add(loader.spec)
             if loader.compiled_in is not None and loader.spec == spec:
-                self._raise_notice(f"The fast kernels are ready (compiled in {loader.compiled_in:.0f} s in the background): the run goes on with them.")
+                self._raise_notice(
+                    f"The fast kernels are ready (compiled in {loader.compiled_in:.0f} s in the background): the run goes on with them."
+                )
 
     def engine(self) -> str:
         """What steps the run, for the readouts: '' on the compiled kernels."""

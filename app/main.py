@@ -150,7 +150,6 @@ class ViewerApp:
                 for client in self.server.get_clients().values():
                     client.add_notification("floatsim", snap.notice, color="red" if snap.diverged else "yellow", auto_close_seconds=8.0)
 
-
     def _update_link(self, snap: Snapshot) -> None:
         """The Copy link button's setup (twice a second at most) and the body's description (on a new body)."""
         now = time.monotonic()
@@ -212,8 +211,9 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     quiet_repeated_tracebacks()
     big_blocks_go_back()
-    loop = SimLoop(scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True,
-                   kernels=kernels)
+    loop = SimLoop(
+        scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True, kernels=kernels
+    )
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
     with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)

@@ -63,13 +63,18 @@ def run(args: RecordArgs) -> int:
         return status
     take = recorder.take
     if recorder.full:
-        print(f"floatsim: note: the replay and video stop at {take.duration:.4g} s ({len(take)} frames, the most a take keeps)", file=sys.stderr)
+        print(
+            f"floatsim: note: the replay and video stop at {take.duration:.4g} s ({len(take)} frames, the most a take keeps)",
+            file=sys.stderr,
+        )
     if args.record:
         from .replay import replay_html
 
         html = replay_html(take)
         Path(args.record).write_text(html)
-        print(f"replay: {len(take)} frames over {take.duration:.4g} s -> {args.record} ({len(html) / 1e6:.2f} MB; opens offline in a browser)")
+        print(
+            f"replay: {len(take)} frames over {take.duration:.4g} s -> {args.record} ({len(html) / 1e6:.2f} MB; opens offline in a browser)"
+        )
     if args.video:
         from .video import frame_count, render_video
 

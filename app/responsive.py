@@ -113,8 +113,12 @@ def main(args: ResponsiveArgs) -> int:
         print("|---|---|---|")
         print(f"| real-time factor (asked 1) | {statistics.median(steps):.3f} | {min(steps):.3f} |")
         print(f"| viser event-loop lag (ms) | {statistics.median(lags) * 1e3:.2f} | {max(lags) * 1e3:.1f} |")
-        print(f"| Pause click in the page -> applied by the simulation (ms) | {statistics.median(latencies) * 1e3:.0f} | {max(latencies) * 1e3:.0f} |")
-        print(f"| of which on the server: message in -> applied (ms) | {statistics.median(server_side) * 1e3:.2f} | {max(server_side) * 1e3:.1f} |")
+        print(
+            f"| Pause click in the page -> applied by the simulation (ms) | {statistics.median(latencies) * 1e3:.0f} | {max(latencies) * 1e3:.0f} |"
+        )
+        print(
+            f"| of which on the server: message in -> applied (ms) | {statistics.median(server_side) * 1e3:.2f} | {max(server_side) * 1e3:.1f} |"
+        )
         print(f"| server process CPU (cores) | {cores:.2f} | |")
     finally:
         app.stop()

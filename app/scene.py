@@ -66,7 +66,9 @@ class SceneView:
             self._sized_for = body.radius
             self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay)
             self.markers = MarkersView(self.server, body.radius)
-            self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value)
+            self.frame = scene.add_frame(
+                "/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value
+            )
         self.mesh = scene.add_mesh_simple(
             "/body/mesh", body.mesh_vertices, body.mesh_faces, color=(215, 235, 250), flat_shading=True, visible=self.layers.mesh.value
         )

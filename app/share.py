@@ -21,8 +21,19 @@ from sim.errors import ConfigError
 from .loop import CONTROLLED, DERIVED, SPEED, Settings
 
 PROBE = "floatsim-address"
-VISER_PARAMS = {"fixedDpr", "darkMode", "showStats", "websocket", "logCamera", "playbackPath", "synchronizedVideoOverlay",
-                "initialCameraPosition", "initialCameraLookAt", "initialCameraUp", "forceOrbitOriginTool"}
+VISER_PARAMS = {
+    "fixedDpr",
+    "darkMode",
+    "showStats",
+    "websocket",
+    "logCamera",
+    "playbackPath",
+    "synchronizedVideoOverlay",
+    "initialCameraPosition",
+    "initialCameraLookAt",
+    "initialCameraUp",
+    "forceOrbitOriginTool",
+}
 """The page address's parameters that viser's client reads itself: not part of a setup."""
 
 _PROBE_JS = """(function(){

@@ -58,7 +58,7 @@ def examples_page() -> str:
         picture = ROOT / "docs" / "examples" / f"{path.stem[:2]}.png"
         if picture.exists():
             out += [f"![{title}](examples/{picture.name})", ""]
-        out += ["??? example \"The code\"", "    ```python"] + [f"    {line}" if line else "" for line in code.splitlines()] + ["    ```", ""]
+        out += ['??? example "The code"', "    ```python"] + [f"    {line}" if line else "" for line in code.splitlines()] + ["    ```", ""]
     return "\n".join(out)
 
 

@@ -28,8 +28,10 @@ def main(args: Args) -> None:
     sim = Simulation(scene, mesh=mesh)
     sim.step(round(args.t_end / sim.dt))
     f = sim.frame()
-    print(f"{sim.body.name}: {sim.body.mass:.1f} kg, {sim.body.volume:.4f} m^3; after {f.t:.1f} s its centre is at z = {f.x_world[2]:.4f} m, "
-          f"{f.submerged_volume / sim.body.volume:.1%} of it under water (Archimedes: {args.density / scene.fluid.rho:.1%})")
+    print(
+        f"{sim.body.name}: {sim.body.mass:.1f} kg, {sim.body.volume:.4f} m^3; after {f.t:.1f} s its centre is at z = {f.x_world[2]:.4f} m, "
+        f"{f.submerged_volume / sim.body.volume:.1%} of it under water (Archimedes: {args.density / scene.fluid.rho:.1%})"
+    )
 
 
 if __name__ == "__main__":

@@ -32,9 +32,11 @@ def main(args: Args) -> None:
     crossings = t[up] - z[up] * (t[up + 1] - t[up]) / (z[up + 1] - z[up])
     body = sim.body
     k = sim.params.rho * sim.params.g * np.pi * 0.5**2  # the water plane's stiffness
-    print(f"heave period {np.diff(crossings).mean():.3f} s measured ({len(crossings) - 1} periods), "
-          f"{2 * np.pi * np.sqrt(body.mass / k):.3f} s without the added mass; "
-          f"amplitude from {abs(z[: len(z) // 10]).max():.4f} m to {abs(z[-len(z) // 10 :]).max():.4f} m")
+    print(
+        f"heave period {np.diff(crossings).mean():.3f} s measured ({len(crossings) - 1} periods), "
+        f"{2 * np.pi * np.sqrt(body.mass / k):.3f} s without the added mass; "
+        f"amplitude from {abs(z[: len(z) // 10]).max():.4f} m to {abs(z[-len(z) // 10 :]).max():.4f} m"
+    )
 
 
 if __name__ == "__main__":

@@ -36,8 +36,10 @@ def heave_amplitude(radiation: str, args: Args) -> float:
 
 def main(args: Args) -> None:
     alone, with_water = heave_amplitude("none", args), heave_amplitude("bem", args)
-    print(f"heave amplitude in {args.height:g} m waves of {args.period:g} s: {alone:.4f} m (Froude-Krylov only), {with_water:.4f} m "
-          f"(with radiation and diffraction): x{with_water / alone:.2f}")
+    print(
+        f"heave amplitude in {args.height:g} m waves of {args.period:g} s: {alone:.4f} m (Froude-Krylov only), {with_water:.4f} m "
+        f"(with radiation and diffraction): x{with_water / alone:.2f}"
+    )
 
 
 if __name__ == "__main__":

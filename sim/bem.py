@@ -80,7 +80,11 @@ class Coefficients:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.npz")
         try:
-            excitation = {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov} if self.has_excitation else {}
+            excitation = (
+                {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov}
+                if self.has_excitation
+                else {}
+            )
             with os.fdopen(fd, "wb") as f:
                 np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
                                     rho=self.rho, depth=self.depth, panels=self.panels, center=self.center, **excitation)  # fmt: skip
@@ -95,7 +99,16 @@ class Coefficients:
         try:
             with np.load(path) as f:
                 extra = {key: f[key] for key in ("center", "headings", "diffraction", "froude_krylov") if key in f.files}
-                c = cls(f["omega"], f["added_mass"], f["damping"], f["added_mass_inf"], float(f["rho"]), float(f["depth"]), int(f["panels"]), **extra)
+                c = cls(
+                    f["omega"],
+                    f["added_mass"],
+                    f["damping"],
+                    f["added_mass_inf"],
+                    float(f["rho"]),
+                    float(f["depth"]),
+                    int(f["panels"]),
+                    **extra,
+                )
         except UNREADABLE as e:
             raise ValueError(f"not a coefficients file ({type(e).__name__})") from None
         check(c)
@@ -183,7 +196,9 @@ def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.
     return T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3)
 
 
-def cache_key(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, center=(0.0, 0.0, 0.0)) -> str:
+def cache_key(
+    vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, center=(0.0, 0.0, 0.0)
+) -> str:
     """The solve's inputs hashed (a centre at the origin adds nothing: the keys of files solved before it was a choice stand)."""
     h = hashlib.sha256()
     center = np.round(np.asarray(center, float), 9) + 0.0  # + 0.0: -0.0 becomes 0.0 (a vertex on the water line may come out either)
@@ -216,7 +231,9 @@ def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float =
     wv, wf = wet_mesh(vertices, faces, panel or size / 8)
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     key = cache_key(wv, wf, rho, g, depth, omega, center)
-    return _stored_or_solved(key, excitation, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None))
+    return _stored_or_solved(
+        key, excitation, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None)
+    )
 
 
 def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf, omega: np.ndarray | None = None,
@@ -231,7 +248,9 @@ def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth
     h = hashlib.sha256(b"bodies")
     for wv, wf, c in wet:
         h.update(cache_key(wv, wf, rho, g, depth, omega, c).encode())
-    return _stored_or_solved(h.hexdigest()[:20], excitation, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if excitation else None))
+    return _stored_or_solved(
+        h.hexdigest()[:20], excitation, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if excitation else None)
+    )
 
 
 def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
@@ -253,11 +272,17 @@ def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
         if bad or partial is not None:
             import capytaine  # noqa: F401  (said before a solve of minutes starts, or instead of it)
 
-            note(f"note: {bad[0]}: solving again" if bad else "note: the stored solve for this body has no wave excitation: solving again with it")
+            note(
+                f"note: {bad[0]}: solving again"
+                if bad
+                else "note: the stored solve for this body has no wave excitation: solving again with it"
+            )
         result = solve_now()
     except (ImportError, MissingSolver):
         if partial is not None:
-            raise MissingSolver(f"{what} for this body needs Capytaine (the stored solve has radiation only): pip install -e \".[bem]\"") from None
+            raise MissingSolver(
+                f'{what} for this body needs Capytaine (the stored solve has radiation only): pip install -e ".[bem]"'
+            ) from None
         raise MissingSolver(f"{what}: {bad[0]} and solving again needs Capytaine: pip install -e \".[bem]\"" if bad else
                             f"{what} needs the boundary-element solver Capytaine for this body (or its coefficients in {cached}): "
                             'pip install -e ".[bem]"') from None  # fmt: skip
@@ -275,7 +300,9 @@ def keep(result: Coefficients, path: Path) -> None:
     try:
         result.save(path)
     except OSError as e:
-        note(f"warning: cannot cache the radiation coefficients in {path.parent} ({e.strerror or e}): this run goes on, the next one solves again")
+        note(
+            f"warning: cannot cache the radiation coefficients in {path.parent} ({e.strerror or e}): this run goes on, the next one solves again"
+        )
 
 
 def solve(vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, progress: bool = True,
@@ -292,7 +319,9 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     try:
         import capytaine as cpt
     except ImportError:
-        raise MissingSolver("radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\"") from None
+        raise MissingSolver(
+            "radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\""
+        ) from None
     import logging
 
     from capytaine.bem.airy_waves import froude_krylov_force

@@ -221,6 +221,7 @@ def _declared_counts(data: bytes, kind: str) -> tuple[int, int]:
             return int.from_bytes(data[80:84], "little"), 0
         return data.count(b"vertex") // 3, 0  # three corners a facet
     if kind == "obj":
+
         def lines(tag: bytes) -> int:
             return sum(data.count(b"\n" + tag + sep) + data.startswith(tag + sep) for sep in (b" ", b"\t"))
 
@@ -242,12 +243,16 @@ def _read(source, name: str, file_type: str | None) -> tuple[bytes, str]:
             raise ConfigError(f"mesh file not found: {printable(str(source), 200)}")
         kind = path.suffix.lstrip(".").lower()
         if kind in MESH_FORMATS and path.stat().st_size > MAX_MESH_BYTES:
-            raise ConfigError(f"'{name}' is {path.stat().st_size / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)")
+            raise ConfigError(
+                f"'{name}' is {path.stat().st_size / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)"
+            )
         data = path.read_bytes() if kind in MESH_FORMATS else b""
     if kind not in MESH_FORMATS:
         raise ConfigError(f"'{name}': mesh files must be {', '.join(f'.{f}' for f in MESH_FORMATS)}, got '.{printable(kind, 12)}'")
     if len(data) > MAX_MESH_BYTES:
-        raise ConfigError(f"'{name}' is {len(data) / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)")
+        raise ConfigError(
+            f"'{name}' is {len(data) / 1e6:.0f} MB, more than {MAX_MESH_BYTES / 1e6:.0f} MB: simplify it first (e.g. in Blender)"
+        )
     return data, kind
 
 
@@ -267,7 +272,9 @@ def load_mesh(source, name: str = "mesh", unit: str = "m", file_type: str | None
     triangles, vertices = _declared_counts(data, kind)
     if triangles > MAX_TRIANGLES or vertices > MAX_VERTICES:
         what = f"{triangles:,} faces" if triangles > MAX_TRIANGLES else f"{vertices:,} vertices"
-        raise ConfigError(f"'{name}' has {what}, more than a mesh of {MAX_TRIANGLES:,} triangles needs: simplify it first (e.g. in Blender)")
+        raise ConfigError(
+            f"'{name}' has {what}, more than a mesh of {MAX_TRIANGLES:,} triangles needs: simplify it first (e.g. in Blender)"
+        )
     try:
         mesh = trimesh.load(io.BytesIO(data), file_type=kind, force="mesh", process=False)
     except Exception as e:  # noqa: BLE001 -- trimesh raises many types for unreadable files

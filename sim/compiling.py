@@ -36,15 +36,27 @@ def kernels_ready(spec) -> bool:
 
 def spec_argument(spec) -> str:
     """A kernels.Spec as one command-line word (for the child)."""
-    return ",".join([spec.scheme, spec.model, "+".join(spec.terms), str(int(spec.waves)), str(int(spec.radiating)), str(int(spec.current)), str(int(spec.held)),
-                     str(int(spec.system))])
+    return ",".join(
+        [
+            spec.scheme,
+            spec.model,
+            "+".join(spec.terms),
+            str(int(spec.waves)),
+            str(int(spec.radiating)),
+            str(int(spec.current)),
+            str(int(spec.held)),
+            str(int(spec.system)),
+        ]
+    )
 
 
 def parse_spec(word: str):
     from .kernels import Spec
 
     scheme, model, terms, waves, radiating, current, held, system = word.split(",")
-    return Spec(scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1", held == "1", system == "1")
+    return Spec(
+        scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1", held == "1", system == "1"
+    )
 
 
 class Compiler:

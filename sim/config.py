@@ -25,115 +25,467 @@ from .surface import FORCE_MODELS
 SCENES_DIR = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 
 BODY = (
-    Param("body", "shape", "cube", "Body shape: cube (side `size`), box (sides `extents`) or mesh (a watertight file)",
-          kind="choice", choices=("cube", "box", "mesh"), name="body shape"),
+    Param(
+        "body",
+        "shape",
+        "cube",
+        "Body shape: cube (side `size`), box (sides `extents`) or mesh (a watertight file)",
+        kind="choice",
+        choices=("cube", "box", "mesh"),
+        name="body shape",
+    ),
     Param("body", "size", 1.0, "Cube side", "m", lo=1e-3, hi=1e3, name="cube size"),
-    Param("body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=1e-3, hi=1e3, kind="vector", size=3,
-          name="box extents"),
-    Param("body", "points_per_edge", 10, "Cube/box samples: N x N cell-centred samples per face", lo=1, hi=1000, kind="int",
-          name="points per edge", label="Points per edge", gui=(1, 60, 1), live=(1, 100)),  # 60 000 samples at most in the viewer
+    Param(
+        "body", "extents", (1.0, 1.0, 1.0), "Box sides along body x, y, z", "m", lo=1e-3, hi=1e3, kind="vector", size=3, name="box extents"
+    ),
+    Param(
+        "body",
+        "points_per_edge",
+        10,
+        "Cube/box samples: N x N cell-centred samples per face",
+        lo=1,
+        hi=1000,
+        kind="int",
+        name="points per edge",
+        label="Points per edge",
+        gui=(1, 60, 1),
+        live=(1, 100),
+    ),  # 60 000 samples at most in the viewer
     Param("body", "mesh", "", "Mesh file (shape mesh), relative to the scene file or the working directory", kind="text", name="mesh file"),
-    Param("body", "mesh_unit", "m", "Unit of the mesh file's coordinates (scaled to metres)", kind="choice", choices=tuple(UNITS),
-          name="mesh unit"),
-    Param("body", "samples", 600, "Mesh: target number of samples (triangles are subdivided until there are this many)", lo=1, hi=1e6,
-          kind="int", name="mesh samples", label="Samples", gui=(100, 20000, 100), live=(1, 60000)),
-    Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=1e-3,
-          hi=1e5, live=(1.0, 1e5), kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
+    Param(
+        "body",
+        "mesh_unit",
+        "m",
+        "Unit of the mesh file's coordinates (scaled to metres)",
+        kind="choice",
+        choices=tuple(UNITS),
+        name="mesh unit",
+    ),
+    Param(
+        "body",
+        "samples",
+        600,
+        "Mesh: target number of samples (triangles are subdivided until there are this many)",
+        lo=1,
+        hi=1e6,
+        kind="int",
+        name="mesh samples",
+        label="Samples",
+        gui=(100, 20000, 100),
+        live=(1, 60000),
+    ),
+    Param(
+        "body",
+        "density",
+        900.0,
+        "Body density: mass / enclosed volume (ignored when mass is set)",
+        "kg/m^3",
+        lo=1e-3,
+        hi=1e5,
+        live=(1.0, 1e5),
+        kind="optional",
+        gui=(1.0, 5000.0, 1.0),
+        label="Density",
+    ),
     Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=1e-6, hi=1e12, kind="optional"),
 )
 FLUID = (
     Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),
     Param("fluid", "g", 9.81, "Gravitational acceleration", "m/s^2", lo=0.0, hi=1e3, name="gravity g"),
-    Param("fluid", "forces", "points", "How water forces are integrated: points (over the samples, the report's model), cells (the samples "
-          "with each cell clipped at the water line: continuous wetting) or panels (exactly over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
-    Param("fluid", "radiation", "none", "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
-          "boundary-element solve about the rest pose, Cummins' equation)", kind="choice", choices=("none", "bem"), label="Radiation", gui=()),
-    Param("fluid", "bem_min_period", None, "Radiation: the shortest wave period of the BEM solve's frequency grid (unset: waves half as "
-          "long as the body); below a gap's sloshing resonance (a float around a spar) it keeps the solve clear of it", "s", lo=0.0,
-          lo_open=True, hi=1e3, kind="optional"),
+    Param(
+        "fluid",
+        "forces",
+        "points",
+        "How water forces are integrated: points (over the samples, the report's model), cells (the samples "
+        "with each cell clipped at the water line: continuous wetting) or panels (exactly over the mesh triangles clipped at the water line)",
+        kind="choice",
+        choices=FORCE_MODELS,
+        name="force model",
+        label="Force model",
+        gui=(),
+    ),
+    Param(
+        "fluid",
+        "radiation",
+        "none",
+        "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
+        "boundary-element solve about the rest pose, Cummins' equation)",
+        kind="choice",
+        choices=("none", "bem"),
+        label="Radiation",
+        gui=(),
+    ),
+    Param(
+        "fluid",
+        "bem_min_period",
+        None,
+        "Radiation: the shortest wave period of the BEM solve's frequency grid (unset: waves half as "
+        "long as the body); below a gap's sloshing resonance (a float around a spar) it keeps the solve clear of it",
+        "s",
+        lo=0.0,
+        lo_open=True,
+        hi=1e3,
+        kind="optional",
+    ),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (
-    Param("initial", "position", (0.0, 0.0, 0.0), "Centre of mass, world frame", "m", lo=-1e7, hi=1e7, kind="vector", size=3,
-          name="initial position", flag=False),
-    Param("initial", "orientation", (1.0, 0.0, 0.0, 0.0), "Body-to-world rotation as a unit quaternion (w, x, y, z)", lo=-1.0, hi=1.0,
-          kind="vector", size=4, name="initial orientation q0", flag=False),
-    Param("initial", "velocity", (0.0, 0.0, 0.0), "Centre-of-mass velocity, world frame", "m/s", lo=-1e4, hi=1e4, kind="vector", size=3,
-          name="initial velocity u0", flag=False),
-    Param("initial", "omega", (0.0, 0.0, 0.0), "Angular velocity, world frame", "rad/s", lo=-1e3, hi=1e3, kind="vector", size=3,
-          name="initial angular velocity omega0", label="Initial ω", flag=False, gui=()),
+    Param(
+        "initial",
+        "position",
+        (0.0, 0.0, 0.0),
+        "Centre of mass, world frame",
+        "m",
+        lo=-1e7,
+        hi=1e7,
+        kind="vector",
+        size=3,
+        name="initial position",
+        flag=False,
+    ),
+    Param(
+        "initial",
+        "orientation",
+        (1.0, 0.0, 0.0, 0.0),
+        "Body-to-world rotation as a unit quaternion (w, x, y, z)",
+        lo=-1.0,
+        hi=1.0,
+        kind="vector",
+        size=4,
+        name="initial orientation q0",
+        flag=False,
+    ),
+    Param(
+        "initial",
+        "velocity",
+        (0.0, 0.0, 0.0),
+        "Centre-of-mass velocity, world frame",
+        "m/s",
+        lo=-1e4,
+        hi=1e4,
+        kind="vector",
+        size=3,
+        name="initial velocity u0",
+        flag=False,
+    ),
+    Param(
+        "initial",
+        "omega",
+        (0.0, 0.0, 0.0),
+        "Angular velocity, world frame",
+        "rad/s",
+        lo=-1e3,
+        hi=1e3,
+        kind="vector",
+        size=3,
+        name="initial angular velocity omega0",
+        label="Initial ω",
+        flag=False,
+        gui=(),
+    ),
 )
 STEP = (
     Param("step", "integrator", "implicit", "Time integrator", kind="choice", choices=tuple(INTEGRATORS), label="Integrator", gui=()),
-    Param("step", "dt", 0.005, "Time step (the output interval for the adaptive methods)", "s", lo=1e-7, hi=1.0, live=(1e-5, 1.0),
-          gui=(0.0005, 0.05, 0.0005), label="Time step"),
+    Param(
+        "step",
+        "dt",
+        0.005,
+        "Time step (the output interval for the adaptive methods)",
+        "s",
+        lo=1e-7,
+        hi=1.0,
+        live=(1e-5, 1.0),
+        gui=(0.0005, 0.05, 0.0005),
+        label="Time step",
+    ),
     Param("step", "t_end", 30.0, "Simulated duration", "s", lo=0.0, hi=1e7),
     Param("step", "rtol", 1e-8, "Relative tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1.0),
     Param("step", "atol", 1e-10, "Absolute tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1e3),
 )
 WAVES = (
-    Param("waves", "kind", "still", "The sea: still water, regular (Airy) waves, or an irregular JONSWAP sea", kind="choice",
-          choices=("still", "regular", "jonswap"), name="waves", flag_name="waves", label="Waves", gui=()),
-    Param("waves", "height", 1.0, "Regular waves: crest-to-trough height H", "m", lo=0.0, hi=30.0, name="wave height", flag_name="wave_height",
-          label="Height", gui=(0.0, 4.0, 0.05)),
-    Param("waves", "period", 8.0, "Regular waves: period T", "s", lo=0.0, lo_open=True, hi=60.0, live=(0.5, 60.0), name="wave period",
-          flag_name="wave_period", label="Period", gui=(1.0, 20.0, 0.1)),
-    Param("waves", "direction", 0.0, "Direction the waves travel to, degrees from +x", "deg", lo=-360.0, hi=360.0, name="wave direction",
-          flag_name="wave_direction", label="Direction", gui=(-180.0, 180.0, 1.0)),
+    Param(
+        "waves",
+        "kind",
+        "still",
+        "The sea: still water, regular (Airy) waves, or an irregular JONSWAP sea",
+        kind="choice",
+        choices=("still", "regular", "jonswap"),
+        name="waves",
+        flag_name="waves",
+        label="Waves",
+        gui=(),
+    ),
+    Param(
+        "waves",
+        "height",
+        1.0,
+        "Regular waves: crest-to-trough height H",
+        "m",
+        lo=0.0,
+        hi=30.0,
+        name="wave height",
+        flag_name="wave_height",
+        label="Height",
+        gui=(0.0, 4.0, 0.05),
+    ),
+    Param(
+        "waves",
+        "period",
+        8.0,
+        "Regular waves: period T",
+        "s",
+        lo=0.0,
+        lo_open=True,
+        hi=60.0,
+        live=(0.5, 60.0),
+        name="wave period",
+        flag_name="wave_period",
+        label="Period",
+        gui=(1.0, 20.0, 0.1),
+    ),
+    Param(
+        "waves",
+        "direction",
+        0.0,
+        "Direction the waves travel to, degrees from +x",
+        "deg",
+        lo=-360.0,
+        hi=360.0,
+        name="wave direction",
+        flag_name="wave_direction",
+        label="Direction",
+        gui=(-180.0, 180.0, 1.0),
+    ),
     Param("waves", "hs", 2.0, "JONSWAP: significant wave height Hs = 4 sqrt(m0)", "m", lo=0.0, hi=30.0, label="Hs", gui=(0.0, 8.0, 0.05)),
-    Param("waves", "tp", 10.0, "JONSWAP: peak period Tp", "s", lo=0.0, lo_open=True, hi=60.0, live=(1.0, 60.0), label="Tp", gui=(2.0, 25.0, 0.1)),
+    Param(
+        "waves",
+        "tp",
+        10.0,
+        "JONSWAP: peak period Tp",
+        "s",
+        lo=0.0,
+        lo_open=True,
+        hi=60.0,
+        live=(1.0, 60.0),
+        label="Tp",
+        gui=(2.0, 25.0, 0.1),
+    ),
     Param("waves", "gamma", 3.3, "JONSWAP: peak enhancement gamma (1: Pierson-Moskowitz)", lo=1.0, hi=10.0),
-    Param("waves", "components", 64, "JONSWAP: number of wave components", lo=1, hi=4096, kind="int", name="wave components",
-          flag_name="wave_components"),
-    Param("waves", "seed", 0, "JONSWAP: random seed of the phases and frequencies (the same seed, the same sea)", lo=0, hi=2**32 - 1, kind="int"),
+    Param(
+        "waves",
+        "components",
+        64,
+        "JONSWAP: number of wave components",
+        lo=1,
+        hi=4096,
+        kind="int",
+        name="wave components",
+        flag_name="wave_components",
+    ),
+    Param(
+        "waves",
+        "seed",
+        0,
+        "JONSWAP: random seed of the phases and frequencies (the same seed, the same sea)",
+        lo=0,
+        hi=2**32 - 1,
+        kind="int",
+    ),
     Param("waves", "depth", None, "Water depth h (unset: deep water)", "m", lo=0.0, lo_open=True, hi=1e5, kind="optional"),
     Param("waves", "spreading", 0.0, "JONSWAP: directional spreading exponent s of cos^(2s) (0: long-crested)", lo=0.0, hi=100.0),
-    Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
-          "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
+    Param(
+        "waves",
+        "diffraction",
+        None,
+        "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
+        "radiation = bem; unset: on wherever radiation is bem)",
+        kind="switch",
+        label="Diffraction",
+        gui=(),
+    ),
 )
 WATER = (
-    Param("water", "current", (0.0, 0.0), "Uniform current (u, v), world frame: the water and its waves move with it", "m/s", lo=-20.0,
-          hi=20.0, kind="vector", size=2, name="current", label="Current (u, v)", gui=()),
+    Param(
+        "water",
+        "current",
+        (0.0, 0.0),
+        "Uniform current (u, v), world frame: the water and its waves move with it",
+        "m/s",
+        lo=-20.0,
+        hi=20.0,
+        kind="vector",
+        size=2,
+        name="current",
+        label="Current (u, v)",
+        gui=(),
+    ),
 )
 MOORINGS = (
-    Param("moorings", "lines", 0, "Mooring lines on MoorDyn (the .[moorings] extra): a symmetric spread of this many identical lines "
-          "(0: none)", lo=0, hi=64, kind="int", name="mooring lines"),
-    Param("moorings", "line_file", "", "A MoorDyn v2 input file instead of the spread: its Coupled points are the fairleads (world "
-          "positions at the starting pose), relative to the scene file or the working directory", kind="text", name="mooring file"),
-    Param("moorings", "first_heading", 0.0, "Direction of the first line's anchor from the body, degrees from +x (the others evenly "
-          "around)", "deg", lo=-360.0, hi=360.0),
-    Param("moorings", "anchor_radius", 20.0, "Horizontal distance of the anchors from the world's vertical axis (x = y = 0)", "m", lo=0.0, hi=1e5),
-    Param("moorings", "anchor_depth", 10.0, "Depth of the seabed the anchors sit on (MoorDyn's water depth)", "m", lo=0.0, lo_open=True, hi=1e4),
-    Param("moorings", "fairlead_radius", 0.5, "Horizontal distance of the fairleads from the centre of mass (starting pose)", "m", lo=0.0, hi=1e4),
+    Param(
+        "moorings",
+        "lines",
+        0,
+        "Mooring lines on MoorDyn (the .[moorings] extra): a symmetric spread of this many identical lines (0: none)",
+        lo=0,
+        hi=64,
+        kind="int",
+        name="mooring lines",
+    ),
+    Param(
+        "moorings",
+        "line_file",
+        "",
+        "A MoorDyn v2 input file instead of the spread: its Coupled points are the fairleads (world "
+        "positions at the starting pose), relative to the scene file or the working directory",
+        kind="text",
+        name="mooring file",
+    ),
+    Param(
+        "moorings",
+        "first_heading",
+        0.0,
+        "Direction of the first line's anchor from the body, degrees from +x (the others evenly around)",
+        "deg",
+        lo=-360.0,
+        hi=360.0,
+    ),
+    Param(
+        "moorings",
+        "anchor_radius",
+        20.0,
+        "Horizontal distance of the anchors from the world's vertical axis (x = y = 0)",
+        "m",
+        lo=0.0,
+        hi=1e5,
+    ),
+    Param(
+        "moorings",
+        "anchor_depth",
+        10.0,
+        "Depth of the seabed the anchors sit on (MoorDyn's water depth)",
+        "m",
+        lo=0.0,
+        lo_open=True,
+        hi=1e4,
+    ),
+    Param(
+        "moorings",
+        "fairlead_radius",
+        0.5,
+        "Horizontal distance of the fairleads from the centre of mass (starting pose)",
+        "m",
+        lo=0.0,
+        hi=1e4,
+    ),
     Param("moorings", "fairlead_height", 0.0, "Height of the fairleads above the centre of mass (starting pose)", "m", lo=-1e4, hi=1e4),
     Param("moorings", "line_length", 25.0, "Unstretched length of each line", "m", lo=0.0, lo_open=True, hi=1e5),
     Param("moorings", "line_mass", 1.0, "Mass per unit length of each line", "kg/m", lo=0.0, lo_open=True, hi=1e5),
     Param("moorings", "line_diameter", 0.01, "Volume-equivalent diameter (buoyancy and drag)", "m", lo=0.0, lo_open=True, hi=100.0),
     Param("moorings", "line_stiffness", 1.0e6, "Axial stiffness EA", "N", lo=0.0, lo_open=True, hi=1e13),
     Param("moorings", "segments", 20, "Segments per line (lumped masses: segments + 1 nodes)", lo=1, hi=500, kind="int"),
-    Param("moorings", "anchors", (), "Anchor points instead of the spread's, world frame (one line each, on or above the seabed at anchor_depth)", "m",
-          lo=-1e5, hi=1e5, kind="points", size=64, flag=False),
-    Param("moorings", "fairleads", (), "Fairlead points for the anchors given, relative to the centre of mass in the scene's input frame "
-          "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
-    Param("moorings", "body", "", "A scene of several bodies: the name of the one the lines hold (default: the first listed)", kind="text",
-          name="moored body", flag=False),
+    Param(
+        "moorings",
+        "anchors",
+        (),
+        "Anchor points instead of the spread's, world frame (one line each, on or above the seabed at anchor_depth)",
+        "m",
+        lo=-1e5,
+        hi=1e5,
+        kind="points",
+        size=64,
+        flag=False,
+    ),
+    Param(
+        "moorings",
+        "fairleads",
+        (),
+        "Fairlead points for the anchors given, relative to the centre of mass in the scene's input frame "
+        "(as the body is at orientation 1 0 0 0)",
+        "m",
+        lo=-1e4,
+        hi=1e4,
+        kind="points",
+        size=64,
+        flag=False,
+    ),
+    Param(
+        "moorings",
+        "body",
+        "",
+        "A scene of several bodies: the name of the one the lines hold (default: the first listed)",
+        kind="text",
+        name="moored body",
+        flag=False,
+    ),
 )
 CONSTRAINT = (
-    Param("constraint", "joint", "free", "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
-          "turning), revolute (turns about axis through the pivot) or, for a [[bodies]] entry, planar (moves in the plane normal to axis "
-          "and turns about it: surge, heave and pitch for axis y)", kind="choice", choices=JOINTS, label="Joint", gui=()),
-    Param("constraint", "axis", (0.0, 0.0, 1.0), "The joint's axis, world frame (normalised)", lo=-1e3, hi=1e3, kind="vector", size=3,
-          name="joint axis"),
-    Param("constraint", "pivot", (0.0, 0.0, 0.0), "A point on a revolute joint's axis, from the starting centre of mass, world frame", "m",
-          lo=-1e5, hi=1e5, kind="vector", size=3, name="joint pivot"),
-    Param("constraint", "pto_stiffness", 0.0, "Power take-off spring on the joint's coordinate (N/m sliding, N m/rad turning), about the "
-          "starting pose", lo=0.0, hi=1e9, name="PTO stiffness"),
-    Param("constraint", "pto_damping", 0.0, "Power take-off damper on the joint's coordinate (N s/m sliding, N m s/rad turning): the "
-          "power it absorbs is the CSV's P_pto", lo=0.0, hi=1e9, live=(0.0, 1e7), name="PTO damping", label="PTO damping",
-          gui=(0.0, 20000.0, 10.0)),
+    Param(
+        "constraint",
+        "joint",
+        "free",
+        "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
+        "turning), revolute (turns about axis through the pivot) or, for a [[bodies]] entry, planar (moves in the plane normal to axis "
+        "and turns about it: surge, heave and pitch for axis y)",
+        kind="choice",
+        choices=JOINTS,
+        label="Joint",
+        gui=(),
+    ),
+    Param(
+        "constraint",
+        "axis",
+        (0.0, 0.0, 1.0),
+        "The joint's axis, world frame (normalised)",
+        lo=-1e3,
+        hi=1e3,
+        kind="vector",
+        size=3,
+        name="joint axis",
+    ),
+    Param(
+        "constraint",
+        "pivot",
+        (0.0, 0.0, 0.0),
+        "A point on a revolute joint's axis, from the starting centre of mass, world frame",
+        "m",
+        lo=-1e5,
+        hi=1e5,
+        kind="vector",
+        size=3,
+        name="joint pivot",
+    ),
+    Param(
+        "constraint",
+        "pto_stiffness",
+        0.0,
+        "Power take-off spring on the joint's coordinate (N/m sliding, N m/rad turning), about the starting pose",
+        lo=0.0,
+        hi=1e9,
+        name="PTO stiffness",
+    ),
+    Param(
+        "constraint",
+        "pto_damping",
+        0.0,
+        "Power take-off damper on the joint's coordinate (N s/m sliding, N m s/rad turning): the power it absorbs is the CSV's P_pto",
+        lo=0.0,
+        hi=1e9,
+        live=(0.0, 1e7),
+        name="PTO damping",
+        label="PTO damping",
+        gui=(0.0, 20000.0, 10.0),
+    ),
 )
-SECTIONS = {"body": BODY, "fluid": FLUID, "initial": INITIAL, "step": STEP, "waves": WAVES, "water": WATER, "moorings": MOORINGS,
-            "constraint": CONSTRAINT}
+SECTIONS = {
+    "body": BODY,
+    "fluid": FLUID,
+    "initial": INITIAL,
+    "step": STEP,
+    "waves": WAVES,
+    "water": WATER,
+    "moorings": MOORINGS,
+    "constraint": CONSTRAINT,
+}
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
 """Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
 assert len({p.key for p in PARAMS.values()}) == len(PARAMS), "a parameter key is declared in two sections"
@@ -155,8 +507,16 @@ WavesConfig = _section("WavesConfig", WAVES)
 WaterConfig = _section("WaterConfig", WATER)
 MooringsConfig = _section("MooringsConfig", MOORINGS)
 ConstraintConfig = _section("ConstraintConfig", CONSTRAINT)
-SECTION_TYPES = {"body": BodyConfig, "fluid": FluidConfig, "initial": InitialConfig, "step": StepConfig, "waves": WavesConfig, "water": WaterConfig,
-                 "moorings": MooringsConfig, "constraint": ConstraintConfig}
+SECTION_TYPES = {
+    "body": BodyConfig,
+    "fluid": FluidConfig,
+    "initial": InitialConfig,
+    "step": StepConfig,
+    "waves": WavesConfig,
+    "water": WaterConfig,
+    "moorings": MooringsConfig,
+    "constraint": ConstraintConfig,
+}
 
 
 ENTRY_SECTIONS = ("body", "initial", "constraint")
@@ -274,7 +634,7 @@ def _body_entry(data: dict, where: str) -> BodyEntry:
         if k in owner:
             tables[owner[k]][k] = tuple(v) if isinstance(v, list) else v
     if not isinstance(data.get("name"), str) or not data["name"]:
-        raise ConfigError(f"{where}: give the body a name (name = \"float\")")
+        raise ConfigError(f'{where}: give the body a name (name = "float")')
     if tables["body"].get("shape") == "mesh" and "forces" not in data:
         data = {**data, "forces": MESH_FORCES}
     return BodyEntry(data["name"], data.get("parent", "world"), *(SECTION_TYPES[name](**tables[name]) for name in ENTRY_SECTIONS),
@@ -292,11 +652,15 @@ def _check_body(b, i, c, where: str = "") -> None:
     if c.joint != "free" and not any(c.axis):
         raise ConfigError(f"{where}[constraint] axis must not be zero")
     if c.joint == "planar" and (c.pto_damping or c.pto_stiffness):
-        raise ConfigError(f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one")
+        raise ConfigError(
+            f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one"
+        )
     norm = math.sqrt(sum(q * q for q in i.orientation))
     if abs(norm - 1.0) > QUATERNION_SLACK:
-        raise ConfigError(f"{where}initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
-                          f"(one within {QUATERNION_SLACK:g} of 1 is normalised)")
+        raise ConfigError(
+            f"{where}initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
+            f"(one within {QUATERNION_SLACK:g} of 1 is normalised)"
+        )
 
 
 def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
@@ -339,15 +703,17 @@ def validate(scene: SceneConfig) -> SceneConfig:
     _check_body(checked["body"], checked["initial"], checked["constraint"])
     _check_steepness(checked["waves"], checked["fluid"].g)
     if checked["fluid"].radiation != "none" and any(checked["water"].current):
-        raise ConfigError("a current with radiation is not modelled (the radiation memory assumes water at rest): "
-                          "set [water] current = [0, 0] or [fluid] radiation = \"none\"")
+        raise ConfigError(
+            "a current with radiation is not modelled (the radiation memory assumes water at rest): "
+            'set [water] current = [0, 0] or [fluid] radiation = "none"'
+        )
     m = checked["moorings"]
     if len(m.anchors) != len(m.fairleads):
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):
         raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
-        raise ConfigError("diffraction comes from the boundary-element solve: it needs [fluid] radiation = \"bem\" (--radiation bem)")
+        raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)
     if not scene.bodies and checked.constraint.joint == "planar":
         raise ConfigError("[constraint] joint 'planar' is for a [[bodies]] entry: one body takes fixed, prismatic or revolute")
@@ -423,8 +789,12 @@ def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:
         sections.setdefault(section, {})[name] = value
     if sections.get("body", {}).get("mesh") and "shape" not in sections["body"]:
         sections["body"]["shape"] = "mesh"  # --mesh FILE alone means: this file is the body
-    if sections.get("body", {}).get("shape") == "mesh" and scene.body.shape != "mesh" and "forces" not in sections.get("fluid", {}) \
-            and scene.fluid.forces == "points":
+    if (
+        sections.get("body", {}).get("shape") == "mesh"
+        and scene.body.shape != "mesh"
+        and "forces" not in sections.get("fluid", {})
+        and scene.fluid.forces == "points"
+    ):
         sections.setdefault("fluid", {})["forces"] = MESH_FORCES  # a body becoming a mesh takes the mesh default
     if "density" in sections.get("body", {}):
         sections["body"]["mass"] = None  # an explicit density wins over a preset's mass

@@ -97,4 +97,3 @@ class Ensemble:
             elif check_energy and s.frame().E_total - s._E_ref > 10.0 * s._E_scale:
                 self.diverged[i] = s.diagnose(s.state.t, "the energy blew up")
                 s.state = before  # the last state that passed the check, as Simulation.step does
-

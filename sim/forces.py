@@ -88,6 +88,7 @@ def damping(body, water, fluid, wet, twist, t) -> Load:
 DRAG_COEFFICIENT = Param("fluid", "drag_coefficient", 0.0, "Quadratic (pressure) drag coefficient C_d: a wet element moving into the "
                          "water feels -(1/2) rho C_d a (v_rel . n)^2 n", lo=0.0, hi=100.0, label="Drag C_d", gui=(0.0, 5.0, 0.05))  # fmt: skip
 
+
 def _advancing_nodes(water, wet: WetSurface, twist: np.ndarray, t: float) -> WetSurface:
     """Nodes of the part of the wet surface that moves into the water (v_rel . n > 0).
 
@@ -219,7 +220,9 @@ class Model:
         fv, tv = self.twist_loads(wet, np.concatenate([u, omega]), t)
         return force + fv, torque + tv
 
-    def linearised(self, wet: WetSurface, twist: np.ndarray, t: float = 0.0, pose: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    def linearised(
+        self, wet: WetSurface, twist: np.ndarray, t: float = 0.0, pose: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """(f, D): the loads near `twist` as f - D (u, omega), f (6,), D (6, 6) or None (no twist terms
         wet). `pose`: the pose loads (6,) when already known (they do not depend on the twist)."""
         f = np.concatenate(self.pose_loads(wet, t)) if pose is None else pose

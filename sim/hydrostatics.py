@@ -159,8 +159,10 @@ def sampled_model_warning(body, fluid, R: np.ndarray | None = None) -> str | Non
     margin = leak_margin(body, fluid, R)
     if margin is None or margin >= LEAK_BAND:
         return None
-    return ("the points model may keep this body rocking or drifting for ever: its GM is close to zero for its sample spacing "
-            f"(|GM|/BM = {margin:.2f} sqrt(h/L), band < {LEAK_BAND:g}); use the cells or panels force model (the accuracy report's part 6)")
+    return (
+        "the points model may keep this body rocking or drifting for ever: its GM is close to zero for its sample spacing "
+        f"(|GM|/BM = {margin:.2f} sqrt(h/L), band < {LEAK_BAND:g}); use the cells or panels force model (the accuracy report's part 6)"
+    )
 
 
 def floating_potential(body, fluid, R: np.ndarray) -> float:
@@ -182,6 +184,7 @@ def lowest_orientation(body, fluid, starts: list[np.ndarray], xatol: float = 1e-
 
     best = (None, np.inf)
     for R0 in starts:
+
         def u(v, R0=R0):
             return floating_potential(body, fluid, Rotation.from_rotvec(v).as_matrix() @ R0)
 

@@ -232,7 +232,9 @@ def derivative(model: Model, t: float, y: np.ndarray) -> np.ndarray:
     spin = np.cross(omega, L)
     f[3:] -= spin
     dnu = np.linalg.solve(rad.mass_matrix(model.body, R), f)
-    return np.concatenate([u, dq, dnu[:3], angular_momentum(model.body, R, dnu[3:]) + spin, rad.rate(R, memory, nu), [-nu @ rad.force(R, memory)]])
+    return np.concatenate(
+        [u, dq, dnu[:3], angular_momentum(model.body, R, dnu[3:]) + spin, rad.rate(R, memory, nu), [-nu @ rad.force(R, memory)]]
+    )
 
 
 class RK4:
@@ -308,7 +310,9 @@ class Radau(Adaptive):
     method, order = "Radau", 5
 
 
-INTEGRATORS = {cls.name if not cls.adaptive else cls.method.lower(): cls for cls in (Euler, Splitting, ImplicitSplitting, RK4, RK45, DOP853, Radau)}
+INTEGRATORS = {
+    cls.name if not cls.adaptive else cls.method.lower(): cls for cls in (Euler, Splitting, ImplicitSplitting, RK4, RK45, DOP853, Radau)
+}
 
 
 def make_integrator(name: str, rtol: float = 1e-8, atol: float = 1e-10):

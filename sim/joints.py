@@ -181,5 +181,3 @@ def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memor
     if rad is None:
         return float(J @ f) - joint.stiffness * theta, Dq, joint.mass(model.body, R, J)
     return float(J @ (f + rad.load(R, memory, t))) - joint.stiffness * theta, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)
-
-

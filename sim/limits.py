@@ -49,7 +49,9 @@ def check_memory(what: str, n_bytes: float, flag: str) -> None:
 def check_samples(n: int, flag: str) -> None:
     """The surface samples of one body, against MAX_SAMPLES and the memory available."""
     if n > MAX_SAMPLES:
-        raise ConfigError(f"{n:,} surface samples (about {size(n * BYTES_PER_SAMPLE)} of memory) is over the limit of {MAX_SAMPLES:,}: lower {flag}")
+        raise ConfigError(
+            f"{n:,} surface samples (about {size(n * BYTES_PER_SAMPLE)} of memory) is over the limit of {MAX_SAMPLES:,}: lower {flag}"
+        )
     check_memory(f"{n:,} surface samples", n * BYTES_PER_SAMPLE, flag)
 
 

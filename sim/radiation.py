@@ -267,7 +267,11 @@ def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=Non
 
     z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
-    omega = None if fluid.bem_min_period is None else default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period)
+    omega = (
+        None
+        if fluid.bem_min_period is None
+        else default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period)
+    )
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None)  # fmt: skip
     memory = fit_memory(c)

@@ -107,8 +107,11 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
     E_grav = body.mass * water.g * float(state.x_world[2])
     if model.radiation is not None:  # the water moving with the body: 1/2 nu^T A_inf nu
         nu = np.concatenate([state.u_world, omega])
-        E_kin += 0.5 * float(nu @ (model.radiation.mass_matrix(body, R) @ nu)) - 0.5 * body.mass * float(state.u_world @ state.u_world) \
+        E_kin += (
+            0.5 * float(nu @ (model.radiation.mass_matrix(body, R) @ nu))
+            - 0.5 * body.mass * float(state.u_world @ state.u_world)
             - 0.5 * float(omega @ state.L_world)
+        )
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
     if kernels is not None:
@@ -124,7 +127,11 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
         wet = model.wetted(state.x_world, R, state.t)
         F, T = model.loads(wet, state.u_world, omega, state.t)
         e_hyd, a_sub, v_sub = model.hydrostatic_energy(wet), wet.submerged_area, wet.submerged_volume
-        wet_index = wet.index if wet.triangles is None else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
+        wet_index = (
+            wet.index
+            if wet.triangles is None
+            else np.flatnonzero(water.height_above_surface(state.x_world + body.r_body @ R.T, state.t) < 0)
+        )
     p_diff = 0.0
     if model.radiation is not None:
         f = model.radiation.load(R, state.memory, state.t)
@@ -259,7 +266,9 @@ class Simulation:
             from .radiation import make_radiation
 
             start = initial_state(body, self.scene)
-            radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2])
+            radiation = make_radiation(
+                body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2]
+            )
             depth = self.scene.waves.depth
             if depth is not None:
                 note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "
@@ -367,11 +376,15 @@ class Simulation:
         integ = self.integrator
         notes = []
         if self.joint is not None and integ.name != "implicit":
-            notes.append(f"a jointed body steps by its own scheme (Stormer-Verlet, its damping implicit): integrator '{integ.name}' is not used")
+            notes.append(
+                f"a jointed body steps by its own scheme (Stormer-Verlet, its damping implicit): integrator '{integ.name}' is not used"
+            )
         if self.backend == "numba" and self.joint is not None:
             notes.append("the joint has no compiled twin yet: the scene runs on the numpy reference (slower)")
         elif self.backend == "numba" and missing_terms(self.model):
-            notes.append(f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)")
+            notes.append(
+                f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)"
+            )
         elif self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
             notes.append(f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)")
         elif self.backend == "numba" and not compiled_model(self.model):
@@ -394,7 +407,11 @@ class Simulation:
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too
             t, self.state = self.state.t, checked  # back to the last state that passed this check
-            what = f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)" if np.isfinite(energy) else "the state left every finite bound"
+            what = (
+                f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"
+                if np.isfinite(energy)
+                else "the state left every finite bound"
+            )
             raise SimulationDiverged(self.diagnose(t, what))
         return self.state
 
@@ -530,7 +547,12 @@ class Simulation:
             omega = angular_velocity(body, R, self.state.L_world)
             self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
-        elif old.fluid != scene.fluid or old.waves != scene.waves or old.water != scene.water or (self.model.radiation is not None and old.initial != scene.initial):
+        elif (
+            old.fluid != scene.fluid
+            or old.waves != scene.waves
+            or old.water != scene.water
+            or (self.model.radiation is not None and old.initial != scene.initial)
+        ):
             self.model = self._model(body)  # (radiation is linear about the scene's starting orientation)
             self._check_backend()
         if (old.step.integrator, old.step.rtol, old.step.atol) != (scene.step.integrator, scene.step.rtol, scene.step.atol):
@@ -579,6 +601,8 @@ class Simulation:
         self.largest_turn = 0.0
         self._join()
         self._moor()
-        self._memory_of = None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
+        self._memory_of = (
+            None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
+        )
         self._sync_memory()
         self._rebase_energy()

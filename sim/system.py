@@ -167,7 +167,9 @@ class SystemRadiation:
         omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period)
         c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
         memory = fit_memory(c, length=max(m.body.radius for m in models))
-        return cls(c.added_mass_inf, memory, [s.R_world_body for s in starts], None if water is None else Diffraction(c, water, (0.0, 0.0)), c)
+        return cls(
+            c.added_mass_inf, memory, [s.R_world_body for s in starts], None if water is None else Diffraction(c, water, (0.0, 0.0)), c
+        )
 
     @property
     def states(self) -> int:
@@ -563,7 +565,6 @@ def body_frames(system: System, s: SystemState) -> list[dict]:
     return out
 
 
-
 class Assembly:
     """A running scene of several bodies: the system, its state and step; stops loudly on a non-finite state.
     The counterpart of simulation.Simulation for [[bodies]]. On the numba backend the bodies' loads come from their
@@ -584,7 +585,9 @@ class Assembly:
         self.moorings = self._moorings()
         self.notes: list[str] = []
         if scene.step.integrator != "implicit":
-            self.notes.append(f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used")
+            self.notes.append(
+                f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used"
+            )
         self.backend = "numpy"
         wanted = backend or default_backend()
         if wanted == "numba" and not self.system.has_twin:

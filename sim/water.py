@@ -163,7 +163,9 @@ def wavenumber(omega: np.ndarray, g: float, depth: float) -> np.ndarray:
     return k
 
 
-def regular_waves(rho: float, g: float, height: float, period: float, direction_deg: float = 0.0, depth: float = math.inf, phase: float = 0.0) -> Waves:
+def regular_waves(
+    rho: float, g: float, height: float, period: float, direction_deg: float = 0.0, depth: float = math.inf, phase: float = 0.0
+) -> Waves:
     """One Airy component of crest-to-trough height H and period T."""
     omega = np.array([2 * math.pi / period])
     return Waves(rho, g, np.array([0.5 * height]), omega, wavenumber(omega, g, depth), np.array([math.radians(direction_deg)]),

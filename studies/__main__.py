@@ -4,8 +4,12 @@ import sys
 
 from .probes import dispatch
 
-COMMANDS = {"report": "studies.accuracy:report", "figures": "studies.seed_figures:figures", "decay": "studies.decay:decay",
-            "stability": "studies.stability:stability"}
+COMMANDS = {
+    "report": "studies.accuracy:report",
+    "figures": "studies.seed_figures:figures",
+    "decay": "studies.decay:decay",
+    "stability": "studies.stability:stability",
+}
 
 
 def main(argv: list[str] | None = None) -> int:

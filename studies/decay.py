@@ -70,7 +70,9 @@ def decay(args: DecayArgs) -> int:
     radiation = sim.scene.fluid.radiation
     print(f"{dof} decay of '{scene.name}' ({radiation} radiation, forces {sim.scene.fluid.forces}, integrator {sim.integrator.name}, "
           f"dt {sim.dt:g} s), released {args.drop if dof == 'heave' else args.tilt:g} {unit} from rest at z = {z_rest:.4f} m")  # fmt: skip
-    print(f"| damped period | {result.period:.4f} s (median of {len(result.periods)} peak-to-peak intervals, spread {np.ptp(result.periods) if len(result.periods) else math.nan:.2g} s) |")
+    print(
+        f"| damped period | {result.period:.4f} s (median of {len(result.periods)} peak-to-peak intervals, spread {np.ptp(result.periods) if len(result.periods) else math.nan:.2g} s) |"
+    )
     print(f"| decay rate sigma | {result.rate:.4f} 1/s (damping ratio {result.damping_ratio:.4f}) |")
     print(f"| first trough | {result.first_trough:.4g} {unit} at t = {result.first_trough_time:.3f} s |")
     out = Path(args.out or f"decay_{scene.name}_{dof}.png")

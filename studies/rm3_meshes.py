@@ -57,7 +57,9 @@ def main() -> None:
         wv, wf = wet_mesh(mesh.vertices, mesh.faces, 100.0)
         W = wv[wf]
         displaced = -float(np.einsum("ki,ki->k", W.mean(axis=1), np.cross(W[:, 1] - W[:, 0], W[:, 2] - W[:, 0]))[:, None].sum()) / 6
-        print(f"{name}: {len(mesh.faces)} triangles, centre of mass (area centroid) z = {centroid[2]:.4f} m, displaced {abs(displaced):.3f} m^3")
+        print(
+            f"{name}: {len(mesh.faces)} triangles, centre of mass (area centroid) z = {centroid[2]:.4f} m, displaced {abs(displaced):.3f} m^3"
+        )
 
 
 if __name__ == "__main__":

@@ -28,7 +28,9 @@ def _compiled_kernels():
     with open(os.path.join(KERNEL_CACHE, ".tests.lock"), "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
         todo = [spec_argument(spec) for spec in specs if not cached(spec)]
-        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]]) for i in range(2) if todo[i::2]]
+        children = [
+            subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]]) for i in range(2) if todo[i::2]
+        ]
         for child in children:
             assert child.wait() == 0, "the presets' kernels did not compile"
     for spec in specs:

@@ -226,7 +226,9 @@ def test_a_burst_of_updates_leaves_every_control_showing_what_runs():
 
         page = asyncio.run(burst())
         last = {p[0].lower(): p[2] for p in pairs[:4]}  # the server may still be reading the page's messages on a loaded machine
-        snap = wait_for(app, lambda s: all(s.settings.value(key) == good for key, good in last.items()), timeout=20.0, what="the burst's last values")
+        snap = wait_for(
+            app, lambda s: all(s.settings.value(key) == good for key, good in last.items()), timeout=20.0, what="the burst's last values"
+        )
         shown = asyncio.run(fresh_page(app.port))
         for label, key, _bad, good in ((p[0], p[0].lower(), *p[1:]) for p in pairs[:4]):
             assert snap.settings.value(key) == good, key

@@ -78,7 +78,9 @@ def test_missing_capytaine_is_one_clear_line(monkeypatch, tmp_path):
     import builtins
 
     real = builtins.__import__
-    monkeypatch.setattr(builtins, "__import__", lambda name, *a, **k: (_ for _ in ()).throw(ImportError()) if name == "capytaine" else real(name, *a, **k))
+    monkeypatch.setattr(
+        builtins, "__import__", lambda name, *a, **k: (_ for _ in ()).throw(ImportError()) if name == "capytaine" else real(name, *a, **k)
+    )
     monkeypatch.setattr(bem, "SHIPPED", tmp_path / "none")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     with pytest.raises(ConfigError, match=r"pip install -e \"\.\[bem\]\""):

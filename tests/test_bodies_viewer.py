@@ -76,7 +76,9 @@ def test_every_body_is_drawn_where_the_run_has_it_and_the_controls_drive_it():
         stepped, reset = asyncio.run(drive())
         assert stepped == pytest.approx(t_paused + app.loop.run.dt)
         assert reset.frame.t == 0.0 and reset.epoch == 1
-        snap = wait_for(app, lambda s: "Speed must be within" in s.notice and s.frame.t > 0.5, what="the clamped speed and the run going on")
+        snap = wait_for(
+            app, lambda s: "Speed must be within" in s.notice and s.frame.t > 0.5, what="the clamped speed and the run going on"
+        )
         assert snap.speed == 100.0
 
 

@@ -28,7 +28,11 @@ def test_run_writes_the_promised_columns_and_rows(tmp_path, capsys):
     assert data.shape == (21, len(header))  # t = 0 and every 5 of 100 steps
     np.testing.assert_allclose(data[:, 0], np.linspace(0, 1, 21), atol=1e-12)
     np.testing.assert_allclose(data[:, header.index("z")], -0.4, atol=1e-9)
-    np.testing.assert_allclose(data[:, header.index("E_total")], data[:, header.index("E_kin")] + data[:, header.index("E_grav")] + data[:, header.index("E_hyd")], rtol=1e-12)
+    np.testing.assert_allclose(
+        data[:, header.index("E_total")],
+        data[:, header.index("E_kin")] + data[:, header.index("E_grav")] + data[:, header.index("E_hyd")],
+        rtol=1e-12,
+    )
     summary = capsys.readouterr().out
     assert "z = -0.400000 m" in summary and "100 steps" in summary
 
@@ -117,7 +121,25 @@ def test_unknown_key_in_a_scene_file_is_named(tmp_path, capsys):
 
 def test_divergence_stops_with_the_time_and_cause_and_keeps_rows(tmp_path, capsys):
     out = tmp_path / "boom.csv"
-    code = main(["run", "--scene", "damped", "--damping", "1e6", "--integrator", "euler", "--dt", "0.01", "--t-end", "5", "--every", "1", "--out", str(out)])
+    code = main(
+        [
+            "run",
+            "--scene",
+            "damped",
+            "--damping",
+            "1e6",
+            "--integrator",
+            "euler",
+            "--dt",
+            "0.01",
+            "--t-end",
+            "5",
+            "--every",
+            "1",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 3
     err = capsys.readouterr().err
     assert "diverged at t =" in err and "--integrator implicit" in err
@@ -169,7 +191,9 @@ def test_tyro_panels_become_one_line_in_both_renderings():
 def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
     """`run` announces the one-time compile before it starts (not after a silent minute): it can tell."""
     probe = "import sim, sim.kernels as k; print(k.cached(sim.Simulation(sim.load_scene('drop')).spec))"
-    fresh = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)})
+    fresh = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    )
     assert fresh.stdout.strip() == "False"
     from sim import Simulation, load_scene
     from sim.kernels import cached, warm_up
@@ -214,7 +238,9 @@ def test_an_output_never_overwrites_the_runs_own_input(tmp_path, capsys):
 def test_absurd_numbers_are_one_line_each(flags, says):
     """Issue 23: subnormal sizes, masses and steps gave tracebacks (LinAlgError, OverflowError); a 1e-300 s step
     ran on after a 600-digit estimate. Now each is refused in one line, exit 2, before any work."""
-    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "drop", *flags], capture_output=True, text=True, timeout=60, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "sim", "run", "--scene", "drop", *flags], capture_output=True, text=True, timeout=60, check=False
+    )
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.count("\n") == 1 and says in done.stderr, done.stderr
 
@@ -222,7 +248,9 @@ def test_absurd_numbers_are_one_line_each(flags, says):
 def test_a_scene_file_nested_5000_deep_is_one_line(tmp_path):
     scene = tmp_path / "deep.toml"
     scene.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
-    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(scene)], capture_output=True, text=True, timeout=60, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "sim", "run", "--scene", str(scene)], capture_output=True, text=True, timeout=60, check=False
+    )
     assert done.returncode == 2 and "nested too deeply" in done.stderr and done.stderr.count("\n") == 1, done.stderr[-300:]
 
 
@@ -240,7 +268,21 @@ def test_a_stiff_adaptive_run_stops_within_its_step_budget_naming_a_better_integ
     """Issue 23: a 1 kg cube at d = 1e7 kept rk45, dop853 and radau busy for 10 minutes with nothing said: the
     evaluation cap allowed a minute per step. The CLI gives each output step a wall budget (30 s; here 1 s). (radau
     now runs this case: 600 steps in 2.5 s.)"""
-    args = ["run", "--scene", "damped", "--density", "1", "--damping", "1e7", "--integrator", integrator, "--t-end", "3", "--step-budget", "1"]
+    args = [
+        "run",
+        "--scene",
+        "damped",
+        "--density",
+        "1",
+        "--damping",
+        "1e7",
+        "--integrator",
+        integrator,
+        "--t-end",
+        "3",
+        "--step-budget",
+        "1",
+    ]
     done = subprocess.run([sys.executable, "-m", "sim", *args], capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 3, done.stderr
     assert f"'{integrator}' needed more than" in done.stderr and "use --integrator implicit" in done.stderr

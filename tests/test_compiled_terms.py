@@ -40,7 +40,9 @@ def test_each_term_alone_matches_the_reference(name, forces, water):
     """The term's force, torque and linearisation (f, D), kernel against reference, with no other term on."""
     waves = water != "still"
     sea_state = regular_waves(1000.0, 9.81, 0.4, 5.0, 20.0) if waves else StillWater()
-    model = alone(Model(make_box((1.0, 0.8, 0.6), 6, 400.0), sea_state, FluidConfig(forces=forces, damping=40.0, drag_coefficient=0.8)), name)
+    model = alone(
+        Model(make_box((1.0, 0.8, 0.6), 6, 400.0), sea_state, FluidConfig(forces=forces, damping=40.0, drag_coefficient=0.8)), name
+    )
     kernels = specialised(Spec("implicit", forces, (name,), waves, False))
     forces_kernel = kernels.forces
     packed = Packed(model.body.packed, model.body.mass, model.body.inertia, pack(model)[1])

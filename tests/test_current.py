@@ -40,7 +40,9 @@ def test_a_body_carried_by_the_current_is_the_body_in_water_at_rest_seen_moving(
     assert np.abs(resting.state.u_world).max() > 1e-3, "the body moves: the check is not trivial"
 
 
-@pytest.mark.parametrize("integrator, forces", [("implicit", "points"), ("implicit", "panels"), ("implicit", "cells"), ("splitting", "points")])
+@pytest.mark.parametrize(
+    "integrator, forces", [("implicit", "points"), ("implicit", "panels"), ("implicit", "cells"), ("splitting", "points")]
+)
 def test_kernels_match_the_reference_in_a_current(integrator, forces):
     scene = with_overrides(load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.8, step__integrator=integrator,
                            water__current=(0.5, 0.2), initial__orientation=(0.96, 0.2, 0.1, 0.17))  # fmt: skip

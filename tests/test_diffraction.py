@@ -143,7 +143,9 @@ def test_the_transfer_function_is_interpolated_in_heading_and_frequency():
 def test_diffraction_is_on_with_bem_in_waves_and_can_be_switched_off():
     """On wherever radiation is bem in waves, off in still water and when switched off, compiled like the rest;
     the heave of the sphere at T = 2.5 s shrinks by the scattered wave."""
-    base = with_overrides(load_scene("sphere"), waves__kind="regular", waves__height=0.02, waves__period=2.5, initial__position=(0.0, 0.0, 0.0))
+    base = with_overrides(
+        load_scene("sphere"), waves__kind="regular", waves__height=0.02, waves__period=2.5, initial__position=(0.0, 0.0, 0.0)
+    )
     on, off = Simulation(base), Simulation(with_overrides(base, waves__diffraction=False))
     assert on.model.radiation.diffraction is not None and off.model.radiation.diffraction is None
     assert Simulation(load_scene("sphere"), backend="numpy").model.radiation.diffraction is None  # still water

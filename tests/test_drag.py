@@ -125,7 +125,7 @@ def test_drag_is_a_scene_key_a_flag_and_only_in_scenes_that_use_it(tmp_path, cap
     assert "drag" not in Simulation(load_scene("damped")).model.term_names  # left out when C_d = 0
     assert "drag" in Simulation(with_overrides(load_scene("damped"), fluid__drag_coefficient=0.5)).model.term_names
     scene = tmp_path / "s.toml"
-    scene.write_text('[fluid]\ndrag_coefficient = 0.8\n[step]\nt_end = 0.1\n')
+    scene.write_text("[fluid]\ndrag_coefficient = 0.8\n[step]\nt_end = 0.1\n")
     assert main(["run", "--scene", str(scene)]) == 0
     assert "drag(drag_coefficient = 0.8)" in capsys.readouterr().out
     assert main(["run", "--scene", "drop", "--t-end", "0.1", "--drag-coefficient", "2.5"]) == 0

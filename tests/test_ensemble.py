@@ -1,6 +1,5 @@
 """Ensembles: each body advances exactly as it would alone; sweeps land on the analytic equilibria."""
 
-
 import numpy as np
 import pytest
 

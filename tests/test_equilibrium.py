@@ -56,8 +56,12 @@ def test_tilted_cube_buoyancy_converges_to_archimedes():
     exact = 1000 * 9.81 * submerged_area_of_polygon(world)
     errors = []
     for n in (4, 8, 16, 32, 64):
-        scene = with_overrides(load_scene("rest"), body__points_per_edge=n, initial__position=(0.0, 0.0, zc),
-                               initial__orientation=tuple(rotation_quat(angle * np.array([1.0, 0.0, 0.0]))))
+        scene = with_overrides(
+            load_scene("rest"),
+            body__points_per_edge=n,
+            initial__position=(0.0, 0.0, zc),
+            initial__orientation=tuple(rotation_quat(angle * np.array([1.0, 0.0, 0.0]))),
+        )
         sim = Simulation(scene)
         frame = sim.frame()
         errors.append(abs(frame.force_world[2] + sim.body.mass * 9.81 - exact) / exact)

@@ -13,7 +13,9 @@ EXAMPLES = sorted((ROOT / "examples").glob("[0-9][0-9]_*.py"))
 
 
 def run(name: str, *flags: str) -> str:
-    done = subprocess.run([sys.executable, str(ROOT / "examples" / name), *flags], capture_output=True, text=True, timeout=600, cwd=ROOT, check=False)
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / name), *flags], capture_output=True, text=True, timeout=600, cwd=ROOT, check=False
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
 

@@ -103,7 +103,9 @@ def test_torque_free_asymmetric_box_keeps_body_frame_L_norm():
 
 @pytest.mark.parametrize("name", ["splitting", "implicit", "rk4"])
 def test_free_fall_above_water_follows_the_parabola(name):
-    scene = with_overrides(load_scene("drop"), initial__position=(0.0, 0.0, 200.0), initial__velocity=(1.0, -2.0, 3.0), step__integrator=name, step__dt=0.01)
+    scene = with_overrides(
+        load_scene("drop"), initial__position=(0.0, 0.0, 200.0), initial__velocity=(1.0, -2.0, 3.0), step__integrator=name, step__dt=0.01
+    )
     sim = Simulation(scene)
     sim.step(300)
     t = sim.state.t

@@ -70,4 +70,6 @@ def test_ctrl_c_in_a_study_command_is_one_line():
     time.sleep(6.0)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=30)
-    assert proc.returncode == 130 and err.strip().endswith("decay interrupted (Ctrl-C) before writing its results") and "Traceback" not in err
+    assert (
+        proc.returncode == 130 and err.strip().endswith("decay interrupted (Ctrl-C) before writing its results") and "Traceback" not in err
+    )

@@ -55,7 +55,9 @@ def test_a_sliding_wall_sided_body_heaves_as_the_damped_oscillator_at_second_ord
         t, z, sim = heave(dt, damping=1000.0, stiffness=k)
         assert sim.body.mass == pytest.approx(m)
         errors.append(np.abs(z - rest - damped_heave(t, 0.1 - rest, m, RHO * G * A + k, 1000.0)).max())
-    assert errors[-1] < 2e-6 and errors[0] / errors[1] == pytest.approx(4.0, rel=0.1) and errors[1] / errors[2] == pytest.approx(4.0, rel=0.1), errors
+    assert (
+        errors[-1] < 2e-6 and errors[0] / errors[1] == pytest.approx(4.0, rel=0.1) and errors[1] / errors[2] == pytest.approx(4.0, rel=0.1)
+    ), errors
 
 
 def test_the_take_off_absorbs_what_the_body_loses():
@@ -213,7 +215,9 @@ def test_a_heaving_converter_absorbs_the_frequency_domain_power():
             sim.step(1)
             z.append(sim.state.x_world[2] - z_rest)
         power = (sim.frame().E_pto - e0) / (sim.state.t - t0)
-        print(f"T = {T:.3f} s: heave {0.5 * (max(z) - min(z)) / abs(a * xi) - 1:+.2%}, power {power / (0.5 * c_pto * w * w * abs(a * xi) ** 2) - 1:+.2%}")
+        print(
+            f"T = {T:.3f} s: heave {0.5 * (max(z) - min(z)) / abs(a * xi) - 1:+.2%}, power {power / (0.5 * c_pto * w * w * abs(a * xi) ** 2) - 1:+.2%}"
+        )
         assert 0.5 * (max(z) - min(z)) == pytest.approx(abs(a * xi), rel=0.02), (T, max(z), abs(a * xi))
         assert power == pytest.approx(0.5 * c_pto * w * w * abs(a * xi) ** 2, rel=0.02), (T, power)
 

@@ -46,7 +46,9 @@ def test_adaptive_integrators_use_the_numpy_path():
 
 
 @pytest.mark.parametrize("forces", ["points", "cells", "panels"])
-@pytest.mark.parametrize("scene, changes", [("damped", {}), ("spin", {"fluid__damping": 30.0}), ("drop", {"initial__position": (0.0, 0.0, 3.0)})])
+@pytest.mark.parametrize(
+    "scene, changes", [("damped", {}), ("spin", {"fluid__damping": 30.0}), ("drop", {"initial__position": (0.0, 0.0, 3.0)})]
+)
 def test_compiled_frame_matches_numpy_frame(scene, changes, forces):
     config = with_overrides(load_scene(scene), fluid__forces=forces, **changes)
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
@@ -66,8 +68,9 @@ def test_compiled_frame_matches_numpy_frame(scene, changes, forces):
 BODIES = {
     "cube": lambda: make_box((1.0, 1.0, 1.0), 6, 900.0, "cube"),
     # a box given as a mesh, tilted in its file so its principal frame is not the file's: three different moments
-    "mesh": lambda: make_mesh_body(trimesh.creation.box(extents=(1.0, 0.6, 0.3), transform=trimesh.transformations.rotation_matrix(0.4, [1, 2, 3])),
-                                   300, density=700.0),  # fmt: skip
+    "mesh": lambda: make_mesh_body(
+        trimesh.creation.box(extents=(1.0, 0.6, 0.3), transform=trimesh.transformations.rotation_matrix(0.4, [1, 2, 3])), 300, density=700.0
+    ),  # fmt: skip
 }
 POSES = list(zip(Rotation.random(6, random_state=11).as_quat(scalar_first=True), np.linspace(-0.35, 0.3, 6)))
 TWISTS = np.random.default_rng(2).normal(size=(6, 6))
@@ -175,7 +178,9 @@ def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
     t = 0.0 if water == "still" else T_WAVES
     for (q, z), twist in zip(POSES[:3], TWISTS):
         R = Rotation.from_quat(q, scalar_first=True).as_matrix()
-        state = State(t, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:]))))
+        state = State(
+            t, np.array([0.0, 0.0, z]), np.asarray(q, float), 0.5 * twist[:3], R @ (model.body.inertia * (R.T @ (0.5 * twist[3:])))
+        )
         ref = integrator.step(model, state, 0.01).as_vector()
         y, done = schemes.advance(state.as_vector(), t, 1, 0.01, Packed(model.body.packed, model.body.mass, model.body.inertia, coef), sea,
                                   NO_RADIATION)  # fmt: skip
@@ -205,7 +210,9 @@ def test_stage_frame_with_every_term(body_name, forces, water):
         assert e_hyd == pytest.approx(model.hydrostatic_energy(ref), rel=tol, abs=1e-9)
         assert (a_sub, v_sub) == pytest.approx((ref.submerged_area, ref.submerged_volume), rel=tol, abs=1e-12)
         heights = model.water.height_above_surface(x + model.body.r_body @ R.T, t)
-        np.testing.assert_array_equal(np.flatnonzero(wet), ref.index if forces == "cells" else np.flatnonzero(heights < 0))  # cells: any part wet
+        np.testing.assert_array_equal(
+            np.flatnonzero(wet), ref.index if forces == "cells" else np.flatnonzero(heights < 0)
+        )  # cells: any part wet
 
 
 @pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4"])
@@ -238,7 +245,9 @@ def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(
 
 
 @pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize("scene, changes", [("waves", {}), ("storm", {}), ("storm", {"waves__spreading": 10.0, "waves__depth": 30.0, "waves__components": 16})])
+@pytest.mark.parametrize(
+    "scene, changes", [("waves", {}), ("storm", {}), ("storm", {"waves__spreading": 10.0, "waves__depth": 30.0, "waves__components": 16})]
+)
 def test_compiled_path_matches_numpy_in_waves(scene, changes, forces):
     """Trajectories in a regular swell (direct sum), the storm (local expansion, with drag) and a
     short-crested finite-depth sea (direct sum): kernel and reference agree to round-off."""
@@ -339,14 +348,18 @@ def test_compiled_radiation_with_a_turned_rest_pose(monkeypatch):
                           initial__position=(0.0, 0.0, -0.35), initial__velocity=(0.2, 0.0, 0.0))  # fmt: skip
     yawed = with_overrides(base, initial__orientation=(np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)))
     reference, compiled = Simulation(yawed, backend="numpy"), Simulation(yawed, backend="numba")
-    assert any(e.row != e.col and {e.row, e.col} <= {0, 1, 3, 4} and e.row % 3 != e.col % 3 for e in compiled.model.radiation.memory.entries)
+    assert any(
+        e.row != e.col and {e.row, e.col} <= {0, 1, 3, 4} and e.row % 3 != e.col % 3 for e in compiled.model.radiation.memory.entries
+    )
     for _ in range(3):
         reference.step(40)
         compiled.step(40)
         ra, rb = reference.state.as_vector(), compiled.state.as_vector()
         np.testing.assert_allclose(rb, ra, rtol=0, atol=1e-10 * (1 + np.abs(ra).max()))
     monkeypatch.setattr(bem, "radiation_coefficients", lambda *args, **kw: upright)
-    straight = Simulation(with_overrides(base, initial__velocity=(0.2 * np.cos(-a), 0.2 * np.sin(-a), 0.0)))  # the same motion in its own axes
+    straight = Simulation(
+        with_overrides(base, initial__velocity=(0.2 * np.cos(-a), 0.2 * np.sin(-a), 0.0))
+    )  # the same motion in its own axes
     straight.step(120)
     assert compiled.state.x_world[2] == pytest.approx(straight.state.x_world[2], abs=2e-4)
     assert np.linalg.norm(compiled.state.u_world) == pytest.approx(np.linalg.norm(straight.state.u_world), rel=0.02)

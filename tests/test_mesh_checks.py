@@ -57,7 +57,9 @@ def test_load_mesh_says_what_is_wrong(files):
     with pytest.raises(ConfigError, match="is too small"):
         make_mesh_body(str(files / "speck.stl"), 600, density=500.0)
     # one closed box still loads, in every unit that makes it plausible
-    assert load_mesh(trimesh.creation.box(extents=(800.0, 600.0, 500.0)).export(file_type="stl"), "b.stl", "mm").volume == pytest.approx(0.24)
+    assert load_mesh(trimesh.creation.box(extents=(800.0, 600.0, 500.0)).export(file_type="stl"), "b.stl", "mm").volume == pytest.approx(
+        0.24
+    )
 
 
 def test_a_name_with_control_characters_is_shown_without_them():

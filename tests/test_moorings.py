@@ -23,7 +23,9 @@ RHO, G = 1000.0, 9.81
 
 def run_cli(tmp_path, *args: str) -> tuple[subprocess.CompletedProcess, np.ndarray | None]:
     out = tmp_path / "run.csv"
-    done = subprocess.run([sys.executable, "-m", "sim", "run", "--out", str(out), *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-m", "sim", "run", "--out", str(out), *args], cwd=ROOT, capture_output=True, text=True, timeout=600
+    )
     rows = np.genfromtxt(out, delimiter=",", names=True) if done.returncode == 0 else None
     return done, rows
 
@@ -49,7 +51,9 @@ def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
 def test_more_segments_come_closer_to_the_catenary():
     errors = []
     for segments in (5, 10, 20, 40):
-        scene = with_overrides(load_scene("moored-buoy"), moorings__lines=1, moorings__segments=segments, fluid__radiation="none", waves__kind="still")
+        scene = with_overrides(
+            load_scene("moored-buoy"), moorings__lines=1, moorings__segments=segments, fluid__radiation="none", waves__kind="still"
+        )
         sim = Simulation(scene, backend="numpy")
         s = lines_of(scene.moorings)
         x = sim.state.x_world
@@ -189,7 +193,9 @@ def test_a_recording_draws_the_lines_where_the_run_had_them():
         starts.append(at)
         at += size
     assert at == len(inner)
-    updates = [m[1]["updates"]["points"] for m in doc["messages"] if m[1].get("name") == "/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"]
+    updates = [
+        m[1]["updates"]["points"] for m in doc["messages"] if m[1].get("name") == "/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"
+    ]
     assert len(updates) >= 10  # streamed as the run goes (15 a second at most)
     i = updates[-1]["__binary_index"]
     last = np.frombuffer(inner[starts[i] : starts[i] + sizes[i]], dtype=np.float32).reshape(-1, 2, 3)

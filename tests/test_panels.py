@@ -31,7 +31,9 @@ def clipped_hull(vertices_world: np.ndarray, edges) -> tuple[float, np.ndarray]:
     return hull.volume, np.average(cents, axis=0, weights=vols)
 
 
-POSES = [(q, z) for q, z in zip(Rotation.random(12, random_state=7).as_quat(scalar_first=True), np.linspace(-0.45, 0.45, 12))]  # always cut by the water line
+POSES = [
+    (q, z) for q, z in zip(Rotation.random(12, random_state=7).as_quat(scalar_first=True), np.linspace(-0.45, 0.45, 12))
+]  # always cut by the water line
 
 
 @pytest.mark.parametrize("q, zc", POSES)
@@ -106,7 +108,9 @@ def test_panel_energy_is_conserved_to_the_integrator_order():
     and it falls ~4x when dt halves, through the water line and while tumbling."""
     errors = []
     for dt in (0.01, 0.005):
-        scene = with_overrides(load_scene("spin"), fluid__forces="panels", step__integrator="splitting", step__dt=dt, initial__omega=(-2.0, 2.0, 0.5))
+        scene = with_overrides(
+            load_scene("spin"), fluid__forces="panels", step__integrator="splitting", step__dt=dt, initial__omega=(-2.0, 2.0, 0.5)
+        )
         sim = Simulation(scene)
         e0 = sim.frame().E_total
         worst = 0.0

@@ -42,7 +42,18 @@ def test_fitted_memory_reproduces_added_mass_and_damping(cube):
     memory = fit_memory(cube, tol=0.02)
     K, fit = transfer(cube), memory.response(cube.omega)
     rows_cols = {(e.row, e.col) for e in memory.entries}
-    for i, j in [(0, 0), (1, 1), (2, 2), (3, 3), (4, 4), (5, 5), (0, 4), (4, 0), (1, 3), (3, 1)]:  # the cube's couplings: surge-pitch, sway-roll
+    for i, j in [
+        (0, 0),
+        (1, 1),
+        (2, 2),
+        (3, 3),
+        (4, 4),
+        (5, 5),
+        (0, 4),
+        (4, 0),
+        (1, 3),
+        (3, 1),
+    ]:  # the cube's couplings: surge-pitch, sway-roll
         assert (i, j) in rows_cols
         err = np.abs(fit[:, i, j] - K[:, i, j]).max() / np.abs(K[:, i, j]).max()
         assert err <= 0.02, (i, j, err)

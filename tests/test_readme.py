@@ -45,7 +45,9 @@ def test_the_readme_is_a_front_door():
     """At most about 150 lines, the two quick-start lines first among its commands, and every page it links there."""
     assert len(README.splitlines()) <= 150
     quick = README.split("## Quick start")[1].split("```bash")[1].split("```")[0].strip().splitlines()
-    assert quick[0].startswith('pip install -e . && python -m app') and quick[1].startswith('pip install -e ".[test]" && python -m pytest -q -n 2')
+    assert quick[0].startswith("pip install -e . && python -m app") and quick[1].startswith(
+        'pip install -e ".[test]" && python -m pytest -q -n 2'
+    )
     for link in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", README):
         assert link.startswith("http") or (ROOT / link).exists(), link
 
@@ -66,7 +68,11 @@ def test_every_public_name_has_a_docstring():
             missing.append(name)
         if inspect.isclass(obj):
             for attr, member in vars(obj).items():
-                if not attr.startswith("_") and (inspect.isfunction(member) or isinstance(member, property)) and not (member.__doc__ or "").strip():
+                if (
+                    not attr.startswith("_")
+                    and (inspect.isfunction(member) or isinstance(member, property))
+                    and not (member.__doc__ or "").strip()
+                ):
                     missing.append(f"{name}.{attr}")
     assert not missing, f"no docstring: {', '.join(missing)}"
 

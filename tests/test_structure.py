@@ -27,7 +27,13 @@ def test_physics_package_imports_no_viewer_plotting_or_cli_library():
         if "commands" in path.parts:
             continue  # the command line is the one subpackage that uses tyro
         for node in ast.walk(ast.parse(path.read_text())):
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else []
+            )
             for name in names:
                 assert name.split(".")[0] not in ("tyro", "matplotlib", "viser", "app", "studies"), (path, name)
 

@@ -96,7 +96,10 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
         (["--param", "density=abc"], "values must be numbers"),
         (["--param", "density=-5,300"], "density must be >= 0.001"),
         (["--scene", "damped"], "nothing to sweep"),
-        (["--param", "density=300", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:9"),
+        (
+            ["--param", "density=300", "--scheduler", "tcp://127.0.0.1:9", "--timeout", "1"],
+            "cannot reach the Dask scheduler at tcp://127.0.0.1:9",
+        ),
         (["--param", "density=300", "--scheduler", "foo", "--timeout", "1"], "cannot reach the Dask scheduler at foo"),
         (["--param", "orientation_seed=-1,2"], "seeds must be in 0..4294967295"),
         (["--param", "density=100:900:10000000000"], "over the limit of 200,000 cases"),

@@ -61,7 +61,13 @@ def test_damaged_and_missing_chunks_are_run_again_on_resume(reference, tmp_path)
     notes = [line for line in done.stderr.splitlines() if line.startswith("floatsim: note:")]
     assert len(notes) == 5 and all("running chunk" in n for n in notes), done.stderr
     assert "Traceback" not in done.stderr
-    for cid, why in ((0, "not readable"), (1, "not readable"), (2, "not readable"), (3, "_history/chunk-00003.parquet: missing"), (4, "checksum")):
+    for cid, why in (
+        (0, "not readable"),
+        (1, "not readable"),
+        (2, "not readable"),
+        (3, "_history/chunk-00003.parquet: missing"),
+        (4, "checksum"),
+    ):
         assert any(f"running chunk {cid} again" in n and why in n for n in notes), (cid, notes)
     pd.testing.assert_frame_equal(table(out), table(reference), check_exact=True)
     pd.testing.assert_frame_equal(table(out / "_history"), table(reference / "_history"), check_exact=True)
@@ -69,7 +75,7 @@ def test_damaged_and_missing_chunks_are_run_again_on_resume(reference, tmp_path)
     assert again.returncode == 0 and "(6 already done, 0 to run)" in again.stdout and "note" not in again.stderr
 
 
-@pytest.mark.parametrize("damage", [b"{\"key\": \"353d", b"\xff\xfe garbage", b"[1, 2, 3]", b""])
+@pytest.mark.parametrize("damage", [b'{"key": "353d', b"\xff\xfe garbage", b"[1, 2, 3]", b""])
 def test_a_damaged_manifest_is_called_damaged(reference, tmp_path, damage):
     out = tmp_path / "s"
     shutil.copytree(reference, out)

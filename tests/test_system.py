@@ -178,7 +178,9 @@ def run_chain(scene, dt: float, t_end: float):
     return system, s, e0, frames
 
 
-PLANAR_CHAIN = CHAIN.replace("    omega = [0.1, 0.3, 0.0]\n", '    omega = [0.0, 0.3, 0.0]\n    joint = "planar"\n    axis = [0.0, 1.0, 0.0]\n')
+PLANAR_CHAIN = CHAIN.replace(
+    "    omega = [0.1, 0.3, 0.0]\n", '    omega = [0.0, 0.3, 0.0]\n    joint = "planar"\n    axis = [0.0, 1.0, 0.0]\n'
+)
 """The chain with the barge on a planar joint to the world (surge, heave and pitch, as WEC-Sim's RM3 spar), rocking in its plane."""
 
 
@@ -204,7 +206,12 @@ def test_joints_hold_to_round_off(tmp_path):
     _, _, _, frames = run_chain(scene, 0.02, 2.0)
     from sim.rotation import quat_to_matrix
 
-    barge0, flap0, buoy0, pivot0 = np.array([0.0, 0.0, 0.05]), np.array([1.6, 0.0, 0.0]), np.array([-1.3, 0.0, 0.1]), np.array([1.0, 0.0, 0.0])
+    barge0, flap0, buoy0, pivot0 = (
+        np.array([0.0, 0.0, 0.05]),
+        np.array([1.6, 0.0, 0.0]),
+        np.array([-1.3, 0.0, 0.1]),
+        np.array([1.0, 0.0, 0.0]),
+    )
     worst = 0.0
     for barge, flap, buoy in frames:
         Rb, Rf = quat_to_matrix(barge["q"]), quat_to_matrix(flap["q"])  # both start unturned
@@ -246,7 +253,9 @@ def sim_cli(*args: str, backend: str = "numpy"):
                           env={**os.environ, "FLOATSIM_BACKEND": backend})  # fmt: skip
 
 
-PAIR = SLIDE.replace('name = "cube"', 'name = "spar"') + """
+PAIR = (
+    SLIDE.replace('name = "cube"', 'name = "spar"')
+    + """
     [[bodies]]
     name = "float"
     parent = "spar"
@@ -258,6 +267,7 @@ PAIR = SLIDE.replace('name = "cube"', 'name = "spar"') + """
     density = 400.0
     position = [0.0, 0.0, 0.8]
 """
+)
 """A spar-like cube on a slide to the seabed and a float sliding on it, in waves: the rm3 preset's kernels (panels, damping, waves)."""
 
 

@@ -64,7 +64,9 @@ def test_jonswap_sea_has_the_asked_hs_and_tp_and_is_reproducible():
 def test_zero_amplitude_is_still_water(forces, integrator):
     """The waves' general path (per-point surface, stretched pressure, water velocity, higher-order
     panel rule) with a = 0 reproduces still water to round-off."""
-    base = with_overrides(load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.5, step__integrator=integrator, step__dt=0.01)
+    base = with_overrides(
+        load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.5, step__integrator=integrator, step__dt=0.01
+    )
     still = Simulation(base, backend="numpy")
     flat = Simulation(with_overrides(base, waves__kind="regular", waves__height=0.0), backend="numpy")
     assert not flat.model.water.flat

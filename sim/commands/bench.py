@@ -130,7 +130,9 @@ def bench(args: BenchArgs) -> int:
     bar.close()
     sweep_rows = _sweep_rows(args.sweep_cases) if args.sweep_cases else []
     print(f"machine: {machine()}; OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
-    print(f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs")
+    print(
+        f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs"
+    )
     _table(("model", "samples", "integrator", "us/step", "ns/sample", "x real time", "numpy us/step", "speed-up"), rows)
     if ens_rows:
         _table((f"ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500", "body-steps/s"), ens_rows)
@@ -141,21 +143,41 @@ def bench(args: BenchArgs) -> int:
         print(f"sweep of {args.sweep_cases} cases (damped cube, N = 10, implicit, dt 0.005 s, 2 s each, chunks of 64; no files); "
               "startup: until the first chunk starts (workers, kernels); idle: the rest of the wall time not spent computing chunks, "
               "over all workers; scheduling: the same without the workers' wait at the end for the last chunk")  # fmt: skip
-        _table(("backend", "workers", "wall s", "startup s", "body-steps/s", "per core", "vs serial", "idle", "scheduling", "simulated h per core-h"),
-               sweep_rows)
+        _table(
+            (
+                "backend",
+                "workers",
+                "wall s",
+                "startup s",
+                "body-steps/s",
+                "per core",
+                "vs serial",
+                "idle",
+                "scheduling",
+                "simulated h per core-h",
+            ),
+            sweep_rows,
+        )
     if wave_rows:
         print()
-        print(f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)")
+        print(
+            f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)"
+        )
         _table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
     if mooring_rows:
         print()
-        print("the moored-buoy preset (compiled, implicit, dt = 0.01 s): the body's step with and without its lines, and where a moored step's time goes")
+        print(
+            "the moored-buoy preset (compiled, implicit, dt = 0.01 s): the body's step with and without its lines, and where a moored step's time goes"
+        )
         _table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
     if system_rows:
         print()
         print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
               "its time goes; compiled: the bodies' loads (the kinematics and kicks are numpy)")  # fmt: skip
-        _table(("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "MoorDyn us", "joints and stepping us"), system_rows)
+        _table(
+            ("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "MoorDyn us", "joints and stepping us"),
+            system_rows,
+        )
     return 0
 
 

@@ -59,7 +59,9 @@ def compare(args: CompareArgs) -> int:
         rows.append((name, dt, float(np.abs(pose - reference).max()), cost))
         bar.update()
     bar.close()
-    print(f"scene {base.name}, t_end {args.t_end:g} s, error = max |pose - DOP853 reference| at t_end, cost = median wall ms per simulated s")
+    print(
+        f"scene {base.name}, t_end {args.t_end:g} s, error = max |pose - DOP853 reference| at t_end, cost = median wall ms per simulated s"
+    )
     print("| integrator | dt (s) | error (m) | cost (ms/s) |")
     print("|---|---|---|---|")
     for name, dt, err, cost in rows:

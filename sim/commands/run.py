@@ -44,7 +44,9 @@ class _RunBase:
     """Write one CSV row every K steps."""
     out: Annotated[str | None, tyro.conf.arg(metavar="FILE", help_behavior_hint="(default: none, a summary only)")] = None
     """CSV file to write."""
-    progress: Annotated[bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")] = None
+    progress: Annotated[
+        bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")
+    ] = None
     """Show a progress bar."""
     step_budget: float = STEP_SECONDS
     """Wall seconds an adaptive integrator (rk45, dop853, radau) may spend on one output step before the run stops, naming a better one."""
@@ -197,7 +199,9 @@ def run(args: RunArgs, watch=None) -> int:
     last = sim.frame()
     steps = round(last.t / sim.dt)
     drift = last.E_total - first.E_total
-    asked = f" ({scene.body.samples} asked: {SAMPLES_NOTE})" if scene.body.shape == "mesh" and sim.body.n_samples != scene.body.samples else ""
+    asked = (
+        f" ({scene.body.samples} asked: {SAMPLES_NOTE})" if scene.body.shape == "mesh" and sim.body.n_samples != scene.body.samples else ""
+    )
     print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples{asked}, mass {sim.body.mass:.6g} kg, "
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
           f"inertia {'exact (mesh shell)' if sim.body.exact_inertia else 'of the samples'}")  # fmt: skip

@@ -38,7 +38,9 @@ def run_bodies(args, scene: SceneConfig) -> int:
     for b in last.bodies:
         print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
     for name, theta, _, _, absorbed in last.joints:
-        print(f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)")
+        print(
+            f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)"
+        )
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     steps = round(last.t / run.dt)
     print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J; {steps} steps in {wall:.3g} s wall "

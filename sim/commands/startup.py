@@ -56,8 +56,14 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
             cold = timed_run(name, t_end, cache)
             compiled = timed_compile(name, cache)
             warm = timed_run(name, t_end, cache)
-        rows.append((name, f"{cold[0]:.1f}", f"{compiled[0]:.1f}", f"{compiled[1]:.0f}", f"{warm[0]:.1f}", str(cold[2] or compiled[2] or warm[2])))
-        print(f"  {name}: cold {cold[0]:.1f} s ({cold[3][:100]}), compile {compiled[0]:.1f} s, warm {warm[0]:.1f} s", file=sys.stderr, flush=True)
+        rows.append(
+            (name, f"{cold[0]:.1f}", f"{compiled[0]:.1f}", f"{compiled[1]:.0f}", f"{warm[0]:.1f}", str(cold[2] or compiled[2] or warm[2]))
+        )
+        print(
+            f"  {name}: cold {cold[0]:.1f} s ({cold[3][:100]}), compile {compiled[0]:.1f} s, warm {warm[0]:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
     from .bench import _table, machine
 
     print(f"machine: {machine()}")

@@ -140,7 +140,9 @@ def check_size(sweep: Sweep) -> None:
     base = sweep.base()
     steps = round(base.step.t_end / base.step.dt)
     samples = 6 * base.body.points_per_edge**2 if base.body.shape != "mesh" else base.body.samples
-    check_memory(f"a chunk of {min(n, sweep.chunk)} cases of {samples:,} samples", min(n, sweep.chunk) * samples * BYTES_PER_SAMPLE, "--chunk")
+    check_memory(
+        f"a chunk of {min(n, sweep.chunk)} cases of {samples:,} samples", min(n, sweep.chunk) * samples * BYTES_PER_SAMPLE, "--chunk"
+    )
     if sweep.history_every:
         rows = steps // sweep.history_every + 1
         total = n * rows * 9 * 8
@@ -324,4 +326,3 @@ def write(path: Path, columns: dict) -> list:
     record = [digest(partial), table.num_rows]
     os.replace(partial, path)
     return record
-

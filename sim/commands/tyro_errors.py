@@ -34,7 +34,7 @@ def one_line(panel: str) -> str:
     text = re.sub(r"\[/?bold\]|`", "", text)
     if m := re.match(r"Error parsing (--[\w.-]+):", text):
         reasons = [r.strip() for r in re.findall(r"- (?!<class 'NoneType'>)[^:]+: (.*?)(?= - |$)", text)]
-        return f"{m.group(1)}: {reasons[-1] if reasons else text[len(m.group(0)):].strip()}"
+        return f"{m.group(1)}: {reasons[-1] if reasons else text[len(m.group(0)) :].strip()}"
     if text.startswith("Unrecognized options") and len(sections) > 1 and (m := re.search(r"Perhaps you meant: (--[\w.-]+)", sections[1])):
         return f"{text} (did you mean {m.group(1)}?)"
     return text or "could not parse the command line"

@@ -82,7 +82,9 @@ def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, f
     if water.flat:
         return np.zeros((0, 8)), float("inf"), True, radius, current
     beta = water.direction
-    comps = np.column_stack([water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)])
+    comps = np.column_stack(
+        [water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)]
+    )
     return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius, current
 
 

@@ -205,4 +205,3 @@ def derivative_extra(rad, R, u, L, F, T, x, t, inertia):
     for i in range(dx.shape[0]):
         dx[i] += g[i] * nub[col[i]]
     return mv(R, d[:3].copy()), mv(R, inertia * d[3:]) + spin, dx, e_rate
-

@@ -178,7 +178,11 @@ def wet_panels(x, R, verts, faces, fnormals, need_rr):
 @njit(inline="always", **JIT)
 def world_normal(R, fnormals, f):
     b0, b1, b2 = fnormals[f, 0], fnormals[f, 1], fnormals[f, 2]
-    return (R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2, R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2, R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2)
+    return (
+        R[0, 0] * b0 + R[0, 1] * b1 + R[0, 2] * b2,
+        R[1, 0] * b0 + R[1, 1] * b1 + R[1, 2] * b2,
+        R[2, 0] * b0 + R[2, 1] * b1 + R[2, 2] * b2,
+    )
 
 
 @njit(**JIT)

@@ -102,7 +102,11 @@ def drag(x, R, u, w, model, s, need_D):
             if not flags[k]:
                 continue
             a0, a1, a2 = r[k, 0], r[k, 1], r[k, 2]
-            lx, ly, lz = R[0, 0] * a0 + R[0, 1] * a1 + R[0, 2] * a2, R[1, 0] * a0 + R[1, 1] * a1 + R[1, 2] * a2, R[2, 0] * a0 + R[2, 1] * a1 + R[2, 2] * a2
+            lx, ly, lz = (
+                R[0, 0] * a0 + R[0, 1] * a1 + R[0, 2] * a2,
+                R[1, 0] * a0 + R[1, 1] * a1 + R[1, 2] * a2,
+                R[2, 0] * a0 + R[2, 1] * a1 + R[2, 2] * a2,
+            )
             nx, ny, nz = world_normal(R, nrm, k)
             vn = ((u[0] + w[1] * lz - w[2] * ly - flow[k, 0]) * nx + (u[1] + w[2] * lx - w[0] * lz - flow[k, 1]) * ny
                   + (u[2] + w[0] * ly - w[1] * lx - flow[k, 2]) * nz)  # fmt: skip

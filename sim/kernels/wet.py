@@ -122,7 +122,9 @@ def wave_points(x, R, sea, ex, geom, coef, flags, acc, ws, load):
     out = np.empty((m, 4))
     fields(sea, ex, pts, eta, m, coef[RHO], coef[G], (USED & TWIST_TERMS) != 0, out, True)
     flow = ws[0]
-    fp0 = fp1 = fp2 = tp0 = tp1 = tp2 = fd0 = fd1 = fd2 = td0 = td1 = td2 = a_sub = v_sub = z2n = 0.0  # pressure, damping's flow part, frame integrals
+    fp0 = fp1 = fp2 = tp0 = tp1 = tp2 = fd0 = fd1 = fd2 = td0 = td1 = td2 = a_sub = v_sub = z2n = (
+        0.0  # pressure, damping's flow part, frame integrals
+    )
     for i in range(m):
         k = wet[i]
         p, ux, uy, uz = out[i, 0] if pressure_on else 0.0, out[i, 1], out[i, 2], out[i, 3]

@@ -140,8 +140,9 @@ def _run_local(sweep, todo, done, n, stop=None) -> None:
     # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     _warm(sweep, todo[0][1] if todo else None)  # here first: forked workers start with them, spawned ones load them from the disk cache
-    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_start_worker,
-                               initargs=(os.getpid(),))
+    pool = ProcessPoolExecutor(
+        max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_start_worker, initargs=(os.getpid(),)
+    )
     try:
         futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
         pending = set(futures)
@@ -171,7 +172,9 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
             try:
                 client = Client(scheduler, timeout=f"{timeout}s")
             except (OSError, TimeoutError, ValueError) as e:
-                raise ConfigError(f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})") from None
+                raise ConfigError(
+                    f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})"
+                ) from None
         else:
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)

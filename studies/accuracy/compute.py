@@ -603,7 +603,6 @@ def stiff_rows(cfg: Settings, tick, dt: float = 0.01) -> list[StiffRow]:
     return rows
 
 
-
 # ----------------------------------------------------------------------------------------------
 # 5. Extreme cases
 
@@ -647,7 +646,9 @@ def _light_body(quick: bool) -> list[Extreme]:
 def _heavy_body() -> list[Extreme]:
     """Heavy body: sinks at the terminal speed its damping sets."""
     d = 1e4
-    scene = with_overrides(load_scene("rest"), fluid__forces="panels", body__density=10000.0, fluid__damping=d, initial__position=(0.0, 0.0, -1.0))
+    scene = with_overrides(
+        load_scene("rest"), fluid__forces="panels", body__density=10000.0, fluid__damping=d, initial__position=(0.0, 0.0, -1.0)
+    )
     sim = Simulation(scene)
     M, V = probes.body(sim).mass, probes.body(sim).volume
     _, err = run_until(sim, 3.0, 20)
@@ -761,4 +762,3 @@ def extreme_cases(cfg: Settings, tick) -> tuple[list[Extreme], list[tuple[str, s
     past, messages = _past_limits(quick)
     tick()
     return rows + past, messages
-

@@ -144,7 +144,9 @@ def time_domain_rao(base, rest_z: float, w: float, a: float, start: np.ndarray, 
         sim.step(chunk)
         R = sim.state.R_world_body
         times.append(sim.state.t)
-        motions.append([*(sim.state.x_world - [0.0, 0.0, rest_z]), 0.5 * (R[2, 1] - R[1, 2]), 0.5 * (R[0, 2] - R[2, 0]), 0.5 * (R[1, 0] - R[0, 1])])
+        motions.append(
+            [*(sim.state.x_world - [0.0, 0.0, rest_z]), 0.5 * (R[2, 1] - R[1, 2]), 0.5 * (R[0, 2] - R[2, 0]), 0.5 * (R[1, 0] - R[0, 1])]
+        )
     t, q = np.array(times), np.array(motions)
     keep = t > t[-1] - fit * T
     basis = np.column_stack([np.ones(keep.sum()), t[keep], np.cos(w * t[keep]), np.sin(w * t[keep])])

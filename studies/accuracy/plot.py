@@ -121,10 +121,19 @@ def stability(st: StabilityMap, cfg: Settings, path: Path) -> None:
         dd = np.logspace(0, math.log10(max(st.damping) * 3), 200)
         heave, _ = physics_limit(density, 1.0)
         ax.axhline(heave, color="gray", ls="--", lw=1, label=f"heave: dt = 2/omega = {heave:.3g} s")
-        ax.loglog(dd, 2 * u["M"] / (dd * u["A_sub"]), color="gray", ls="-.", lw=1, label="damping: dt = 2 M / (d A_sub) (explicit Euler, linear)")
+        ax.loglog(
+            dd, 2 * u["M"] / (dd * u["A_sub"]), color="gray", ls="-.", lw=1, label="damping: dt = 2 M / (d A_sub) (explicit Euler, linear)"
+        )
         kappa = next((st.lam_max[density, d] / d for d in st.damping if d > 0), None)
         if kappa:
-            ax.loglog(dd, 2 / (kappa * dd), color="k", ls=(0, (1, 3)), lw=1.2, label=f"fastest damping mode: dt = 2/lambda_max, lambda_max = {kappa:.3g} d /s")
+            ax.loglog(
+                dd,
+                2 / (kappa * dd),
+                color="k",
+                ls=(0, (1, 3)),
+                lw=1.2,
+                label=f"fastest damping mode: dt = 2/lambda_max, lambda_max = {kappa:.3g} d /s",
+            )
         ax.axhline(cfg.stab_cap, color="k", ls=":", lw=0.8, label=f"cap {cfg.stab_cap:g} s")
         for method in FIXED:
             c, m, ls = STYLE[method]
@@ -140,7 +149,10 @@ def stability(st: StabilityMap, cfg: Settings, path: Path) -> None:
         first = len(handles) - len(FIXED)
         ax.legend(handles[:first], labels[:first], fontsize=8, loc="lower left")
     fig.legend(handles[first:], labels[first:], loc="lower center", ncol=len(FIXED), fontsize=9)
-    fig.suptitle("largest stable dt of the fixed-step integrators (panels model, upright cube near rest; markers at the cap = stable up to it)", fontsize=11)
+    fig.suptitle(
+        "largest stable dt of the fixed-step integrators (panels model, upright cube near rest; markers at the cap = stable up to it)",
+        fontsize=11,
+    )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     save(fig, path, DPI)
 
@@ -152,7 +164,11 @@ def creep(rows: list[StiffRow], path: Path) -> None:
         t, gap = r.creep
         ax.semilogy(t, gap, color=f"C{i}", label=f"d = {r.d:g}: implicit dt = 0.01 s")
         ax.semilogy(t, gap[0] * np.exp(-r.creep_rate_physical * t), color=f"C{i}", ls="--", lw=1)
-    ax.set(xlabel="t (s)", ylabel="height above rest depth, z + 0.4 (m)", title="creep back to rest depth: simulated (solid) vs physical slow mode (dashed)")
+    ax.set(
+        xlabel="t (s)",
+        ylabel="height above rest depth, z + 0.4 (m)",
+        title="creep back to rest depth: simulated (solid) vs physical slow mode (dashed)",
+    )
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -228,7 +244,9 @@ def excitation(data, path: Path) -> None:
             ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
             ax.xaxis.set_minor_formatter(NullFormatter())
             unit = "m/m" if d < 3 else "rad/m"
-            ax.set(xlabel="wavelength / body length", ylabel=f"|{DOF_NAMES[d]}| per wave amplitude ({unit})", title=f"{b.name}: {DOF_NAMES[d]}")
+            ax.set(
+                xlabel="wavelength / body length", ylabel=f"|{DOF_NAMES[d]}| per wave amplitude ({unit})", title=f"{b.name}: {DOF_NAMES[d]}"
+            )
             ax.grid(True, which="both", alpha=0.3)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=9)

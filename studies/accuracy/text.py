@@ -23,7 +23,16 @@ REL = "accuracy"
 
 
 def markdown(data: ReportData, args: ReportArgs) -> str:
-    sections = (_intro(data, args), _work_precision(data), _model_error(data), _stability(data), _verdict(data), _stiff_and_extreme(data), _leak(data), _excitation(data))
+    sections = (
+        _intro(data, args),
+        _work_precision(data),
+        _model_error(data),
+        _stability(data),
+        _verdict(data),
+        _stiff_and_extreme(data),
+        _leak(data),
+        _excitation(data),
+    )
     return "\n".join(line for lines in sections for line in lines)
 
 
@@ -120,8 +129,12 @@ def _model_error(data: ReportData) -> list[str]:
     L.append("")
     errs = numbers.model_errors(me)
     header = ["N", "cost (s/s)", *errs.keys(), "inertia effect (m)"]
-    rows = [[n, _fmt(me.cost_points[i], ".3g"), *[_fmt(v[i]) for v in errs.values()], _fmt(me.inertia_error[i])] for i, n in enumerate(me.ns)]
-    rows.append(["rate p (error ~ N^-p, N >= 4)", "", *[_fmt(me.rates[k], ".2f") for k in errs], _fmt(me.rates["inertia (trajectory, m)"], ".2f")])
+    rows = [
+        [n, _fmt(me.cost_points[i], ".3g"), *[_fmt(v[i]) for v in errs.values()], _fmt(me.inertia_error[i])] for i, n in enumerate(me.ns)
+    ]
+    rows.append(
+        ["rate p (error ~ N^-p, N >= 4)", "", *[_fmt(me.rates[k], ".2f") for k in errs], _fmt(me.rates["inertia (trajectory, m)"], ".2f")]
+    )
     L += md_table(header, rows)
     L.append("")
     L.append(f"Panels cost {me.cost_panels:.3g} s/s on the same trajectory (12 triangles whatever N). " + _model_discussion(me))
@@ -151,7 +164,13 @@ def _stability(data: ReportData) -> list[str]:
         for d in st.damping:
             heave, damp = physics_limit(density, d)
             lam = st.lam_max[density, d]
-            row = [f"{density:g}", f"{d:g}", f"{heave:.3g}", _fmt(damp, ".3g") if np.isfinite(damp) else "-", f"{2 / lam:.3g}" if lam > 0 else "-"]
+            row = [
+                f"{density:g}",
+                f"{d:g}",
+                f"{heave:.3g}",
+                _fmt(damp, ".3g") if np.isfinite(damp) else "-",
+                f"{2 / lam:.3g}" if lam > 0 else "-",
+            ]
             rows.append(row + [_stable_dt_cell(st.limits[method, density, d], density, lam, cfg.stab_cap) for method in FIXED])
     L += md_table(["density (kg/m^3)", "d (N s/m^3)", "heave 2/omega (s)", "damping limit 2M/(d A_sub) (s)", "fastest mode 2/lambda_max (s)",
                    *[f"{m}: largest stable dt (s)" for m in FIXED]], rows)  # fmt: skip
@@ -247,16 +266,22 @@ def _model_discussion(me: ModelError) -> str:
     fits = numbers.model_fits(me)
     regular = [f"{k} N^-{p:.2f}" for k, (p, scatter) in fits.items() if scatter <= 0.25]
     erratic = [f"{k} (fitted N^-{p:.2f}, scatter {scatter:.2f} decades)" for k, (p, scatter) in fits.items() if scatter > 0.25]
-    text = (f"At N = {me.ns[-1]} the trajectory error is {numbers.trajectory_over_inertia(me):.2g}x the effect of the sampled inertia, which falls as "
-            f"N^-{r['inertia (trajectory, m)']:.2f} and which the panels model no longer has (it takes the shell's exact inertia). ")
+    text = (
+        f"At N = {me.ns[-1]} the trajectory error is {numbers.trajectory_over_inertia(me):.2g}x the effect of the sampled inertia, which falls as "
+        f"N^-{r['inertia (trajectory, m)']:.2f} and which the panels model no longer has (it takes the shell's exact inertia). "
+    )
     if regular:
         text += "Regular convergence (scatter about the fit at most 0.25 decades): " + ", ".join(regular) + " (midpoint quadrature: N^-2). "
     if erratic:
-        text += ("Erratic: " + ", ".join(erratic) + ". The sampled force is piecewise linear in the pose, with a kink each time a row of "
-                 "samples crosses the water line, so such errors depend on where the water line sits between rows, not only on N; "
-                 "a static equilibrium near a tilt bifurcation (small restoring stiffness) magnifies small torque errors. ")
-    return text + (f"The tilted equilibrium was found for {numbers.tilted_found(me)} of {len(me.ns)} N values ('n/a': no torque sign change within 6 deg "
-                   "of the exact tilt).")
+        text += (
+            "Erratic: " + ", ".join(erratic) + ". The sampled force is piecewise linear in the pose, with a kink each time a row of "
+            "samples crosses the water line, so such errors depend on where the water line sits between rows, not only on N; "
+            "a static equilibrium near a tilt bifurcation (small restoring stiffness) magnifies small torque errors. "
+        )
+    return text + (
+        f"The tilted equilibrium was found for {numbers.tilted_found(me)} of {len(me.ns)} N values ('n/a': no torque sign change within 6 deg "
+        "of the exact tilt)."
+    )
 
 
 def _stability_discussion(data: ReportData) -> str:
@@ -285,29 +310,37 @@ def _verdict_discussion(data: ReportData) -> str:
     text = ", ".join(f"{m} {n}" for m, n in numbers.wins(data.verdict))
     noise = numbers.timing_noise(data.wp)
     if noise:
-        text += (f". Timing noise: 'implicit' and 'splitting' do identical work without damping, yet their measured costs differ by "
-                 f"{np.median(noise):.0%} (median) and up to {max(noise):.0%}; cheaper-than differences smaller than that are not "
-                 "significant, and at a few ms per simulated second the per-call overhead of `Simulation.step` dominates")
-    return (f"Wins per method over all cells: {text or 'none'}. The fixed-step integrators run "
-            f"on the '{data.machine['stepping backend'].split()[0]}' backend while the adaptive ones always call back into Python "
-            "for every force evaluation, which weighs heavily in their cost; compare within each family before across. In the "
-            "`storm` column the fixed-step kernels sum the 64-component sea as a local expansion about the body (bounded at 1e-13 "
-            "of the amplitudes, far below every error shown), while the adaptive methods sum every component at every wet node "
-            "on numpy.")
+        text += (
+            f". Timing noise: 'implicit' and 'splitting' do identical work without damping, yet their measured costs differ by "
+            f"{np.median(noise):.0%} (median) and up to {max(noise):.0%}; cheaper-than differences smaller than that are not "
+            "significant, and at a few ms per simulated second the per-call overhead of `Simulation.step` dominates"
+        )
+    return (
+        f"Wins per method over all cells: {text or 'none'}. The fixed-step integrators run "
+        f"on the '{data.machine['stepping backend'].split()[0]}' backend while the adaptive ones always call back into Python "
+        "for every force evaluation, which weighs heavily in their cost; compare within each family before across. In the "
+        "`storm` column the fixed-step kernels sum the 64-component sea as a local expansion about the body (bounded at 1e-13 "
+        "of the amplitudes, far below every error shown), while the adaptive methods sum every component at every wet node "
+        "on numpy."
+    )
 
 
 def _extreme_discussion(data: ReportData) -> str:
     parts = []
     spins = [e for e in data.extremes if e.case.startswith("100 rad/s spin")]
     if spins:
-        parts.append("Torque-free, L is never changed by any scheme, so abs(L) is exact by construction; the kinetic energy error measures "
-                     "the orientation's accuracy (the box is far from isotropic), and the Dzhanibekov flips show the motion is resolved.")
+        parts.append(
+            "Torque-free, L is never changed by any scheme, so abs(L) is exact by construction; the kinetic energy error measures "
+            "the orientation's accuracy (the box is far from isotropic), and the Dzhanibekov flips show the motion is resolved."
+        )
     silent = [e for e in data.extremes if e.case.endswith("past its limit") and not e.ok]
     for e in silent:
-        parts.append(f"**Surprise:** {e.case} ({e.setup}) does not stop: {e.measured}. Past the heave limit the growth is not exponential "
-                     "for long: once the body leaves the water or submerges, the buoyancy stops growing with the displacement, so the motion "
-                     "stays bounded but wrong, and `Simulation`'s blow-up check (energy above its start plus 10x the body's energy scale) "
-                     "does not fire. Only the stability numbers (dt omega > 2) give it away.")
+        parts.append(
+            f"**Surprise:** {e.case} ({e.setup}) does not stop: {e.measured}. Past the heave limit the growth is not exponential "
+            "for long: once the body leaves the water or submerges, the buoyancy stops growing with the displacement, so the motion "
+            "stays bounded but wrong, and `Simulation`'s blow-up check (energy above its start plus 10x the body's energy scale) "
+            "does not fire. Only the stability numbers (dt omega > 2) give it away."
+        )
     return " ".join(parts)
 
 
@@ -315,10 +348,12 @@ def _stiff_discussion(data: ReportData) -> str:
     if not data.stiff:
         return ""
     ratios = numbers.creep_ratios(data.stiff)
-    return ("`implicit` stays put at rest depth and kills a spin at every d, and the creep back to rest depth is monotone and at the "
-            f"physical speed (measured over physical rate: {min(ratios):.3g} to {max(ratios):.3g}). It solves the pose-dependent loads and "
-            "the damping together, exactly, at a frozen pose, so each half step relaxes the velocity to its exact terminal value instead "
-            "of kicking it and then damping the kick away (an earlier version did that and crept up to 256x too fast at d = 1e7).")
+    return (
+        "`implicit` stays put at rest depth and kills a spin at every d, and the creep back to rest depth is monotone and at the "
+        f"physical speed (measured over physical rate: {min(ratios):.3g} to {max(ratios):.3g}). It solves the pose-dependent loads and "
+        "the damping together, exactly, at a frozen pose, so each half step relaxes the velocity to its exact terminal value instead "
+        "of kicking it and then damping the kick away (an earlier version did that and crept up to 256x too fast at d = 1e7)."
+    )
 
 
 def _leak(data: ReportData) -> list[str]:
@@ -336,7 +371,9 @@ def _leak(data: ReportData) -> list[str]:
              "(the largest E(t) minus the lowest E before t); a value of 0 or below means it never rose. "
              + "; ".join(f"{k}: {v}" for k, v in ENERGY_SCENES.items()) + ".")  # fmt: skip
     L.append("")
-    header = ["model", "integrator"] + [f"{k}: {c}" for k in ENERGY_SCENES for c in ("one step (J)", "any stretch (J)", "model's own, any stretch (J)")]
+    header = ["model", "integrator"] + [
+        f"{k}: {c}" for k in ENERGY_SCENES for c in ("one step (J)", "any stretch (J)", "model's own, any stretch (J)")
+    ]
     rows = []
     for forces in ("points", "cells", "panels"):
         for method in FIXED:
@@ -367,7 +404,7 @@ def _leak(data: ReportData) -> list[str]:
     rows = []
     for density in cfg.cases:
         for forces in ("points", "cells", "panels"):
-            for n in (cfg.ns if forces != "panels" else cfg.ns[:1]):
+            for n in cfg.ns if forces != "panels" else cfg.ns[:1]:
                 if n not in (10, cfg.ns[-1]):
                     continue
                 r = lk.at(density, n, forces)
@@ -388,7 +425,7 @@ def _not_at_rest_rows(lk) -> list[list]:
     densities = sorted(set(lk.settings.densities))
     rows = []
     for forces in ("points", "cells", "panels"):
-        for n in (lk.settings.ns if forces != "panels" else lk.settings.ns[:1]):
+        for n in lk.settings.ns if forces != "panels" else lk.settings.ns[:1]:
             bad = [d for d in densities if not lk.at(d, n, forces).at_rest]
             rows.append([forces, "any" if forces == "panels" else n, ", ".join(f"{d:g}" for d in bad) or "none", len(densities)])
     return rows
@@ -421,9 +458,11 @@ def _leak_discussion(lk) -> str:
     quoted = []
     for density in cfg.cases:
         p, c, x = lk.at(density, n10, "points"), lk.at(density, n10, "cells"), lk.at(density, n10, "panels")
-        what = (f"rocks between {p.tilt_min:.1f} and {p.tilt_max:.1f} deg" if p.rocking >= ROCKING_QUOTE else f"sits tilted {p.tilt:.2f} deg")
-        quoted.append(f"at {density:g} kg/m^3 the points model {what}, drifting at {p.speed * 1000:.3g} mm/s with a horizontal water force of "
-                      f"{p.force_x:.3g} N on the body held still, where the exact model rests at {x.tilt:.3f} deg and cells at {c.tilt:.3f} deg")
+        what = f"rocks between {p.tilt_min:.1f} and {p.tilt_max:.1f} deg" if p.rocking >= ROCKING_QUOTE else f"sits tilted {p.tilt:.2f} deg"
+        quoted.append(
+            f"at {density:g} kg/m^3 the points model {what}, drifting at {p.speed * 1000:.3g} mm/s with a horizontal water force of "
+            f"{p.force_x:.3g} N on the body held still, where the exact model rests at {x.tilt:.3f} deg and cells at {c.tilt:.3f} deg"
+        )
     cells_ok = "comes to rest at every density and N mapped" if bad["cells"] == 0 else f"is not at rest in {bad['cells']} of {total} runs"
     return ("**Cause.** In the points model a sample is wet or dry as a whole, so the wet surface ends in a staircase of whole "
             "cells instead of at the water line. The pressure there is small but its lever is long: the band of cells along the "
@@ -450,10 +489,12 @@ def _warning_coverage(lk) -> str:
     leaking = [r for r in points if not r.at_rest]
     caught = sum(r.warned for r in leaking)
     false = sum(r.warned for r in points if r.at_rest)
-    return (f"The run summary and the viewer warn when the points model runs a body with |GM| / BM < {probes.leak_band():g} sqrt(h / L) "
-            "(h the sample spacing, L the square root of the waterplane area; an empirical bound read off this map): of the "
-            f"{len(leaking)} runs above that do not come to rest it covers {caught}, and it also warns for {false} of the "
-            f"{len(points) - len(leaking)} that do.")
+    return (
+        f"The run summary and the viewer warn when the points model runs a body with |GM| / BM < {probes.leak_band():g} sqrt(h / L) "
+        "(h the sample spacing, L the square root of the waterplane area; an empirical bound read off this map): of the "
+        f"{len(leaking)} runs above that do not come to rest it covers {caught}, and it also warns for {false} of the "
+        f"{len(points) - len(leaking)} that do."
+    )
 
 
 def _excitation(data: ReportData) -> list[str]:
@@ -483,7 +524,9 @@ def _excitation(data: ReportData) -> list[str]:
             change = max(rs, key=lambda r: abs(abs(r.freq_full[d]) / abs(r.freq_fk[d]) - 1))
             rows.append([b.name, DOF_NAMES[d], f"{max(r.error(d) for r in rs):.2%}", f"{max(r.error(d, False) for r in rs):.2%}",
                          f"{abs(change.freq_full[d]) / abs(change.freq_fk[d]) - 1:+.0%} at T = {change.period:.2f} s"])  # fmt: skip
-    L += md_table(["body", "dof", "largest error, with diffraction", "largest error, Froude-Krylov only", "largest change by diffraction"], rows)
+    L += md_table(
+        ["body", "dof", "largest error, with diffraction", "largest error, Froude-Krylov only", "largest change by diffraction"], rows
+    )
     L.append("")
     L.append("Period by period (|ξ| per unit wave amplitude, m/m or rad/m):")
     L.append("")

@@ -108,7 +108,9 @@ def _samples(page: Page, cube: Cube) -> None:
 def _rest(page: Page, cube: Cube, traces: dict[str, Trace]) -> None:
     ours, spun = traces["rest"], traces["rest_spin"]
     n = page.nums["rest"] = numbers.rest(cube, ours, spun)
-    image = page.save(plot.rest(cube, ours, spun, n["spin_omega"]), "fig3_rest.png", "Figure 3: z(t) of the cube placed at rest at z = -0.4")
+    image = page.save(
+        plot.rest(cube, ours, spun, n["spin_omega"]), "fig3_rest.png", "Figure 3: z(t) of the cube placed at rest at z = -0.4"
+    )
     page.add(text.rest(ours, spun, n, image))
 
 

@@ -272,7 +272,10 @@ def _quaternion(q_end: list[float]) -> str:
     qw, qx, qy, qz = q_end
     quaternion = f"Its final quaternion is (w, x, y, z) = ({qw:.6g}, {qx:.3g}, {qy:.3g}, {qz:.6g})"
     if math.hypot(qx, qy) < 1e-6:
-        return quaternion + f": a turn about the vertical alone, by 2 atan2(|q_z|, |q_w|) = {fmt(math.degrees(2 * math.atan2(abs(qz), abs(qw))), 4)}°."
+        return (
+            quaternion
+            + f": a turn about the vertical alone, by 2 atan2(|q_z|, |q_w|) = {fmt(math.degrees(2 * math.atan2(abs(qz), abs(qw))), 4)}°."
+        )
     return quaternion + "."
 
 

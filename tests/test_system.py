@@ -253,7 +253,7 @@ def sim_cli(*args: str, backend: str = "numpy"):
                           env={**os.environ, "FLOATSIM_BACKEND": backend})  # fmt: skip
 
 
-PAIR = (
+SLIDING_PAIR = (
     SLIDE.replace('name = "cube"', 'name = "spar"')
     + """
     [[bodies]]
@@ -274,7 +274,7 @@ PAIR = (
 def test_run_writes_every_body_and_joint_to_csv(tmp_path):
     """`python -m sim run` on a [[bodies]] scene: a column per body's pose and twist and per joint, the joints
     holding in the rows (the float slides on the spar's vertical: same x, y), and the energy balance in the summary."""
-    (tmp_path / "pair.toml").write_text(textwrap.dedent(PAIR))
+    (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDING_PAIR))
     out = tmp_path / "pair.csv"
     done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--t-end", "3", "--every", "10", "--out", str(out))
     assert done.returncode == 0, done.stderr
@@ -296,7 +296,7 @@ def test_the_bodies_compiled_loads_match_the_reference_stage_by_stage(tmp_path):
     on both for 2 s: the same trajectory to 1e-12."""
     from sim.kernels import warm_up
 
-    system, s = build(scene_file(tmp_path, PAIR))
+    system, s = build(scene_file(tmp_path, SLIDING_PAIR))
     for spec in system.specs:
         warm_up(spec)
     for _ in range(60):
@@ -327,7 +327,7 @@ def test_run_compiles_the_bodies_loads_and_says_so(tmp_path):
     its rows the numpy reference's to the sea expansion's bound (1e-9 m)."""
     from sim.kernels import warm_up
 
-    (tmp_path / "pair.toml").write_text(textwrap.dedent(PAIR))
+    (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDING_PAIR))
     system, _ = build(load_scene(str(tmp_path / "pair.toml")))
     for spec in system.specs:
         warm_up(spec)  # into the disk cache the child reads

@@ -92,3 +92,13 @@ def test_the_tours_sweep_and_compare_lines_work(line, tmp_path, monkeypatch, cap
     else:
         args += ["--t-end", "0.5"]
     assert main(args) == 0, capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_tours_bench_line_works(capsys):
+    """`python -m sim bench`, cut to one size, one integrator and no extra tables: its speed table, a row per model."""
+    assert tour_lines("bench") == ["python -m sim bench"]
+    cut = ["--sizes", "10", "--integrators", "implicit", "--ensemble", "0", "--no-radiation", "--no-waves", "--no-moorings", "--no-systems"]
+    assert main(["bench", *cut, "--sweep-cases", "0", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "| model | samples | integrator | us/step |" in out and out.count("| implicit |") >= 3  # points, cells, panels

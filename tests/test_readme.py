@@ -12,8 +12,8 @@ ROOT = Path(__file__).resolve().parent.parent
 README = (ROOT / "README.md").read_text()
 HEADLESS = (ROOT / "docs" / "headless.md").read_text()
 API = (ROOT / "docs" / "api.md").read_text()
-SLOW = ("--record", "--video", "hull.stl", "--radiation", "sphere", "rm3", "moored")
-"""Lines left to their own tests: a browser, a file the reader brings, a boundary-element solve, several bodies, MoorDyn."""
+SLOW = ("--record", "--video", "hull.stl", "--radiation")
+"""Lines left to their own tests: a browser, a file the reader brings, a boundary-element solve."""
 
 
 def run_lines() -> list[str]:

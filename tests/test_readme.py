@@ -102,3 +102,29 @@ def test_the_tours_bench_line_works(capsys):
     assert main(["bench", *cut, "--sweep-cases", "0", "--repeats", "1"]) == 0
     out = capsys.readouterr().out
     assert "| model | samples | integrator | us/step |" in out and out.count("| implicit |") >= 3  # points, cells, panels
+
+
+@pytest.mark.parametrize(
+    "line",
+    [line.split("#")[0].strip() for line in README.split("## A tour")[1].split("```")[1].splitlines() if line.startswith("python -m app")],
+)
+def test_the_tours_viewer_lines_serve_their_scene_and_run(line):
+    """`python -m app --scene NAME` as the tour gives it: the viewer (one body or several) serves the scene and its run
+    goes on (on the numpy reference here: nothing compiled)."""
+    import contextlib
+    import io
+    import time
+
+    from app.args import ViewArgs
+    from app.main import start
+
+    scene = shlex.split(line)[shlex.split(line).index("--scene") + 1]
+    with contextlib.redirect_stdout(io.StringIO()):
+        app = start(ViewArgs(scene=scene, port=0), kernels=False)
+    try:
+        deadline = time.monotonic() + 30.0
+        while app.sync().frame.t <= 0.2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert app.sync().frame.t > 0.2 and app.address().startswith("http://")
+    finally:
+        app.stop()

@@ -27,6 +27,7 @@ from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
 from sim.system import Assembly, AssemblyFrame
 
+from .loop import Mailbox
 from .recorder import RecordPanel
 from .scene import LINE_COLOUR, LINES_HZ
 from .take import MAX_SHOTS, Take
@@ -58,7 +59,7 @@ class BodiesSnapshot:
     water: Any
 
 
-class BodiesLoop:
+class BodiesLoop(Mailbox):
     """Runs one Assembly on its own thread in (scaled) real time; `post(name, value)` queues a command
     (pause, step, reset, speed), applied between steps."""
 
@@ -88,23 +89,7 @@ class BodiesLoop:
         self._stopping = False
         self._publish_now()
 
-    # ---- any thread
-
-    def post(self, name: str, value: Any = None) -> None:
-        self._queue.put((name, value))
-
-    def latest(self) -> BodiesSnapshot:
-        with self._lock:
-            assert self._latest is not None
-            return self._latest
-
-    def sync(self, timeout: float = 10.0) -> BodiesSnapshot:
-        """Wait until every command posted before this call is applied; a fresh snapshot."""
-        done = threading.Event()
-        self.post("_sync", done)
-        if not done.wait(timeout):
-            raise TimeoutError(f"the simulation thread did not answer within {timeout} s")
-        return self.latest()
+    # ---- any thread (post, latest, sync: Mailbox)
 
     def start(self) -> BodiesLoop:
         self._thread = threading.Thread(target=self._loop, name="floatsim-bodies", daemon=True)

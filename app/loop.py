@@ -123,7 +123,30 @@ class Snapshot(Posed):
         return self.settings.config.fluid.damping
 
 
-class SimLoop:
+class Mailbox:
+    """A simulation thread's side facing the others: commands go in a queue it applies between steps, snapshots come
+    out under a lock. The subclass makes `_queue`, `_lock` and `_latest`, and answers `_sync` with its event."""
+
+    def post(self, name: str, value: Any = None) -> None:
+        """Queue a command for the simulation thread."""
+        self._queue.put((name, value))
+
+    def latest(self):
+        """The last published snapshot."""
+        with self._lock:
+            assert self._latest is not None
+            return self._latest
+
+    def sync(self, timeout: float = 10.0):
+        """Wait until every command posted before this call is applied, and return a fresh snapshot."""
+        done = threading.Event()
+        self.post("_sync", done)
+        if not done.wait(timeout):
+            raise TimeoutError(f"the simulation thread did not answer within {timeout} s")
+        return self.latest()
+
+
+class SimLoop(Mailbox):
     """Runs one Simulation on its own thread in (scaled) real time.
 
     `post(name, value)` queues a command (thread-safe, never blocks); the thread applies queued
@@ -192,25 +215,7 @@ class SimLoop:
         """The controls' values: a view of the running simulation's scene plus the viewer's own."""
         return Settings(self._scene_name, self.sim.scene, self.sim.body, self._speed, self._paused)
 
-    # ---- any thread ------------------------------------------------------------------------
-
-    def post(self, name: str, value: Any = None) -> None:
-        """Queue a command for the simulation thread."""
-        self._queue.put((name, value))
-
-    def latest(self) -> Snapshot:
-        """The last published snapshot."""
-        with self._lock:
-            assert self._latest is not None
-            return self._latest
-
-    def sync(self, timeout: float = 10.0) -> Snapshot:
-        """Wait until every command posted before this call is applied, and return a fresh snapshot."""
-        done = threading.Event()
-        self.post("_sync", done)
-        if not done.wait(timeout):
-            raise TimeoutError(f"the simulation thread did not answer within {timeout} s")
-        return self.latest()
+    # ---- any thread (post, latest, sync: Mailbox) ------------------------------------------
 
     def start(self) -> SimLoop:
         self._thread = threading.Thread(target=self._run, name="floatsim-sim", daemon=True)

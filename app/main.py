@@ -19,6 +19,7 @@ from sim.hydrostatics import describe_rest
 from .about import About
 from .access import own_origin_only, refuse_share
 from .args import ViewArgs
+from .camera import CameraView
 from .controls import Controls, Layers
 from .guard import big_blocks_go_back, quiet_repeated_tracebacks, release_memory
 from .gui_guard import Refusals, guard_gui
@@ -50,6 +51,8 @@ class ViewerApp:
         with tabs.add_tab("Live", viser.Icon.CHART_LINE):
             self.readouts = Readouts(server)
         self.controls = Controls(server, loop.post, snap.settings, loop.scene_options)
+        self.camera = CameraView(server, follow=not snap.water.flat)  # a sea carries the body off: follow it there
+        self._view_of = snap.settings.scene
         self.layers = Layers(server)
         self.body_file = BodyFile(server, loop.post, lambda text, client=None: loop.post("notice", text))
         self.recorder = RecordPanel(server, self._notify)
@@ -138,6 +141,10 @@ class ViewerApp:
         self.recorder.capture(snap)
         with self.server.atomic():
             self.scene.show(snap)
+            if snap.settings.scene != self._view_of:  # another preset: following as it suits that one
+                self._view_of = snap.settings.scene
+                self.camera.follow_box.value = not snap.water.flat
+            self.camera.follow(snap.frame.x_world)
             self.readouts.update(snap)
             self.controls.show_shape(snap.settings.config.body.shape)
             self._update_link(snap)

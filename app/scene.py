@@ -15,6 +15,7 @@ import viser
 import sim
 
 from .controls import Layers
+from .hull import HullView
 from .loop import Snapshot
 from .markers import MarkersView
 from .water import WaterView
@@ -48,6 +49,8 @@ class SceneView:
         server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
         server.initial_camera.look_at = (0.0, 0.0, -0.3)
         self.body: sim.Body | None = None
+        self.hull: HullView | None = None
+        """The waterline and the wet part (made for each body and sea)."""
         self.mesh = self.points = None
         self._wet: np.ndarray | None = None  # wet set last sent
         self._colour_time = self._arrow_time = self._lines_time = -np.inf
@@ -81,6 +84,7 @@ class SceneView:
         )  # fmt: skip
         self._wet = None
         self._colour_time = -np.inf
+        self.hull = None
 
     def show(self, snap: Snapshot, now: float | None = None) -> None:
         """Move the body to the snapshot's pose, plus throttled colours, arrows, markers and waves;
@@ -106,7 +110,10 @@ class SceneView:
                 self._send_colours(frame.wet_index, now)
             if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
                 self._send_arrows(snap, now)
-            self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
+            sent = self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
+            if self.hull is None or not self.hull.fits(snap.body, snap.water):
+                self.hull = HullView(self.server, snap.body, snap.water)
+            self.hull.show(snap, layers.markers.value, layers.mesh.value, now, due=sent)  # with the sea: the same instant
             self._show_lines(frame.lines, now)
             self._show_joint(frame.joint_axis)
 

@@ -34,6 +34,8 @@ class SoakArgs:
     """Scene preset or .toml path."""
     speed: float = 1.0
     """Simulation speed (x real time)."""
+    points_per_edge: int | None = None
+    """Samples per edge of a cube or box (the scene's own without it), as the viewer's slider sets it."""
     browser: bool = True
     """Connect a headless chromium client (needs /usr/bin/chromium and playwright)."""
     record: bool = False
@@ -69,6 +71,8 @@ def main(args: SoakArgs) -> int:
 
     app = start(ViewArgs(scene=args.scene, port=0))
     app.controls.speed.value = args.speed
+    if args.points_per_edge is not None:
+        app.controls.points_per_edge.value = args.points_per_edge
     duration = args.minutes * 60.0
     child = None
     if args.browser:

@@ -102,6 +102,12 @@ class Waves:
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
         return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
 
+    def elevation_on_grid(self, xy: np.ndarray, t: float, spacing: np.ndarray) -> np.ndarray:
+        """eta as a grid of the given spacing (m, at each point) can show it: components shorter than four
+        spacings left out and faded in up to eight, so that a coarse grid does not alias them into noise."""
+        weight = np.clip(2 * np.pi / (self.k * 4.0 * np.asarray(spacing, float)[..., None]) - 1.0, 0.0, 1.0)
+        return (np.cos(self._psi(np.asarray(xy, float), t)) * weight) @ self.amplitude
+
     def _stretched(self, points: np.ndarray, t: float):
         """(psi, z*) with Wheeler's stretching of the depth coordinate."""
         psi = self._psi(points, t)

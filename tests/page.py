@@ -37,6 +37,8 @@ class Page:
         """Every markdown block's content as the page shows it, by uuid."""
         self.nodes: dict[str, dict] = {}
         """Every scene node's last properties as the page has them (position, wxyz, ...), by name."""
+        self.camera_moves: list[tuple[str, list[float]]] = []
+        """The camera moves the server sent this page, in order: ('position' or 'look_at', value)."""
 
     @classmethod
     @contextlib.asynccontextmanager
@@ -87,6 +89,9 @@ class Page:
             self.nodes[m["name"]].update(m.get("updates", {}))
         elif kind in ("SetPositionMessage", "SetOrientationMessage"):
             self.nodes.setdefault(m["name"], {}).update({k: m[k] for k in ("position", "wxyz") if k in m})
+        if kind in ("SetCameraPositionMessage", "SetCameraLookAtMessage") and not m.get("initial"):  # (not a new page's start)
+            key = "position" if kind == "SetCameraPositionMessage" else "look_at"
+            self.camera_moves.append((key, list(m[key])))
         if kind == "GuiMarkdownMessage" and isinstance(m.get("props"), dict):
             self.texts[m["uuid"]] = m["props"].get("_markdown", "")  # viser 1.1.1's name for the content
         elif kind == "GuiUpdateMessage" and m.get("uuid") in self.texts and "_markdown" in m.get("updates", {}):

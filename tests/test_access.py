@@ -33,9 +33,10 @@ def viewer(**kwargs):
 
 
 async def fresh_page(port: int) -> Page:
-    """What a page that connects now is shown."""
+    """What a page that connects now is shown (the scene's state comes in several windows: read them all)."""
     async with Page.open(port) as page:
         await page.read(1.5, until=lambda p: "Mesh unit" in p.controls)
+        await page.read(0.5)
         return page
 
 

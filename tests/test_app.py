@@ -520,7 +520,7 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     """Still water: the flat grid, and no surface is streamed. Waves (chosen live in the Waves folder):
     the grid gives way to a mesh whose heights are the running Water's elevation, sent at most
     WAVE_HZ times a second; switching the water layer off stops the stream."""
-    from app.water import WAVE_HZ
+    from app.water import FAR, WAVE_HZ
 
     app = make_app("damped")
     water = app.scene.water
@@ -535,9 +535,12 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     elapsed = time.monotonic() - started
     assert water.updates - before <= WAVE_HZ * elapsed + 2  # throttled
     assert water.surface.visible and not water.calm.visible
-    vertices = np.asarray(water.surface.vertices, float)
-    np.testing.assert_allclose(vertices[:, 2], snap.water.elevation(vertices[:, :2], water.sent_time), atol=1e-6)
-    assert np.ptp(vertices[:, 2]) > 0.05 and np.abs(vertices[:, 2]).max() <= 0.3 + 1e-6  # a 0.3 m amplitude, 100 m long wave over 8 m
+    shades = [np.asarray(band.vertices, float) for band in water.bands if band.visible]
+    vertices = np.concatenate(shades)
+    near = np.abs(vertices[:, :2] - snap.frame.x_world[:2]).max(axis=1) < 0.45 * water.size  # the fine patch: every component
+    np.testing.assert_allclose(vertices[near, 2], snap.water.elevation(vertices[near, :2], water.sent_time), atol=1e-6)
+    assert np.ptp(vertices[:, 2]) > 0.05 and np.abs(vertices[:, 2]).max() <= 0.3 + 1e-6  # a 0.3 m amplitude, 100 m long wave
+    assert np.abs(vertices[:, :2]).max() > FAR * 0.5 * water.size  # the ring of the same surface out to the horizon
     app.layers.water.value = False
     time.sleep(0.3)
     frozen = water.updates
@@ -667,3 +670,108 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
     while time.monotonic() < deadline and (app.scene.joint.visible or app.readouts.plots["P"].visible):
         time.sleep(0.05)
     assert not app.scene.joint.visible and not app.readouts.plots["P"].visible
+
+
+def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
+    """A regular wave's triangles go to lighter shades the higher they lie (or the more they face the light):
+    each shade's mean height rises with it; the fine patch and the ring share their seam exactly."""
+    from app.water import BANDS, LIGHT, sea_grid, sea_heights, shade_bands
+    from sim.water import Waves
+
+    water = Waves(1000.0, 9.81, np.array([0.5]), np.array([1.0]), np.array([1.0 / 9.81]), np.array([0.0]), np.array([0.0]))
+    xy, faces, spacing, seam = sea_grid(12.0, 48)
+    z = sea_heights(water, xy, 0.0, spacing, seam)
+    vertices = np.column_stack([xy, z])
+    shade = shade_bands(vertices, faces, 1.0)
+    P = vertices[faces]
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    looks = P[:, :, 2].mean(axis=1) * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
+    assert np.corrcoef(shade, looks)[0, 1] > 0.95
+    assert len(np.unique(shade)) >= 6  # a 1 m high, 63 m long wave spans several shades (of BANDS)
+    assert shade.min() >= 0 and shade.max() < BANDS
+    # the seam: every patch vertex on it lies on the ring's edge between its two ring vertices (no crack)
+    i, a, b = seam.T
+    s = np.linalg.norm(xy[i] - xy[a], axis=1) / np.linalg.norm(xy[b] - xy[a], axis=1)
+    np.testing.assert_allclose(vertices[i], (1 - s)[:, None] * vertices[a] + s[:, None] * vertices[b], atol=1e-12)
+    u, v = xy[i] - xy[a], xy[b] - xy[a]
+    np.testing.assert_allclose(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], 0.0, atol=1e-9)  # and lies on that edge in plan
+
+
+def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):
+    """The cube in the `waves` preset: every vertex of the waterline the page gets lies on the cube's surface and on
+    the instantaneous wave surface within 1 mm, at several instants; the wet part drawn lies under the surface."""
+    from sim.rotation import quat_to_matrix
+
+    app = make_app("waves")
+    seen, checked = set(), 0
+    fresh = lambda: app.scene.hull is not None and app.scene.hull.latest is not None and app.scene.hull.latest[0] not in seen  # noqa: E731
+    while checked < 5:
+        snap = wait_for(app, lambda s: fresh(), what="a new waterline")
+        hull = app.scene.hull
+        with app.server.atomic():  # the line and its pose as one message window
+            t, x, q, segments = hull.latest
+            points = np.asarray(hull.line.points, float).reshape(-1, 3)  # as sent: float32, body frame
+            wet = np.asarray(hull.wet.vertices, float)
+        seen.add(t)
+        if not len(segments):  # a crest over the whole cube: no line (hidden)
+            assert not hull.line.visible
+            continue
+        checked += 1
+        R = quat_to_matrix(q)
+        assert len(points) >= 8 and hull.line.visible  # the cube pierces the surface: a closed loop
+        assert np.abs(np.abs(points).max(axis=1) - 0.5).max() < 1e-3  # on the 1 m cube's faces
+        assert np.abs(snap.water.height_above_surface(points @ R.T + x, t)).max() < 1e-5  # on the water (asked: 1 mm)
+        assert snap.water.height_above_surface(wet @ R.T + x, t).max() < 1e-3 + 2e-3 * snap.body.radius  # wet: under it (drawn lifted)
+
+
+def test_follow_keeps_the_pages_orbit_and_moves_it_with_the_body_and_reset_view_restores_the_start():
+    """Over viser's protocol, in waves (Follow on by default there): the camera the page gets looks at the body's
+    smoothed position, at the offset the page itself chose; switched off, the camera is left alone; Reset view
+    puts the starting camera's offset back around the body; still water starts with Follow off."""
+    import asyncio
+
+    from page import CAMERA, Page
+
+    app = start(ViewArgs(scene="waves", port=0), kernels=False, publish_hz=20.0)
+    try:
+        assert app.camera.follow_box.value
+
+        async def watch():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Follow body" in p.controls)
+                await page.camera()  # offset (3, 3, 3) from the point it looks at
+                await page.read(4.0)
+                moves = list(page.camera_moves)
+                body = app.sync().frame.x_world
+                await page.update("Follow body", False)
+                await page.read(1.0)
+                after = len(page.camera_moves)
+                await page.read(1.5)
+                still = len(page.camera_moves) == after
+                await page.update("Follow body", True)
+                await page.update("Reset view", True)
+                await page.read(1.0)
+                return moves, body, still, page.camera_moves[after:]
+
+        moves, body, still, reset = asyncio.run(watch())
+        positions = [np.array(v) for k, v in moves if k == "position"]
+        looks = [np.array(v) for k, v in moves if k == "look_at"]
+        assert len(positions) > 20 and len(looks) == len(positions)  # ~20 a second while the body moves
+        for p, q in zip(positions, looks):
+            np.testing.assert_allclose(p - q, CAMERA["position"], atol=1e-9)  # the page's own orbit kept
+        assert np.linalg.norm(looks[-1] - body) < 0.25 * np.linalg.norm(np.ptp(looks, axis=0)) + 0.05  # onto the body, within the lag
+        assert np.ptp(np.array(looks)[:, 2]) > 0.1  # it rides the swell (0.5 m waves) with the body
+        assert still  # Follow off: no camera moves
+        initial = np.asarray(app.server.initial_camera.position) - np.asarray(app.server.initial_camera.look_at)
+        last_position = next(np.array(v) for k, v in reversed(reset) if k == "position")
+        last_look = next(np.array(v) for k, v in reversed(reset) if k == "look_at")
+        np.testing.assert_allclose(last_position - last_look, initial, atol=1e-9)  # Reset view: the start's offset, around the body
+        assert np.linalg.norm(last_look - app.sync().frame.x_world) < 1.0
+    finally:
+        app.stop()
+    calm = start(ViewArgs(scene="damped", port=0), kernels=False)
+    try:
+        assert not calm.camera.follow_box.value
+    finally:
+        calm.stop()

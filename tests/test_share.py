@@ -119,7 +119,8 @@ def test_markers_sit_at_the_exact_centre_of_buoyancy_and_metacentre():
         h = view.markers.latest
         assert h.volume == pytest.approx(volume, rel=1e-10)
         np.testing.assert_allclose(view.markers.m.position, h.buoyancy_centre + [0, 0, h.bm[0]], atol=1e-12)
-        assert view.markers.line.visible and np.abs(view.markers.line.points[..., 2]).max() < 1e-5  # waterline on z = 0
+        assert view.hull.line.visible  # the waterline: on the hull (body frame), on z = 0 in the world
+        np.testing.assert_allclose((np.asarray(view.hull.line.points, float).reshape(-1, 3) @ R.T + x)[:, 2], 0.0, atol=1e-6)
 
 
 @pytest.mark.slow

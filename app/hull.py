@@ -112,16 +112,16 @@ def _root(height, h0: np.ndarray, h1: np.ndarray) -> np.ndarray:
 class HullView:
     """The waterline and the wet part as children of the body's frame; `show` runs on the simulation thread only."""
 
-    def __init__(self, server, body, water):
+    def __init__(self, server, body, water, root: str = ""):
         self.hull = Hull.of(body, water)
         self._for = (body, getattr(water, "k", None))
         scene, r = server.scene, body.radius
         self.line = scene.add_line_segments(
-            "/body/waterline", np.zeros((1, 2, 3), np.float32), LINE_COLOUR, thickness=0.012 * r, visible=False
+            f"{root}/body/waterline", np.zeros((1, 2, 3), np.float32), LINE_COLOUR, thickness=0.012 * r, visible=False
         )
         dot = np.zeros((3, 3), np.float32)
         self.wet = scene.add_mesh_simple(
-            "/body/wet", dot, np.array([[0, 1, 2]], np.uint32), color=WET_COLOUR, flat_shading=True, visible=False
+            f"{root}/body/wet", dot, np.array([[0, 1, 2]], np.uint32), color=WET_COLOUR, flat_shading=True, visible=False
         )
         self._normals = _vertex_normals(self.hull.vertices, self.hull.faces) * (LIFT * r)
         self._sent = -np.inf

@@ -144,7 +144,7 @@ class ViewerApp:
             if snap.settings.scene != self._view_of:  # another preset: following as it suits that one
                 self._view_of = snap.settings.scene
                 self.camera.follow_box.value = not snap.water.flat
-            self.camera.follow(snap.frame.x_world)
+            self.camera.follow(self.scene.root, snap.frame.x_world)
             self.readouts.update(snap)
             self.controls.show_shape(snap.settings.config.body.shape)
             self._update_link(snap)

@@ -15,13 +15,13 @@ M_COLOUR = (200, 30, 160)
 class MarkersView:
     """Scene nodes for B and M; `show` runs on the simulation thread only."""
 
-    def __init__(self, server: viser.ViserServer, radius: float):
+    def __init__(self, server: viser.ViserServer, radius: float, root: str = ""):
         scene = server.scene
         r = 0.045 * radius
-        self.b = scene.add_icosphere("/markers/B", radius=r, color=B_COLOUR, visible=False)
-        self.m = scene.add_icosphere("/markers/M", radius=r, color=M_COLOUR, visible=False)
-        scene.add_label("/markers/B/label", "B", position=(1.5 * r, 0.0, -1.5 * r))  # children follow the marker, and hide with it
-        scene.add_label("/markers/M/label", "M", position=(1.5 * r, 0.0, 1.5 * r))
+        self.b = scene.add_icosphere(f"{root}/markers/B", radius=r, color=B_COLOUR, visible=False)
+        self.m = scene.add_icosphere(f"{root}/markers/M", radius=r, color=M_COLOUR, visible=False)
+        scene.add_label(f"{root}/markers/B/label", "B", position=(1.5 * r, 0.0, -1.5 * r))  # children follow the marker, and hide with it
+        scene.add_label(f"{root}/markers/M/label", "M", position=(1.5 * r, 0.0, 1.5 * r))
         self._sent = -np.inf
         self.latest = None
         """The Hydrostatics last shown (None: dry, submerged, or not shown)."""

@@ -20,6 +20,8 @@ from .loop import Snapshot
 from .markers import MarkersView
 from .water import WaterView
 
+ROOT = "/world"
+"""Every node of the scene hangs from this frame: following the body moves it, never the pages' cameras (camera.py)."""
 COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
 LINES_HZ = 15.0
@@ -37,13 +39,16 @@ class SceneView:
         the throttles counted in the time passed to `show` (simulated) rather than wall time."""
         self.server, self.layers, self.replay = server, layers, replay
         scene = server.scene
+        self.root = scene.add_frame(ROOT, show_axes=False)
         self._sized_for = body.radius
         size = max(8.0, 8.0 * body.radius)
-        self.water = WaterView(server, size, lighter=replay)
-        self.markers = MarkersView(server, body.radius)
-        self.frame = scene.add_frame("/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=layers.axes.value)
+        self.water = WaterView(server, size, lighter=replay, root=ROOT)
+        self.markers = MarkersView(server, body.radius, root=ROOT)
+        self.frame = scene.add_frame(
+            f"{ROOT}/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=layers.axes.value
+        )
         self.arrows = scene.add_arrows(
-            "/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
+            f"{ROOT}/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
         )
         view = size / 8 * (2.5 if waves else 1.0)  # a sea needs a wider view than a calm pond
         server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
@@ -67,19 +72,24 @@ class SceneView:
         scene = self.server.scene
         if not 0.5 < body.radius / self._sized_for < 2.0:  # another size of body: water, frame and markers to its scale
             self._sized_for = body.radius
-            self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay)
-            self.markers = MarkersView(self.server, body.radius)
+            self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay, root=ROOT)
+            self.markers = MarkersView(self.server, body.radius, root=ROOT)
             self.frame = scene.add_frame(
-                "/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value
+                f"{ROOT}/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value
             )
         self.mesh = scene.add_mesh_simple(
-            "/body/mesh", body.mesh_vertices, body.mesh_faces, color=(215, 235, 250), flat_shading=True, visible=self.layers.mesh.value
+            f"{ROOT}/body/mesh",
+            body.mesh_vertices,
+            body.mesh_faces,
+            color=(215, 235, 250),
+            flat_shading=True,
+            visible=self.layers.mesh.value,
         )
         # Lift the points a little off the faces so the opaque mesh does not hide half of each one.
         lifted = body.r_body + 0.01 * body.radius * body.n_body
         size = 0.3 * np.sqrt(body.area.mean())  # a third of the sample spacing
         self.points = scene.add_point_cloud(
-            "/body/points", lifted, np.tile(DRY, (body.n_samples, 1)), point_size=float(size), precision="float32",
+            f"{ROOT}/body/points", lifted, np.tile(DRY, (body.n_samples, 1)), point_size=float(size), precision="float32",
             point_shape="circle", visible=self.layers.points.value,
         )  # fmt: skip
         self._wet = None
@@ -112,7 +122,7 @@ class SceneView:
                 self._send_arrows(snap, now)
             sent = self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
             if self.hull is None or not self.hull.fits(snap.body, snap.water):
-                self.hull = HullView(self.server, snap.body, snap.water)
+                self.hull = HullView(self.server, snap.body, snap.water, root=ROOT)
             self.hull.show(snap, layers.markers.value, layers.mesh.value, now, due=sent)  # with the sea: the same instant
             self._show_lines(frame.lines, now)
             self._show_joint(frame.joint_axis)
@@ -130,7 +140,7 @@ class SceneView:
         point, direction = (np.asarray(a, float) for a in axis)
         reach = 2.0 * self._sized_for
         segment = np.array([[point - reach * direction, point + reach * direction]], np.float32)
-        self.joint = self.server.scene.add_line_segments("/joint", segment, JOINT_COLOUR, thickness=0.04)
+        self.joint = self.server.scene.add_line_segments(f"{ROOT}/joint", segment, JOINT_COLOUR, thickness=0.04)
 
     def _show_lines(self, lines: tuple, now: float) -> None:
         """The mooring lines as segments between their nodes, at most LINES_HZ times a second (none: hidden)."""
@@ -142,7 +152,7 @@ class SceneView:
             return
         segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in lines]).astype(np.float32)
         if self.lines is None or len(self.lines.points) != len(segments):
-            self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
+            self.lines = self.server.scene.add_line_segments(f"{ROOT}/moorings", segments, LINE_COLOUR, thickness=0.05)
         else:
             self.lines.points = segments
             self.lines.visible = True

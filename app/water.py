@@ -130,8 +130,9 @@ def sea_scale(water) -> float:
 class WaterView:
     """Scene nodes for the water; `show` runs on the simulation thread only."""
 
-    def __init__(self, server: viser.ViserServer, size: float, lighter: bool = False):
-        """lighter=True: a coarser surface sent less often (recordings: the file stays small)."""
+    def __init__(self, server: viser.ViserServer, size: float, lighter: bool = False, root: str = ""):
+        """lighter=True: a coarser surface sent less often (recordings: the file stays small); `root`: the frame
+        the nodes hang from."""
         self.server = server
         self.size = WAVE_PATCH * size
         self.cells, self.hz = (REPLAY_CELLS, REPLAY_HZ) if lighter else (CELLS, WAVE_HZ)
@@ -139,16 +140,16 @@ class WaterView:
         reach = FAR * half  # calm water: one translucent sheet the submerged part shows through (no floor-like grid)
         sheet = np.array([[-reach, -reach, 0.0], [reach, -reach, 0.0], [reach, reach, 0.0], [-reach, reach, 0.0]], dtype=np.float32)
         self.calm = server.scene.add_mesh_simple(
-            "/water", sheet, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), color=WATER_COLOUR, opacity=WATER_OPACITY,
+            f"{root}/water", sheet, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), color=WATER_COLOUR, opacity=WATER_OPACITY,
             side="double", cast_shadow=False, receive_shadow=False,
         )  # fmt: skip
         self._xy, self._faces, self._spacing, self._seam = sea_grid(half, self.cells)
-        self.surface = server.scene.add_frame("/waves", show_axes=False, visible=False)
+        self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
         """The sea's node: its children are the shades (hidden with it)."""
         dot = np.zeros((3, 3), np.float32)
         self.bands = [
             server.scene.add_mesh_simple(
-                f"/waves/shade{k}",
+                f"{root}/waves/shade{k}",
                 dot,
                 np.array([[0, 1, 2]], np.uint32),
                 color=colour,

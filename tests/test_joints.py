@@ -256,6 +256,6 @@ def test_a_recording_shows_the_joint_axis():
     raw = base64.b64decode(re.search(r'window.__VISER_EMBED_DATA__="([^"]+)"', replay_html(take)).group(1))
     inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=int.from_bytes(raw[:8], "little"))
     doc = msgspec.msgpack.decode(inner[8 : 8 + int.from_bytes(inner[:8], "little")])
-    assert [m for _, m in doc["messages"] if m.get("name") == "/joint" and m["type"] == "LineSegmentsMessage"]
+    assert [m for _, m in doc["messages"] if m.get("name") == "/world/joint" and m["type"] == "LineSegmentsMessage"]
     point, direction = sim.frame().joint_axis
     np.testing.assert_allclose(point, [0.0, 0.0, 0.7]) and np.testing.assert_allclose(direction, [0.0, 1.0, 0.0])

@@ -194,7 +194,9 @@ def test_a_recording_draws_the_lines_where_the_run_had_them():
         at += size
     assert at == len(inner)
     updates = [
-        m[1]["updates"]["points"] for m in doc["messages"] if m[1].get("name") == "/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"
+        m[1]["updates"]["points"]
+        for m in doc["messages"]
+        if m[1].get("name") == "/world/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"
     ]
     assert len(updates) >= 10  # streamed as the run goes (15 a second at most)
     i = updates[-1]["__binary_index"]

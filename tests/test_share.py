@@ -40,9 +40,9 @@ def pose_at(messages, time: float) -> tuple[np.ndarray, np.ndarray]:
     for t, m in messages:
         if t > time + 1e-9:
             break
-        if m.get("name") == "/body" and m["type"] == "SetPositionMessage":
+        if m.get("name") == "/world/body" and m["type"] == "SetPositionMessage":
             position = np.array(m["position"])
-        if m.get("name") == "/body" and m["type"] == "SetOrientationMessage":
+        if m.get("name") == "/world/body" and m["type"] == "SetOrientationMessage":
             orientation = np.array(m["wxyz"])
     return position, orientation
 
@@ -69,7 +69,7 @@ def test_replay_shows_every_recorded_pose_exactly_as_the_csv():
         np.testing.assert_allclose(position, row[1:4], atol=1e-6)
         np.testing.assert_allclose(wxyz, row[4:8], atol=1e-6)
     # at rest, viser's own filter would drop moves under 1e-5: the replay still sends every one
-    assert sum(m["type"] == "SetPositionMessage" and m["name"] == "/body" for _, m in messages) == len(take) + 1
+    assert sum(m["type"] == "SetPositionMessage" and m["name"] == "/world/body" for _, m in messages) == len(take) + 1
 
 
 @pytest.mark.slow

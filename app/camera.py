@@ -21,27 +21,16 @@ SMOOTHING = 0.5
 """Seconds: the time constant of the followed point's lag behind the body."""
 
 
-class CameraView:
-    """The View folder; `follow` runs on the simulation thread only."""
+class Follower:
+    """The followed point, the body's position smoothed over SMOOTHING seconds; `step` moves the world frame
+    `root` by minus it (at most FOLLOW_HZ times a second of the clock `now` counts in), `stop` puts it back."""
 
-    def __init__(self, server: viser.ViserServer, follow: bool):
-        self.server = server
-        with server.gui.add_folder("View"):
-            self.follow_box = server.gui.add_checkbox("Follow body", follow, hint="Keep the body in view: the world moves under the camera")
-            self.reset_button = server.gui.add_button("Reset view", hint="The camera as a new page starts")
-        self.reset_button.on_click(lambda event: self.reset(event.client))
+    def __init__(self):
         self.target: np.ndarray | None = None
-        """The followed point (the body's smoothed position; None: not following)."""
+        """The followed point (None: not following)."""
         self._time = -math.inf
 
-    def follow(self, root, x: np.ndarray, now: float | None = None) -> None:
-        """Move the followed point toward the body's position x, and the world `root` (a frame handle) by minus it."""
-        now = time.monotonic() if now is None else now
-        if not self.follow_box.value:
-            if self.target is not None:
-                self.target = None
-                root.position = (0.0, 0.0, 0.0)
-            return
+    def step(self, root, x: np.ndarray, now: float) -> None:
         if now - self._time < 1.0 / FOLLOW_HZ:
             return
         x = np.asarray(x, float)
@@ -53,6 +42,30 @@ class CameraView:
             self.target += (1.0 - math.exp(-(now - self._time) / SMOOTHING)) * (x - self.target)
         self._time = now
         root.position = -self.target
+
+    def stop(self, root) -> None:
+        if self.target is not None:
+            self.target = None
+            root.position = (0.0, 0.0, 0.0)
+
+
+class CameraView:
+    """The View folder; `follow` runs on the simulation thread only."""
+
+    def __init__(self, server: viser.ViserServer, follow: bool):
+        self.server = server
+        with server.gui.add_folder("View"):
+            self.follow_box = server.gui.add_checkbox("Follow body", follow, hint="Keep the body in view: the world moves under the camera")
+            self.reset_button = server.gui.add_button("Reset view", hint="The camera as a new page starts")
+        self.reset_button.on_click(lambda event: self.reset(event.client))
+        self.follower = Follower()
+
+    def follow(self, root, x: np.ndarray, now: float | None = None) -> None:
+        """While Follow body is on, move the world `root` (a frame handle) by minus the body's smoothed position x."""
+        if self.follow_box.value:
+            self.follower.step(root, x, time.monotonic() if now is None else now)
+        else:
+            self.follower.stop(root)
 
     def reset(self, client: viser.ClientHandle | None) -> None:
         """The page's camera (every page's when None) as a new page starts."""

@@ -14,6 +14,7 @@ import viser
 
 import sim
 
+from .camera import Follower
 from .controls import Layers
 from .hull import HullView
 from .loop import Snapshot
@@ -38,6 +39,8 @@ class SceneView:
         """replay=True: for a recording (app/replay.py): every pose exactly, a lighter wave surface, and
         the throttles counted in the time passed to `show` (simulated) rather than wall time."""
         self.server, self.layers, self.replay = server, layers, replay
+        self.follower = Follower() if replay and waves else None
+        """A replay in waves follows the body as the live view does by default (the live view's own: camera.py)."""
         scene = server.scene
         self.root = scene.add_frame(ROOT, show_axes=False)
         self._sized_for = body.radius
@@ -126,6 +129,8 @@ class SceneView:
             self.hull.show(snap, layers.markers.value, layers.mesh.value, now, due=sent)  # with the sea: the same instant
             self._show_lines(frame.lines, now)
             self._show_joint(frame.joint_axis)
+            if self.follower is not None:
+                self.follower.step(self.root, frame.x_world, now)
 
     def _show_joint(self, axis) -> None:
         """A slide's or a hinge's axis (frame.joint_axis), 4 body radii long; sent when it changes, hidden without one."""

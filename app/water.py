@@ -54,56 +54,56 @@ def _cell_faces(nx: int, ny: int, keep: np.ndarray) -> np.ndarray:
     return np.concatenate([np.stack([a, b, d], axis=1), np.stack([a, d, c], axis=1)]).astype(np.uint32)
 
 
-def sea_grid(half: float, cells: int, far: float = FAR) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(xy (v, 2), faces (f, 3), spacing (v,), seam (s, 3)) of the sea around the origin: a fine square patch
-    of `cells` per side and half-width `half`, then a coarse ring from it out to `far * half`; `spacing` is
-    each vertex's largest cell side. The ring's inner edge runs along the patch's, through every few of its
-    vertices; seam rows (i, a, b) say patch edge vertex i lies on the ring's edge between vertices a and b
-    halfway or so: `sea_heights` puts it on that edge, and the two meet without a gap."""
-    fine = np.linspace(-half, half, cells + 1)
-    g = np.meshgrid(fine, fine, indexing="ij")
-    xy_fine = np.column_stack([g[0].ravel(), g[1].ravel()])
-    per = cells // RING_CELLS  # patch cells per ring cell along the seam
-    inner = fine[::per]
-    step, out = inner[1] - inner[0], [half]
-    while out[-1] < far * half:  # cells growing by a quarter each: a few dozen vertices to the horizon
-        step *= 1.25
-        out.append(out[-1] + step)
-    outer = np.array(out[1:])
-    ring = np.concatenate([-outer[::-1], inner, outer])
-    n, m = len(ring) - 1, len(outer)
-    centre = 0.5 * (ring[:-1] + ring[1:])
-    inside = np.abs(centre) < half
-    keep = ~(inside[:, None] & inside[None, :])
-    g = np.meshgrid(ring, ring, indexing="ij")
-    xy_ring = np.column_stack([g[0].ravel(), g[1].ravel()])
-    gap = np.diff(ring)
-    side = np.maximum(np.r_[gap, gap[-1]], np.r_[gap[0], gap])  # each ring coordinate's wider neighbouring cell
-    spacing = np.concatenate([np.full(len(xy_fine), fine[1] - fine[0]), np.maximum.outer(side, side).ravel()])
-    faces = np.concatenate([grid_faces(cells), _cell_faces(n, n, keep) + len(xy_fine)])
-    seam = []
-    for fixed in (0, cells):  # the patch's four sides: the ring's vertices there take the patch's heights
-        for k in range(cells + 1):
-            for i, j in ((fixed, k), (k, fixed)):
-                ri, rj = m + i // per if i % per == 0 else None, m + j // per if j % per == 0 else None
-                if ri is not None and rj is not None:
-                    spacing[len(xy_fine) + ri * (n + 1) + rj] = fine[1] - fine[0]
-                    continue
-                if ri is None:  # between two of the ring's vertices along x
-                    a, b = (m + i // per) * (n + 1) + rj, (m + i // per + 1) * (n + 1) + rj
+class SeaGrid:
+    """The sea's mesh around the origin: a fine square patch of `cells` per side and half-width `half`, in a
+    coarse ring of the same surface out to `far * half` whose cells grow outward. The ring's inner edge runs
+    along the patch's, through every few of its vertices; the patch's vertices between those are put on the
+    ring's edge, so the two meet without a crack."""
+
+    def __init__(self, half: float, cells: int, far: float = FAR):
+        self.fine = np.linspace(-half, half, cells + 1)
+        per = cells // RING_CELLS  # patch cells per ring cell along the seam
+        step, out = self.fine[per] - self.fine[0], [half]
+        while out[-1] < far * half:  # cells growing by a quarter each: a few dozen vertices to the horizon
+            step *= 1.25
+            out.append(out[-1] + step)
+        outer = np.array(out[1:])
+        self.ring = np.concatenate([-outer[::-1], self.fine[::per], outer])
+        gap = np.diff(self.ring)
+        self.ring_side = np.maximum(np.r_[gap, gap[-1]], np.r_[gap[0], gap])
+        """Each ring coordinate's wider neighbouring cell: what the ring can show there."""
+        n, m, nf = len(self.ring) - 1, len(outer), (cells + 1) ** 2
+        centre = 0.5 * (self.ring[:-1] + self.ring[1:])
+        inside = np.abs(centre) < half
+        self.faces = np.concatenate([grid_faces(cells), _cell_faces(n, n, ~(inside[:, None] & inside[None, :])) + nf])
+        fine_index = lambda i, j: i * (cells + 1) + j  # noqa: E731
+        ring_index = lambda i, j: nf + (m + i) * (n + 1) + m + j  # noqa: E731  (in ring cells from the patch's corner)
+        tied, seam = [], []
+        for k in range(cells + 1):  # the patch's four sides
+            for i, j in {(0, k), (cells, k), (k, 0), (k, cells)}:
+                if i % per == 0 and j % per == 0:  # a ring vertex: the patch's height
+                    tied.append((ring_index(i // per, j // per), fine_index(i, j)))
+                elif i % per:  # between two ring vertices along x
+                    seam.append((fine_index(i, j), ring_index(i // per, j // per), ring_index(i // per + 1, j // per), i % per / per))
                 else:
-                    a, b = ri * (n + 1) + m + j // per, ri * (n + 1) + m + j // per + 1
-                seam.append((i * (cells + 1) + j, len(xy_fine) + a, len(xy_fine) + b))
-    return np.concatenate([xy_fine, xy_ring]), faces, spacing, np.array(seam, np.int64)
+                    seam.append((fine_index(i, j), ring_index(i // per, j // per), ring_index(i // per, j // per + 1), j % per / per))
+        self.tied = np.array(tied, np.int64).T
+        self.seam = np.array(seam).T
 
+    def xy(self, origin: np.ndarray) -> np.ndarray:
+        """(v, 2) the vertices' horizontal positions, the grid centred on `origin`."""
+        grids = [np.meshgrid(c + origin[0], c + origin[1], indexing="ij") for c in (self.fine, self.ring)]
+        return np.concatenate([np.column_stack([gx.ravel(), gy.ravel()]) for gx, gy in grids])
 
-def sea_heights(water, xy: np.ndarray, t: float, spacing: np.ndarray, seam: np.ndarray) -> np.ndarray:
-    """The surface's heights at the grid's vertices (sea_grid), the patch's seam on the ring's edges."""
-    z = water.elevation_on_grid(xy, t, spacing)
-    i, a, b = seam.T
-    s = np.linalg.norm(xy[i] - xy[a], axis=1) / np.linalg.norm(xy[b] - xy[a], axis=1)
-    z[i] = (1.0 - s) * z[a] + s * z[b]
-    return z
+    def heights(self, water, t: float, origin: np.ndarray) -> np.ndarray:
+        """(v,) the surface's heights at the vertices (Waves.elevation_on_grid: the ring leaves out what it cannot show)."""
+        fine = water.elevation_on_grid(self.fine + origin[0], self.fine + origin[1], t).ravel()
+        ring = water.elevation_on_grid(self.ring + origin[0], self.ring + origin[1], t, self.ring_side, self.ring_side).ravel()
+        z = np.concatenate([fine, ring])
+        z[self.tied[0]] = z[self.tied[1]]
+        i, a, b, s = self.seam
+        z[i.astype(int)] = (1.0 - s) * z[a.astype(int)] + s * z[b.astype(int)]
+        return z
 
 
 def shade_bands(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.ndarray:
@@ -115,6 +115,17 @@ def shade_bands(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.nda
     height = P[:, :, 2].mean(axis=1) / scale
     value = 0.5 + 0.35 * np.clip(height, -1.0, 1.0) + SLOPE_GAIN * (n @ LIGHT - LIGHT[2])
     return np.clip((value * BANDS).astype(int), 0, BANDS - 1)
+
+
+def split_by_shade(faces: np.ndarray, shade: np.ndarray, n_vertices: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per shade: (the vertices its triangles use, its triangles numbered in them), in one sort for all shades."""
+    keys = shade[:, None].astype(np.int64) * n_vertices + faces
+    unique, inverse = np.unique(keys, return_inverse=True)
+    first = np.searchsorted(unique // n_vertices, np.arange(BANDS + 1))  # each shade's run in `unique`
+    local = (inverse.reshape(-1, 3) - first[shade][:, None]).astype(np.uint32)
+    order = np.argsort(shade, kind="stable")
+    bounds = np.searchsorted(shade[order], np.arange(BANDS + 1))
+    return [(unique[first[k] : first[k + 1]] % n_vertices, local[order[bounds[k] : bounds[k + 1]]]) for k in range(BANDS)]
 
 
 def band_colours() -> list[tuple[int, int, int]]:
@@ -143,7 +154,7 @@ class WaterView:
             f"{root}/water", sheet, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), color=WATER_COLOUR, opacity=WATER_OPACITY,
             side="double", cast_shadow=False, receive_shadow=False,
         )  # fmt: skip
-        self._xy, self._faces, self._spacing, self._seam = sea_grid(half, self.cells)
+        self.grid = SeaGrid(half, self.cells)
         self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
         """The sea's node: its children are the shades (hidden with it)."""
         dot = np.zeros((3, 3), np.float32)
@@ -186,18 +197,16 @@ class WaterView:
             return False
         cell = self.size / self.cells
         origin = np.round(np.asarray(centre[:2]) / cell) * cell  # follow the body in whole cells
-        xy = self._xy + origin
-        vertices = np.column_stack([xy, sea_heights(water, xy, t, self._spacing, self._seam)]).astype(np.float32)
-        shade = shade_bands(vertices, self._faces, sea_scale(water))
-        for k, node in enumerate(self.bands):
-            faces = self._faces[shade == k]
-            if not len(faces):
+        vertices = np.column_stack([self.grid.xy(origin), self.grid.heights(water, t, origin)]).astype(np.float32)
+        faces = self.grid.faces
+        shade = shade_bands(vertices, faces, sea_scale(water))
+        for node, (points, triangles) in zip(self.bands, split_by_shade(faces, shade, len(vertices))):
+            if not len(triangles):
                 if node.visible:
                     node.visible = False
                 continue
-            used, local = np.unique(faces, return_inverse=True)
-            node.vertices = vertices[used]
-            node.faces = local.reshape(-1, 3).astype(np.uint32)
+            node.vertices = vertices[points]
+            node.faces = triangles
             if not node.visible:
                 node.visible = True
         self.vertices = vertices

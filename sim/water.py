@@ -102,11 +102,24 @@ class Waves:
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
         return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
 
-    def elevation_on_grid(self, xy: np.ndarray, t: float, spacing: np.ndarray) -> np.ndarray:
-        """eta as a grid of the given spacing (m, at each point) can show it: components shorter than four
-        spacings left out and faded in up to eight, so that a coarse grid does not alias them into noise."""
-        weight = np.clip(2 * np.pi / (self.k * 4.0 * np.asarray(spacing, float)[..., None]) - 1.0, 0.0, 1.0)
-        return (np.cos(self._psi(np.asarray(xy, float), t)) * weight) @ self.amplitude
+    def elevation_on_grid(self, xs: np.ndarray, ys: np.ndarray, t: float, spacing_x=None, spacing_y=None) -> np.ndarray:
+        """(nx, ny) eta at every (xs[i], ys[j]): the components factor over x and y, so a grid costs one small
+        matrix product, not a cosine per point and component. Given each coordinate's grid spacing (m),
+        components shorter than four spacings are left out and faded in up to eight, so that a coarse grid
+        does not alias them into noise."""
+        kx, ky = self.k * np.cos(self.direction), self.k * np.sin(self.direction)
+        start = self.amplitude * np.exp(1j * (self.phase - (self.omega + kx * self.current[0] + ky * self.current[1]) * t))
+        X = np.exp(1j * np.multiply.outer(np.asarray(xs, float), kx)) * start
+        Y = np.exp(1j * np.multiply.outer(np.asarray(ys, float), ky))
+        if spacing_x is not None:
+            X = X * self._resolved(spacing_x)
+        if spacing_y is not None:
+            Y = Y * self._resolved(spacing_y)
+        return np.einsum("ik,jk->ij", X, Y).real  # (not BLAS: its threads would spin after each of these small products)
+
+    def _resolved(self, spacing) -> np.ndarray:
+        """(m, n) weights of the components a grid of these spacings shows (elevation_on_grid)."""
+        return np.clip(2 * np.pi / (self.k * 4.0 * np.asarray(spacing, float)[:, None]) - 1.0, 0.0, 1.0)
 
     def _stretched(self, points: np.ndarray, t: float):
         """(psi, z*) with Wheeler's stretching of the depth coordinate."""

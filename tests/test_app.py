@@ -673,29 +673,40 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
 
 
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
-    """A regular wave's triangles go to lighter shades the higher they lie (or the more they face the light):
-    each shade's mean height rises with it; the fine patch and the ring share their seam exactly."""
-    from app.water import BANDS, LIGHT, sea_grid, sea_heights, shade_bands
+    """A wave's triangles go to lighter shades the higher they lie (or the more they face the light); the fine
+    patch has the surface's own heights (the grid's factored sum equals the sum per point), the ring leaves out
+    only what its cells cannot show, and the patch and the ring share their seam exactly."""
+    from app.water import BANDS, LIGHT, SeaGrid, shade_bands
     from sim.water import Waves
 
-    water = Waves(1000.0, 9.81, np.array([0.5]), np.array([1.0]), np.array([1.0 / 9.81]), np.array([0.0]), np.array([0.0]))
-    xy, faces, spacing, seam = sea_grid(12.0, 48)
-    z = sea_heights(water, xy, 0.0, spacing, seam)
+    rng = np.random.default_rng(3)
+    omega = np.array([0.7, 2.5])  # 126 m and 9.9 m long
+    water = Waves(1000.0, 9.81, np.array([0.5, 0.1]), omega, omega**2 / 9.81, rng.uniform(0, 2 * np.pi, 2), rng.uniform(0, 2 * np.pi, 2))
+    grid = SeaGrid(12.0, 48)
+    origin = np.array([3.5, -1.0])
+    xy, z = grid.xy(origin), grid.heights(water, 2.0, origin)
+    fine = len(grid.fine) ** 2
+    on_seam = np.zeros(len(xy), bool)
+    on_seam[grid.seam[0].astype(int)] = True
+    exact = water.elevation(xy, 2.0)
+    np.testing.assert_allclose(z[:fine][~on_seam[:fine]], exact[:fine][~on_seam[:fine]], atol=1e-12)
+    side = np.maximum.outer(grid.ring_side, grid.ring_side).ravel()
+    near_ring = np.flatnonzero((side <= 9.4) & (np.abs(xy[fine:] - origin).max(axis=1) > 12.0 + 1e-9)) + fine
+    assert len(near_ring) > 20  # the ring's first cells: 6 to 9.4 m
+    long_only = Waves(1000.0, 9.81, water.amplitude[:1], omega[:1], water.k[:1], water.direction[:1], water.phase[:1])
+    np.testing.assert_allclose(z[near_ring], long_only.elevation(xy[near_ring], 2.0), atol=1e-12)  # the 126 m wave kept, 9.9 m left out
     vertices = np.column_stack([xy, z])
-    shade = shade_bands(vertices, faces, 1.0)
-    P = vertices[faces]
+    i, a, b, s = grid.seam
+    i, a, b = i.astype(int), a.astype(int), b.astype(int)
+    np.testing.assert_allclose(vertices[i], (1 - s)[:, None] * vertices[a] + s[:, None] * vertices[b], atol=1e-12)  # no crack
+    np.testing.assert_allclose(vertices[grid.tied[0]], vertices[grid.tied[1]], atol=0)
+    shade = shade_bands(vertices.astype(np.float32), grid.faces, 1.0)
+    P = vertices[grid.faces]
     n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     looks = P[:, :, 2].mean(axis=1) * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
     assert np.corrcoef(shade, looks)[0, 1] > 0.95
-    assert len(np.unique(shade)) >= 6  # a 1 m high, 63 m long wave spans several shades (of BANDS)
-    assert shade.min() >= 0 and shade.max() < BANDS
-    # the seam: every patch vertex on it lies on the ring's edge between its two ring vertices (no crack)
-    i, a, b = seam.T
-    s = np.linalg.norm(xy[i] - xy[a], axis=1) / np.linalg.norm(xy[b] - xy[a], axis=1)
-    np.testing.assert_allclose(vertices[i], (1 - s)[:, None] * vertices[a] + s[:, None] * vertices[b], atol=1e-12)
-    u, v = xy[i] - xy[a], xy[b] - xy[a]
-    np.testing.assert_allclose(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0], 0.0, atol=1e-9)  # and lies on that edge in plan
+    assert len(np.unique(shade)) >= 6 and shade.min() >= 0 and shade.max() < BANDS  # several shades of BANDS
 
 
 def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):

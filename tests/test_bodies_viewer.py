@@ -36,7 +36,10 @@ def test_every_body_is_drawn_where_the_run_has_it_and_the_controls_drive_it():
                 await page.camera()
                 await page.read(0.5)  # viser runs a page's callbacks once its camera message is in
                 await page.update("Pause", True)
-                await page.read(1.0)
+                for _ in range(50):  # (a loaded machine may take a while)
+                    await page.read(0.2)
+                    if app.sync().paused:
+                        break
                 snap = app.sync()
                 await page.read(1.0)  # what the paused run drew last has arrived
                 return page, snap

@@ -72,6 +72,26 @@ def test_replay_shows_every_recorded_pose_exactly_as_the_csv():
     assert sum(m["type"] == "SetPositionMessage" and m["name"] == "/world/body" for _, m in messages) == len(take) + 1
 
 
+def test_a_replay_in_waves_follows_the_body_and_carries_the_shaded_sea():
+    """A recording of `waves` moves the world under the camera as the live view does by default (the body, drawn
+    shifted by the world's frame, stays near the origin while it rides the swell) and holds the sea's shades."""
+    from app.scene import ROOT
+
+    take, _ = record("waves", 6.0)
+    duration, messages = recording_messages(replay_html(take))
+    assert any(str(m.get("name", "")).startswith(f"{ROOT}/waves/shade") for _, m in messages)
+    shift, seen, drift = np.zeros(3), [], []
+    for t, m in messages:
+        if m.get("name") == ROOT and m["type"] == "SetPositionMessage":
+            shift = np.array(m["position"])
+        if m.get("name") == f"{ROOT}/body" and m["type"] == "SetPositionMessage" and t > 2.0:
+            seen.append(np.array(m["position"]) + shift)
+            drift.append(np.array(m["position"]))
+    seen, drift = np.array(seen), np.array(drift)
+    assert np.ptp(drift[:, 2]) > 0.1  # it rides the 0.5 m swell
+    assert np.abs(seen).max() < 0.5 * np.abs(drift).max()  # shown near the origin the camera looks at
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["damped", "storm"])
 def test_a_minute_of_replay_fits_in_one_and_a_half_megabytes(scene):

@@ -56,9 +56,9 @@ def _cell_faces(nx: int, ny: int, keep: np.ndarray) -> np.ndarray:
 
 class SeaGrid:
     """The sea's mesh around the origin: a fine square patch of `cells` per side and half-width `half`, in a
-    coarse ring of the same surface out to `far * half` whose cells grow outward. The ring's inner edge runs
-    along the patch's, through every few of its vertices; the patch's vertices between those are put on the
-    ring's edge, so the two meet without a crack."""
+    coarse ring of the same surface out to `far * half` whose cells grow outward. The ring's cells along the
+    patch are fans onto the patch's own edge vertices, so the two share every vertex of their seam: no
+    T-junction, and no crack for the sky to show through."""
 
     def __init__(self, half: float, cells: int, far: float = FAR):
         self.fine = np.linspace(-half, half, cells + 1)
@@ -75,20 +75,29 @@ class SeaGrid:
         n, m, nf = len(self.ring) - 1, len(outer), (cells + 1) ** 2
         centre = 0.5 * (self.ring[:-1] + self.ring[1:])
         inside = np.abs(centre) < half
-        self.faces = np.concatenate([grid_faces(cells), _cell_faces(n, n, ~(inside[:, None] & inside[None, :])) + nf])
-        fine_index = lambda i, j: i * (cells + 1) + j  # noqa: E731
-        ring_index = lambda i, j: nf + (m + i) * (n + 1) + m + j  # noqa: E731  (in ring cells from the patch's corner)
-        tied, seam = [], []
-        for k in range(cells + 1):  # the patch's four sides
-            for i, j in {(0, k), (cells, k), (k, 0), (k, cells)}:
-                if i % per == 0 and j % per == 0:  # a ring vertex: the patch's height
-                    tied.append((ring_index(i // per, j // per), fine_index(i, j)))
-                elif i % per:  # between two ring vertices along x
-                    seam.append((fine_index(i, j), ring_index(i // per, j // per), ring_index(i // per + 1, j // per), i % per / per))
-                else:
-                    seam.append((fine_index(i, j), ring_index(i // per, j // per), ring_index(i // per, j // per + 1), j % per / per))
-        self.tied = np.array(tied, np.int64).T
-        self.seam = np.array(seam).T
+        beside = np.zeros(n, bool)
+        beside[[m - 1, m + RING_CELLS]] = True
+        along = (inside[:, None] | beside[:, None]) & (inside[None, :] | beside[None, :])
+        along &= ~(beside[:, None] & beside[None, :])  # the patch's cells and the ring's beside its sides (the fans'), not its corners
+        fine = lambda i, j: i * (cells + 1) + j  # noqa: E731
+        ring = lambda i, j: nf + i * (n + 1) + j  # noqa: E731
+        fans = []
+        for k in range(RING_CELLS):  # the ring's cells beside the patch's four sides
+            edge = range(k * per, (k + 1) * per + 1)
+            for (o0, o1), inner in (
+                ((ring(m - 1, m + k), ring(m - 1, m + k + 1)), [fine(0, e) for e in edge]),
+                ((ring(m + RING_CELLS + 1, m + k), ring(m + RING_CELLS + 1, m + k + 1)), [fine(cells, e) for e in edge]),
+                ((ring(m + k, m - 1), ring(m + k + 1, m - 1)), [fine(e, 0) for e in edge]),
+                ((ring(m + k, m + RING_CELLS + 1), ring(m + k + 1, m + RING_CELLS + 1)), [fine(e, cells) for e in edge]),
+            ):
+                mid = per // 2
+                fans += [(o0 if e < mid else o1, inner[e], inner[e + 1]) for e in range(per)] + [(o0, inner[mid], o1)]
+        faces = np.concatenate([grid_faces(cells), _cell_faces(n, n, ~along) + nf, np.array(fans, np.int64)])
+        same = np.arange(nf + (n + 1) ** 2)  # the ring's vertices on the patch's edge are the patch's own (its corners')
+        for a in range(RING_CELLS + 1):
+            for b in range(RING_CELLS + 1):
+                same[ring(m + a, m + b)] = fine(a * per, b * per)
+        self.faces = _upward(same[faces].astype(np.uint32), self.xy(np.zeros(2)))
 
     def xy(self, origin: np.ndarray) -> np.ndarray:
         """(v, 2) the vertices' horizontal positions, the grid centred on `origin`."""
@@ -99,11 +108,16 @@ class SeaGrid:
         """(v,) the surface's heights at the vertices (Waves.elevation_on_grid: the ring leaves out what it cannot show)."""
         fine = water.elevation_on_grid(self.fine + origin[0], self.fine + origin[1], t).ravel()
         ring = water.elevation_on_grid(self.ring + origin[0], self.ring + origin[1], t, self.ring_side, self.ring_side).ravel()
-        z = np.concatenate([fine, ring])
-        z[self.tied[0]] = z[self.tied[1]]
-        i, a, b, s = self.seam
-        z[i.astype(int)] = (1.0 - s) * z[a.astype(int)] + s * z[b.astype(int)]
-        return z
+        return np.concatenate([fine, ring])
+
+
+def _upward(faces: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """The triangles turned counter-clockwise seen from above (their normals up: shade_bands reads them)."""
+    a, b, c = (xy[faces[:, k]] for k in range(3))
+    turn = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    faces = faces.copy()
+    faces[turn < 0] = faces[turn < 0][:, [0, 2, 1]]
+    return faces
 
 
 def shade_bands(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.ndarray:

@@ -25,13 +25,14 @@ class Follower:
     """The followed point, the body's position smoothed over SMOOTHING seconds; `step` moves the world frame
     `root` by minus it (at most FOLLOW_HZ times a second of the clock `now` counts in), `stop` puts it back."""
 
-    def __init__(self):
+    def __init__(self, hz: float = FOLLOW_HZ):
+        self.hz = hz
         self.target: np.ndarray | None = None
         """The followed point (None: not following)."""
         self._time = -math.inf
 
     def step(self, root, x: np.ndarray, now: float) -> None:
-        if now - self._time < 1.0 / FOLLOW_HZ:
+        if now - self._time < 1.0 / self.hz:
             return
         x = np.asarray(x, float)
         if not np.isfinite(x).all():

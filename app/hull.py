@@ -18,8 +18,8 @@ import numpy as np
 HULL_HZ = 10.0
 """Updates a second at most (and whenever the wave surface goes out: the two then show the same instant)."""
 LINE_COLOUR = (250, 240, 40)
-WET_COLOUR = (95, 150, 195)
-"""The hull under water: a sea-tinted grey-blue, unlike the dry hull and the blue wet samples."""
+WET_COLOUR = (165, 215, 225)
+"""The hull under water: a pale sea tint, unlike the dry hull and the blue wet samples, and light enough to show through the water."""
 LIFT = 2e-3
 """The wet part is drawn this fraction of the body's radius off the hull (no flicker between the two surfaces)."""
 TOL = 1e-7
@@ -112,7 +112,7 @@ def _root(height, h0: np.ndarray, h1: np.ndarray) -> np.ndarray:
 class HullView:
     """The waterline and the wet part as children of the body's frame; `show` runs on the simulation thread only."""
 
-    def __init__(self, server, body, water, root: str = ""):
+    def __init__(self, server, body, water, root: str = "", hz: float = HULL_HZ):
         self.hull = Hull.of(body, water)
         self._for = (body, getattr(water, "k", None))
         scene, r = server.scene, body.radius
@@ -124,6 +124,7 @@ class HullView:
             f"{root}/body/wet", dot, np.array([[0, 1, 2]], np.uint32), color=WET_COLOUR, flat_shading=True, visible=False
         )
         self._normals = _vertex_normals(self.hull.vertices, self.hull.faces) * (LIFT * r)
+        self.hz = hz
         self._sent = -np.inf
         self.latest: tuple | None = None
         """(t, x, q, segments) of the waterline last sent (body frame), for tests."""
@@ -139,7 +140,7 @@ class HullView:
             self.line.visible = False
         if not wet and self.wet.visible:
             self.wet.visible = False
-        if not (line or wet) or not (due or now - self._sent >= 1.0 / HULL_HZ):
+        if not (line or wet) or not (due or now - self._sent >= 1.0 / self.hz):
             return
         from sim.rotation import quat_to_matrix
 

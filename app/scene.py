@@ -16,13 +16,15 @@ import sim
 
 from .camera import Follower
 from .controls import Layers
-from .hull import HullView
+from .hull import HULL_HZ, HullView
 from .loop import Snapshot
 from .markers import MarkersView
-from .water import WaterView
+from .water import REPLAY_HZ, WaterView
 
 ROOT = "/world"
 """Every node of the scene hangs from this frame: following the body moves it, never the pages' cameras (camera.py)."""
+REPLAY_FOLLOW_HZ = 10.0
+"""A recording's world moves at most this often a simulated second (it stays small)."""
 COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
 LINES_HZ = 15.0
@@ -39,7 +41,7 @@ class SceneView:
         """replay=True: for a recording (app/replay.py): every pose exactly, a lighter wave surface, and
         the throttles counted in the time passed to `show` (simulated) rather than wall time."""
         self.server, self.layers, self.replay = server, layers, replay
-        self.follower = Follower() if replay and waves else None
+        self.follower = Follower(REPLAY_FOLLOW_HZ) if replay and waves else None
         """A replay in waves follows the body as the live view does by default (the live view's own: camera.py)."""
         scene = server.scene
         self.root = scene.add_frame(ROOT, show_axes=False)
@@ -125,8 +127,10 @@ class SceneView:
                 self._send_arrows(snap, now)
             sent = self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
             if self.hull is None or not self.hull.fits(snap.body, snap.water):
-                self.hull = HullView(self.server, snap.body, snap.water, root=ROOT)
-            self.hull.show(snap, layers.markers.value, layers.mesh.value, now, due=sent)  # with the sea: the same instant
+                self.hull = HullView(self.server, snap.body, snap.water, root=ROOT, hz=REPLAY_HZ if self.replay else HULL_HZ)
+            self.hull.show(
+                snap, layers.markers.value, layers.mesh.value and not self.replay, now, due=sent
+            )  # with the sea: the same instant
             self._show_lines(frame.lines, now)
             self._show_joint(frame.joint_axis)
             if self.follower is not None:

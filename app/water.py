@@ -19,7 +19,9 @@ WAVE_HZ = 10.0
 CELLS = 48
 """Grid cells per side of the fine patch around the body."""
 REPLAY_CELLS, REPLAY_HZ = 20, 5.0
-"""A recording's fine patch: 441 vertices, 5 times a simulated second."""
+"""A recording's sea: the fine patch alone, 441 vertices in one mid-shade mesh whose triangles are sent once,
+5 times a simulated second (re-sorting the shades would send every triangle each time: a minute of storm
+would no longer fit in 1.5 MB)."""
 RING_CELLS = 4
 """Cells of the coarse ring along each side of the fine patch (CELLS and REPLAY_CELLS are multiples of it);
 outside it they grow geometrically to the horizon."""
@@ -162,12 +164,13 @@ class WaterView:
         self.size = WAVE_PATCH * size
         self.cells, self.hz = (REPLAY_CELLS, REPLAY_HZ) if lighter else (CELLS, WAVE_HZ)
         half = 0.5 * self.size
-        reach = FAR * half  # calm water: one translucent sheet the submerged part shows through (no floor-like grid)
+        reach = (1.0 if lighter else FAR) * half  # calm water: one translucent sheet the submerged part shows through (no floor-like grid)
         sheet = np.array([[-reach, -reach, 0.0], [reach, -reach, 0.0], [reach, reach, 0.0], [-reach, reach, 0.0]], dtype=np.float32)
         self.calm = server.scene.add_mesh_simple(
             f"{root}/water", sheet, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), color=WATER_COLOUR, opacity=WATER_OPACITY,
             side="double", cast_shadow=False, receive_shadow=False,
         )  # fmt: skip
+        self.lighter = lighter
         self.grid = SeaGrid(half, self.cells)
         self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
         """The sea's node: its children are the shades (hidden with it)."""
@@ -188,8 +191,11 @@ class WaterView:
             )  # fmt: skip
             for k, colour in enumerate(band_colours())
         ]
-        server.scene.configure_fog(3.0 * half, 0.9 * reach, color=SKY)  # the far water fades into the sky at the horizon
-        server.scene.set_background_image(np.full((2, 2, 3), SKY, np.uint8), format="png")
+        if lighter:  # one mesh of fixed triangles, only its vertices sent
+            self.bands[BANDS // 2].faces = grid_faces(self.cells)
+        if not lighter:  # the far water fades into the sky at the horizon (a recording's sea is the patch alone)
+            server.scene.configure_fog(3.0 * half, 0.9 * reach, color=SKY)
+            server.scene.set_background_image(np.full((2, 2, 3), SKY, np.uint8), format="png")
         self._sent = -np.inf
         self.sent_time = 0.0
         """Simulated time of the surface last sent."""
@@ -212,6 +218,14 @@ class WaterView:
         cell = self.size / self.cells
         origin = np.round(np.asarray(centre[:2]) / cell) * cell  # follow the body in whole cells
         vertices = np.column_stack([self.grid.xy(origin), self.grid.heights(water, t, origin)]).astype(np.float32)
+        if self.lighter:
+            node = self.bands[BANDS // 2]
+            node.vertices = vertices[: (self.cells + 1) ** 2]
+            if not node.visible:
+                node.visible = True
+            self._sent, self.sent_time, self.vertices = now, t, vertices
+            self.updates += 1
+            return True
         faces = self.grid.faces
         shade = shade_bands(vertices, faces, sea_scale(water))
         for node, (points, triangles) in zip(self.bands, split_by_shade(faces, shade, len(vertices))):

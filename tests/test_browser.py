@@ -65,7 +65,7 @@ def test_browser_drives_the_simulation(app, browser_page):
     # Pause and Reset through the DOM: the server goes back to t = 0 at the initial depth.
     page.get_by_label("Pause").check()
     wait_for(app, lambda s: s.settings.paused, what="pause on the server")
-    page.get_by_role("button", name="Reset").click()
+    page.get_by_role("button", name="Reset", exact=True).click()
     snap = wait_for(app, lambda s: s.frame.t < 1e-9, what="reset on the server")
     assert snap.frame.x_world[2] == pytest.approx(-0.4, abs=1e-9)
     assert snap.density == 500.0  # reset keeps the parameters

@@ -201,8 +201,6 @@ class WaterView:
         """Simulated time of the surface last sent."""
         self.updates = 0
         """How many wave surfaces were sent (tests check the throttle and the still-water silence)."""
-        self.vertices = np.zeros((0, 3), np.float32)
-        """The surface last sent (every shade's vertices), world frame."""
 
     def show(self, water, t: float, centre: np.ndarray, visible: bool, now: float | None = None) -> bool:
         """The flat sheet for still water; otherwise the surface around `centre` (x, y) at time t, throttled.
@@ -223,7 +221,7 @@ class WaterView:
             node.vertices = vertices[: (self.cells + 1) ** 2]
             if not node.visible:
                 node.visible = True
-            self._sent, self.sent_time, self.vertices = now, t, vertices
+            self._sent, self.sent_time = now, t
             self.updates += 1
             return True
         faces = self.grid.faces
@@ -237,7 +235,6 @@ class WaterView:
             node.faces = triangles
             if not node.visible:
                 node.visible = True
-        self.vertices = vertices
         self._sent, self.sent_time = now, t
         self.updates += 1
         return True

@@ -64,25 +64,39 @@ def _number(value, integral: bool = False) -> str | None:
 
 class Refusals:
     """Counts refused updates (or other requests: `what`) and reports them through `notify`, at most
-    once per NOTICE_SECONDS."""
+    once per NOTICE_SECONDS; refusals inside that interval are reported together at its end (a flood
+    gives one notice with a count, and the last refusal of a burst is never left unsaid)."""
 
     def __init__(self, notify: Callable[[str], None], what: str = "control update"):
         self.notify = notify
         self.what = what
         self.count = 0
         self._pending = 0
+        self._why = ""
         self._last = -math.inf
+        self._timer: threading.Timer | None = None
         self._lock = threading.Lock()
 
     def __call__(self, why: str) -> None:
         with self._lock:
             self.count += 1
             self._pending += 1
-            now = time.monotonic()
-            if now - self._last < NOTICE_SECONDS:
+            self._why = why
+            wait = self._last + NOTICE_SECONDS - time.monotonic()
+            if wait > 0:
+                if self._timer is None:
+                    self._timer = threading.Timer(wait, self._flush)
+                    self._timer.daemon = True
+                    self._timer.start()
                 return
-            n, self._pending, self._last = self._pending, 0, now
-        self.notify(f"Ignored {n} {self.what}{'s' if n > 1 else ''} from a browser: {why}.")
+        self._flush()
+
+    def _flush(self) -> None:
+        with self._lock:
+            self._timer = None
+            n, why, self._pending, self._last = self._pending, self._why, 0, time.monotonic()
+        if n:
+            self.notify(f"Ignored {n} {self.what}{'s' if n > 1 else ''} from a browser: {why}.")
 
 
 def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, object], bool] | None = None) -> None:

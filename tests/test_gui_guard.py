@@ -17,7 +17,7 @@ import viser
 import websockets
 from page import CAMERA
 
-from app.gui_guard import MAX_NUMBER, refusal
+from app.gui_guard import MAX_NUMBER, Refusals, refusal
 
 BAD_UPDATES = (
     {"value": 1e300}, {"value": -1e300}, {"value": math.inf}, {"value": math.nan}, {"value": 2.0 * MAX_NUMBER},
@@ -82,6 +82,24 @@ def test_refusal_keeps_only_a_sane_value_of_the_controls_own_type():
     assert refusal(State("a", ("a", "b")), {"value": "b"}) is None and refusal(State("a", ("a", "b")), {"value": "c"})
     assert refusal(State((0.0, 0.0, 0.0)), {"value": [1, 2, 3]}) is None and refusal(State((0.0, 0.0, 0.0)), {"value": [1, 2]})
     assert refusal(State(1.0), {"value": 1.0, "disabled": True}) and refusal(State(1.0), {"visible": False})
+
+
+def test_refusals_in_a_burst_give_one_notice_now_and_one_with_the_rest_at_the_intervals_end(monkeypatch):
+    """A page refused just after another must still be told why: not dropped by the rate limit."""
+    import app.gui_guard as guard
+
+    monkeypatch.setattr(guard, "NOTICE_SECONDS", 0.3)
+    notes: list[str] = []
+    refused = Refusals(notes.append)
+    refused("first reason")
+    assert notes == ["Ignored 1 control update from a browser: first reason."]
+    for _ in range(3):
+        refused("second reason")
+    assert len(notes) == 1  # held back inside the interval...
+    time.sleep(0.6)
+    assert notes[1:] == ["Ignored 3 control updates from a browser: second reason."]  # ...and said at its end, once
+    time.sleep(0.4)
+    assert len(notes) == 2 and refused.count == 4
 
 
 @pytest.mark.slow

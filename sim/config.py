@@ -50,6 +50,9 @@ FLUID = (
           "with each cell clipped at the water line: continuous wetting) or panels (exactly over the mesh triangles clipped at the water line)", kind="choice", choices=FORCE_MODELS, name="force model", label="Force model", gui=()),
     Param("fluid", "radiation", "none", "Radiation: none (the report's water) or bem (added mass and radiation damping from a "
           "boundary-element solve about the rest pose, Cummins' equation)", kind="choice", choices=("none", "bem"), label="Radiation", gui=()),
+    Param("fluid", "hydro", "nonlinear", "Hydrostatics and Froude-Krylov force: nonlinear (the exact wet surface at each instant) or "
+          "linear (a stiffness matrix and the undisturbed wave's pressure over the wet surface at rest, WEC-Sim's default: "
+          "fast in many-component seas; scenes of several bodies)", kind="choice", choices=("nonlinear", "linear")),
     Param("fluid", "bem_min_period", None, "Radiation: the shortest wave period of the BEM solve's frequency grid (unset: waves half as "
           "long as the body); below a gap's sloshing resonance (a float around a spar) it keeps the solve clear of it", "s", lo=0.0,
           lo_open=True, hi=1e3, kind="optional"),
@@ -376,6 +379,12 @@ def validate(scene: SceneConfig) -> SceneConfig:
     checked = dataclasses.replace(scene, **checked)
     if not scene.bodies and checked.constraint.joint == "planar":
         raise ConfigError("[constraint] joint 'planar' is for a [[bodies]] entry: one body takes fixed, prismatic or revolute")
+    if checked.fluid.hydro == "linear" and not scene.bodies:
+        raise ConfigError(
+            '[fluid] hydro = "linear" is for scenes of several bodies ([[bodies]]) for now: one body takes the exact wet surface'
+        )
+    if checked.fluid.hydro == "linear" and checked.fluid.drag_coefficient > 0:
+        raise ConfigError('quadratic drag needs the instantaneous wet surface: with [fluid] hydro = "linear" set drag_coefficient = 0')
     if not scene.bodies and checked.moorings.body:
         raise ConfigError(f"[moorings] body = {checked.moorings.body!r} names one of several bodies: this scene has one ([body])")
     return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked

@@ -28,7 +28,8 @@ damping, as the one-body implicit scheme and the joint to the world are.
 
 The velocity-product term J_dot v is a central difference of J v along the motion (its error ~1e-10
 relative); it is left out where every Jacobian is constant (slides on slides to the world).
-Each body's loads come from the numpy reference or its compiled twin (body_loads.py); the kinematics and the
+Each body's loads come from the numpy reference or its compiled twin (body_loads.py), or with `[fluid] hydro =
+"linear"` from the linear hydrostatics and Froude-Krylov force about the rest pose (linear_hydro.py); the kinematics and the
 kicks are numpy. Mooring lines (MoorDyn, moorings.py) hold one of the bodies ([moorings] body): the Assembly
 advances them over each step and holds their mean pull on that body over it, as for one body.
 """
@@ -45,6 +46,7 @@ from .body_loads import BodyLoads
 from .config import SceneConfig
 from .forces import Model
 from .joints import _rotation
+from .linear_hydro import LinearLoads
 from .rotation import matrix_to_quat, normalized, quat_to_matrix, rotate_world, skew
 from .surface import wet_panels
 from .water import make_water
@@ -252,7 +254,7 @@ class System:
     @property
     def specs(self) -> list:
         """The kernels.Spec of the bodies' loads, each once."""
-        return list(dict.fromkeys(loads.spec for loads in self.loads))
+        return list(dict.fromkeys(loads.spec for loads in self.loads if loads.spec is not None))
 
     def use_kernels(self, on: bool, expand: bool = True) -> None:
         """The bodies' loads from their compiled twins (loaded from the disk cache, or compiled now) or, off, numpy."""
@@ -452,8 +454,10 @@ class System:
         e_hyd = 0.0
         from .forces import hydrostatic_energy
 
-        for m, x, R in zip(self.members, pose.x, pose.R):
-            if m.model.has("pressure"):
+        for m, loads, x, R in zip(self.members, self.loads, pose.x, pose.R):
+            if isinstance(loads, LinearLoads):
+                e_hyd += loads.energy(x, R)
+            elif m.model.has("pressure"):
                 e_hyd += hydrostatic_energy(self.water, wet_panels(m.body, self.water, x, R, s.t))
         M = self.inertia(pose)
         return {"E_kin": 0.5 * float(s.v @ M @ s.v),
@@ -536,6 +540,8 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     if scene.fluid.radiation == "bem":
         radiation = SystemRadiation.of(models, starts, scene.fluid, water if diffracting(scene) else None)
     system = System(groups, order, water, scene.fluid, radiation)
+    if scene.fluid.hydro == "linear":
+        system.loads = [LinearLoads(m, s.x_world, s.R_world_body) for m, s in zip(models, starts)]
     x_free = np.array([g.origin for g in groups if g.kind == "free"]).reshape(-1, 3)
     q_free = np.tile([1.0, 0.0, 0.0, 0.0], (n_free, 1))
     rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints),

@@ -46,8 +46,9 @@ def stiffness(system: System, s0: SystemState, step: float = 1e-4) -> np.ndarray
     return np.column_stack(columns)
 
 
-def response(system: System, s0: SystemState, i: int, heading: int = 0, diffraction: bool = True) -> np.ndarray:
-    """(d,) complex xi per unit wave amplitude at the solve's frequency i and heading index `heading`."""
+def response(system: System, s0: SystemState, i: int, heading: int = 0, diffraction: bool = True, froude_krylov=None) -> np.ndarray:
+    """(d,) complex xi per unit wave amplitude at the solve's frequency i and heading index `heading`; `froude_krylov`:
+    (6k,) complex, the bodies' Froude-Krylov force per unit amplitude to use instead of the solve's (a linear run's own)."""
     c = system.radiation.coefficients
     w = float(c.omega[i])
     pose = system.pose(s0)
@@ -61,7 +62,8 @@ def response(system: System, s0: SystemState, i: int, heading: int = 0, diffract
             D += Jb.T @ lin @ Jb
     for g in system.joints:
         D[g.dofs.start, g.dofs.start] += g.damping
-    X = J.T @ (c.froude_krylov[i, heading] + (c.diffraction[i, heading] if diffraction else 0.0))
+    X_FK = c.froude_krylov[i, heading] if froude_krylov is None else froude_krylov
+    X = J.T @ (X_FK + (c.diffraction[i, heading] if diffraction else 0.0))
     return np.linalg.solve(-(w**2) * M - 1j * w * D + stiffness(system, s0), X)
 
 

@@ -1,0 +1,132 @@
+"""Linear hydrostatics and Froude-Krylov force (`[fluid] hydro = "linear"`, sim/linear_hydro.py): the loads are the
+exact model's to first order about rest, the Froude-Krylov force is the BEM solve's, and a run is linear theory itself."""
+
+import dataclasses
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from test_rm3 import _shipped_only, time_domain  # noqa: F401  (the fixture: the shipped coefficients, no solve)
+
+from sim.config import load_scene, with_overrides
+from sim.forces import Model
+from sim.linear_hydro import LinearLoads, moved, rotation_vector
+from sim.system import build
+from sim.system_frequency import response, steady_start
+from sim.water import StillWater, regular_waves
+
+
+def rm3(**changes):
+    return with_overrides(load_scene("rm3"), fluid__hydro="linear", **changes)
+
+
+def test_rotation_vector_inverts_the_exponential_up_to_a_half_turn():
+    rng = np.random.default_rng(4)
+    for scale in (1e-9, 1e-3, 0.5, 2.0, 3.0, np.pi * (1 - 1e-9)):
+        phi = rng.normal(size=3)
+        phi *= scale / np.linalg.norm(phi)
+        np.testing.assert_allclose(rotation_vector(Rotation.from_rotvec(phi).as_matrix()), phi, rtol=0, atol=1e-12)
+
+
+def test_the_linear_loads_are_the_exact_ones_to_first_order_about_rest():
+    """Moved by eps along any direction of pose space, the float's linear loads differ from the exact clipped ones by
+    O(eps^2): the gap falls four-fold when eps halves."""
+    system, _ = build(rm3(waves__kind="still"))
+    loads = system.loads[1]
+    m = loads.model
+    still = Model(m.body, StillWater(m.water.rho, m.water.g), m.fluid)
+    direction = np.array([0.3, -0.2, 1.0, 0.02, -0.03, 0.01])
+    gaps = []
+    for eps in (0.2, 0.1, 0.05):
+        x, R = moved(loads.x0, loads.R0, eps * direction)
+        exact = np.concatenate(still.pose_loads(still.wetted(x, R, 0.0)))
+        linear, _ = loads(x, R, 0.0, np.zeros(6))
+        gaps.append(np.abs(linear - exact).max())
+        assert gaps[-1] < 0.01 * np.abs(loads.C @ (eps * direction)).max()  # the linear part is the load's bulk
+    assert 3.5 < gaps[0] / gaps[1] < 4.5 and 3.5 < gaps[1] / gaps[2] < 4.5
+
+
+def test_the_froude_krylov_force_is_the_boundary_element_solves():
+    """The undisturbed wave's pressure over the wet surface at rest, per unit amplitude, against Capytaine's Froude-Krylov
+    force of the same meshes at every solve frequency: forces within 2 % of each body's largest, moments within 2 % of
+    that force times the body's radius (the solve's panel centroids against the clipped triangles' quadrature: 1 % on
+    the float's heave, rho g A_wp at long waves; the spar's pitch moment is a small difference of large parts)."""
+    system, _ = build(rm3())
+    c = system.radiation.coefficients
+    for i in range(len(c.omega)):
+        for b, at_rest in enumerate(system.loads):
+            m = at_rest.model
+            waves = regular_waves(m.water.rho, m.water.g, 2.0, 2 * np.pi / float(c.omega[i]))
+            ours, theirs = LinearLoads(Model(m.body, waves, m.fluid), at_rest.x0, at_rest.R0).X[0], c.froude_krylov[i, 0, 6 * b : 6 * b + 6]
+            force = np.abs(theirs[:3]).max()
+            assert force > 1e4 and np.abs(ours[:3] - theirs[:3]).max() < 0.02 * force, (c.omega[i], b, ours, theirs)
+            assert np.abs(ours[3:] - theirs[3:]).max() < 0.02 * force * m.body.radius, (c.omega[i], b, ours, theirs)
+
+
+@pytest.mark.parametrize("amplitude", [0.05, 1.0])
+def test_a_linear_run_is_linear_theory_at_any_wave_height(amplitude):
+    """rm3 with linear hydrostatics and Froude-Krylov force, started on the frequency domain's steady state in regular
+    waves: six periods match its relative heave and take-off power within 0.1 % for 10 cm waves and for 2 m ones alike
+    (the exact wet surface is linear theory only in small waves)."""
+    system, _ = build(rm3())
+    c = system.radiation.coefficients
+    i = int(np.argmin(abs(c.omega - 2 * np.pi / 8.0)))
+    w = float(c.omega[i])
+    system, rest = build(rm3(waves__height=2 * amplitude, waves__period=2 * np.pi / w))
+    froude_krylov = np.concatenate([loads.X[0] for loads in system.loads]) / amplitude
+    xi = response(system, rest, i, froude_krylov=froude_krylov)
+    relative, power = time_domain(system, steady_start(system, rest, xi, w, amplitude), w, periods=6)
+    slide = next(g for g in system.joints if g.name == "float")
+    k, d = slide.coordinate, slide.dofs.start
+    expected = 0.5 * slide.damping * w * w * abs(amplitude * xi[d]) ** 2
+    assert abs(abs(relative[k]) / abs(amplitude * xi[d]) - 1) < 1e-3 and abs(power[k] / expected - 1) < 1e-3
+    assert abs(np.angle(relative[k] / xi[d])) < 1e-3 and expected > 100.0
+
+
+def test_energy_closes_with_linear_hydrostatics():
+    """In still water, the float kicked upwards at 0.5 m/s: kinetic, gravity and the linear model's hydrostatic energy, the
+    take-off's and the radiated waves' add up to the start's, to second order in dt."""
+    scene = rm3(waves__kind="still")
+    float_at = dataclasses.replace(scene.bodies[1], initial=dataclasses.replace(scene.bodies[1].initial, velocity=(0.0, 0.0, 0.5)))
+    scene = dataclasses.replace(scene, bodies=(scene.bodies[0], float_at))
+    errors = []
+    for dt in (0.2, 0.1):
+        system, s = build(scene)
+        start, kinetic = sum(system.energies(s).values()), system.energies(s)["E_kin"]
+        for _ in range(round(30.0 / dt)):
+            s = system.step(s, dt)
+        errors.append(abs(sum(system.energies(s).values()) + s.absorbed.sum() + s.E_rad - start))
+        assert s.E_rad > 0.05 * s.absorbed.sum() > 0
+    assert 3.0 < errors[0] / errors[1] < 5.5 and errors[1] < 0.005 * kinetic
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--scene", "drop", "--hydro", "linear"], "is for scenes of several bodies"),
+        (["--scene", "rm3", "--hydro", "linear", "--drag-coefficient", "1.0"], "quadratic drag needs the instantaneous wet surface"),
+        (["--scene", "rm3", "--hydro", "linearised"], "hydro"),
+    ],
+)
+def test_a_linear_scene_it_cannot_run_is_a_one_line_error(flags, message):
+    done = subprocess.run([sys.executable, "-m", "sim", "run", *flags, "--t-end", "0.1"], capture_output=True, text=True, timeout=120)
+    assert done.returncode != 0 and message in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) <= 2
+
+
+def test_run_rm3_with_linear_hydro_in_a_sea(tmp_path):
+    """From the CLI: a 64-component sea with linear hydro runs and writes the take-off's power; the float's heave stays
+    within the sea's own height."""
+    out = tmp_path / "rm3.csv"
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "rm3", "--hydro", "linear", "--waves", "jonswap", "--hs", "2.5",
+                           "--tp", "8", "--wave-components", "64", "--dt", "0.01", "--t-end", "20", "--out", str(out)], capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    import csv
+
+    rows = list(csv.DictReader(out.open()))
+    z = np.array([float(r["float_z"]) for r in rows])
+    assert len(rows) > 100 and np.isfinite(z).all() and np.ptp(z) < 2 * 2.5
+    assert np.ptp(z) > 0.1  # it moves in the sea

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import os
 import platform
@@ -252,7 +253,11 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     cases = [("rm3, regular waves, dt 0.05 s", preset), ("rm3, JONSWAP, 64 components, dt 0.01 s", sea)]
     if importlib.util.find_spec("moordyn") is not None:
         cases.append(("rm3-moored (planar spar, 3 chains x 20 segments), dt 0.05 s", load_scene("rm3-moored")))
-    cases.append(("rm3, JONSWAP, 64 components, dt 0.01 s", with_overrides(sea, fluid__hydro="linear")))
+    linear = with_overrides(sea, fluid__hydro="linear")  # on slides: a linear system, stepped exactly
+    spar = linear.bodies[0]
+    planar = dataclasses.replace(spar, constraint=dataclasses.replace(spar.constraint, joint="planar", axis=(0.0, 1.0, 0.0)))
+    cases += [("rm3, JONSWAP, 64 components, dt 0.01 s", linear),
+              ("rm3 (planar spar), JONSWAP, 64 components, dt 0.01 s", dataclasses.replace(linear, bodies=(planar, *linear.bodies[1:])))]  # fmt: skip
     rows = []
     for label, scene in cases:
         linear = scene.fluid.hydro == "linear"
@@ -260,7 +265,7 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
             run = Assembly(scene, backend=backend)
             t, h, r, m = _system_split(run, args.repeats)
             run.close()
-            loads = "linear" if linear else "compiled" if run.compiled else "numpy"
+            loads = ("linear, exact step" if run.exact else "linear") if linear else "compiled" if run.compiled else "numpy"
             rows.append((label, loads, f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{h * 1e6:.0f}", f"{r * 1e6:.0f}",
                          f"{m * 1e6:.0f}" if run.moorings else "-", f"{(t - h - r - m) * 1e6:.0f}"))  # fmt: skip
     return rows

@@ -34,7 +34,7 @@ def run_bodies(args, scene: SceneConfig) -> int:
     system = run.system
     names = ", ".join(f"{m.name} ({m.body.mass:.6g} kg, {m.body.n_samples} samples)" for m in system.members)
     print(f"scene {scene.name}: {len(system.members)} bodies: {names}; {len(system.groups)} rigid groups, {system.n_dofs} degrees of freedom; "
-          f"Stormer-Verlet, dt {run.dt:g} s; the bodies' loads {'compiled' if run.compiled else 'on the numpy reference'}")  # fmt: skip
+          "{}, dt {:g} s; the bodies' loads {}".format(*how_stepped(run)))  # fmt: skip
     for b in last.bodies:
         print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
     for name, theta, _, _, absorbed in last.joints:
@@ -73,3 +73,9 @@ def announce_compile(run, scene: SceneConfig, n_steps: int) -> None:
     run.use_backend("numba")
     if (seconds := time.perf_counter() - started) > 5.0:
         print(f"floatsim: compiled the bodies' fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
+
+
+def how_stepped(run) -> tuple[str, float, str]:
+    """(the scheme, dt, where the bodies' loads come from), as the summary says them."""
+    loads = "linear" if run.scene.fluid.hydro == "linear" else "compiled" if run.compiled else "on the numpy reference"
+    return "stepped exactly (a linear system)" if run.exact is not None else "Stormer-Verlet", run.dt, loads

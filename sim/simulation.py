@@ -214,8 +214,8 @@ class Simulation:
         self._mesh = mesh
         scene = validate(scene)
         if scene.bodies:
-            raise ConfigError(f"scene {scene.name!r} has several bodies ([[bodies]]): `python -m sim run` runs it; the viewer, sweeps and "
-                              "studies take one-body scenes for now")  # fmt: skip
+            raise ConfigError(f"scene {scene.name!r} has several bodies ([[bodies]]): run it with sim.system.Assembly (as `python -m sim run`, "
+                              "the viewer and sweeps do); Simulation and the studies take one-body scenes")  # fmt: skip
         self.scene = scene
         self.backend = backend or default_backend()
         self.notes: list[str] = []

@@ -127,6 +127,9 @@ def build(args: SweepArgs) -> Sweep:
     sweep = Sweep(scene, tuple(params.items()), tuple(sorted(overrides.items())), settle, chunk, every)
     check_size(sweep)
     base = sweep.base()
+    if base.bodies and (settle or every):
+        raise ConfigError(f"--{'settle' if settle else 'history-every'} is for one-body scenes: a sweep of several bodies runs each case to "
+                          "t_end and reports its take-offs' power and amplitudes")  # fmt: skip
     for case in sweep.cases():  # any bad value fails here, with its one line, before anything runs
         case_scene(base, case)
     return sweep

@@ -54,6 +54,8 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
     """Results (one row per case) and, if asked, histories of the cases `indices`, as column dicts.
     `stop` (interrupt.StopOnCtrlC) is checked every block: once asked, Interrupted is raised."""
     base = sweep.base()
+    if base.bodies:
+        return run_system_chunk(sweep, indices, stop), None
     cases = {i: sweep.case(i) for i in indices}
     scenes = [case_scene(base, cases[i]) for i in indices]
     ensemble = Ensemble(scenes)
@@ -121,3 +123,53 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
         for key, v in zip(SUMMARY, values):
             rows[key].append(v)
     return rows, history
+
+
+def run_system_chunk(sweep: Sweep, indices: list[int], stop=None) -> dict:
+    """A scene of several bodies, case after case: each run to t_end; per joint, the take-off's mean power and the
+    coordinate's amplitude (half its range) over the run's second half (the start's transient left out), and the
+    energy every take-off absorbed (`E_pto`). A case that diverges gets status 'diverged' and NaNs."""
+    from ..errors import SimulationDiverged
+    from ..system import Assembly
+
+    base = sweep.base()
+    rows: dict = {"case": list(indices)}
+    for name, _ in sweep.params:
+        rows[name] = [sweep.case(i)[name] for i in indices]
+    for key in ("status", "t", "E_pto"):
+        rows[key] = []
+    for i in indices:
+        run = Assembly(case_scene(base, sweep.case(i)))
+        joints = run.system.joints
+        n_steps = round(run.scene.step.t_end / run.dt)
+        sample = max(1, round(SAMPLE / run.dt))
+        status, coordinates, halfway = "end", [], None
+        try:
+            done = 0
+            while done < n_steps:
+                run.step(min(sample, n_steps - done))
+                done = min(done + sample, n_steps)
+                if stop is not None:
+                    stop.check()
+                if halfway is None and 2 * done >= n_steps:
+                    halfway = (run.state.t, run.state.absorbed.copy())
+                if halfway is not None:
+                    coordinates.append(run.state.theta.copy())
+        except SimulationDiverged:
+            status = "diverged"
+        finally:
+            run.close()
+        s = run.state
+        rows["status"].append(status)
+        rows["t"].append(s.t)
+        rows["E_pto"].append(float(s.absorbed.sum()))
+        spread = np.ptp(np.array(coordinates), axis=0) if len(coordinates) > 1 and status == "end" else None
+        for g in joints:
+            power = (
+                (s.absorbed[g.coordinate] - halfway[1][g.coordinate]) / (s.t - halfway[0])
+                if spread is not None and s.t > halfway[0]
+                else math.nan
+            )
+            rows.setdefault(f"{g.name}_power", []).append(float(power))
+            rows.setdefault(f"{g.name}_amplitude", []).append(float(0.5 * spread[g.coordinate]) if spread is not None else math.nan)
+    return rows

@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import expm
+from scipy.linalg import block_diag, expm
 
 from .linear_hydro import LinearLoads
 
@@ -53,8 +53,8 @@ class ExactLinear:
         n = 2 * d + s + 1  # (q, v, x, 1)
         M = system.inertia(pose)
         f0 = np.concatenate([loads.f0 for loads in system.loads])
-        C = _block([loads.C for loads in system.loads])
-        D = _block([np.zeros((6, 6)) if loads.D0 is None else loads.D0 for loads in system.loads])
+        C = block_diag(*(loads.C for loads in system.loads))
+        D = block_diag(*(np.zeros((6, 6)) if loads.D0 is None else loads.D0 for loads in system.loads))
         K, c = np.zeros((d, d)), np.zeros(d)
         self._joint = [(g.coordinate, g.dofs.start) for g in system.joints]
         for g in system.joints:
@@ -73,10 +73,10 @@ class ExactLinear:
         self.A, self.c = A, c
         self.W = None if rad is None else J.T @ rad.H  # the radiated power is v . W x
         omega, Y = [], []
-        for loads in system.loads:  # each body's Froude-Krylov components, zero on the others
+        for b, loads in enumerate(system.loads):  # each body's Froude-Krylov components, zero on the others
             for w, X in zip(loads.omega, loads.X):
                 omega.append(w)
-                Y.append(J.T @ _placed(X, system.loads.index(loads), len(system.loads)))
+                Y.append(J.T @ _placed(X, b, len(system.loads)))
         if rad is not None and rad.diffraction is not None:
             for w, X in zip(rad.diffraction.omega, rad.diffraction.amplitude):
                 omega.append(w)
@@ -148,16 +148,6 @@ class ExactLinear:
         """(each take-off's absorbed power, the radiated power) from the probed rows (v, W x) of one or more states."""
         v = probed[: self.d]
         return self.c[:, None] * v * v, (v * probed[self.d :]).sum(axis=0) if self.W is not None else np.zeros(probed.shape[1])
-
-
-def _block(blocks: list[np.ndarray]) -> np.ndarray:
-    n = sum(b.shape[0] for b in blocks)
-    out = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        out[i : i + b.shape[0], i : i + b.shape[0]] = b
-        i += b.shape[0]
-    return out
 
 
 def _placed(X: np.ndarray, b: int, bodies: int) -> np.ndarray:

@@ -737,6 +737,7 @@ def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):
         assert snap.water.height_above_surface(wet @ R.T + x, t).max() < 1e-3 + 2e-3 * snap.body.radius  # wet: under it (drawn lifted)
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_the_start():
     """Over viser's protocol, in waves (Follow on by default there): the frame every node hangs from is moved by
     minus the body's smoothed position (the page sees the body near the origin it looks at), and the page's

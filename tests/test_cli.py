@@ -188,6 +188,7 @@ def test_tyro_panels_become_one_line_in_both_renderings():
         assert one_line(panel) == "Unrecognized options: --densty, 3 (did you mean --density?)"
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
     """`run` announces the one-time compile before it starts (not after a silent minute): it can tell."""
     probe = "import sim, sim.kernels as k; print(k.cached(sim.Simulation(sim.load_scene('drop')).spec))"

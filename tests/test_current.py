@@ -57,6 +57,7 @@ def test_kernels_match_the_reference_in_a_current(integrator, forces):
             np.testing.assert_allclose(getattr(compiled.frame(), field), getattr(reference.frame(), field), rtol=1e-10, atol=1e-8)
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_a_floating_body_released_at_rest_drifts_with_the_current(tmp_path):
     """Through the CLI: the damped cube released at rest in a 0.5 m/s current ends up moving with it, at
     rest relative to the water (the only horizontal force is damping on the relative velocity)."""

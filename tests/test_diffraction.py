@@ -170,6 +170,7 @@ def test_diffraction_without_radiation_is_one_line_and_exit_2():
     assert len(lines) == 1 and "diffraction" in lines[0] and "radiation" in lines[0] and "Traceback" not in done.stderr
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_the_csv_carries_the_diffraction_power(tmp_path):
     """`run` writes P_diff = F_d . (u, omega): here recomputed from the sphere's shipped excitation and the CSV's own
     velocities; zero with diffraction off."""

@@ -30,7 +30,7 @@ def drag_load(sim: Simulation, twist) -> np.ndarray:
 
 
 @pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize("integrator", FIXED + ("rk45",))
+@pytest.mark.parametrize("integrator", [*FIXED, pytest.param("rk45", marks=pytest.mark.slow)])  # rk45: 6-9 s
 def test_heavy_cube_sinks_at_the_terminal_speed(forces, integrator):
     """Face down, fully submerged: (1/2) rho C_d s^2 v^2 = (M - rho V) g, so v = sqrt(2 (M - rho V) g / (rho C_d s^2)).
     euler, rk4 and the implicit scheme (drag linearised about the current speed) keep it as their exact

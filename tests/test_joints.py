@@ -178,6 +178,7 @@ def test_a_joint_runs_on_the_reference_and_says_so():
     assert any("own scheme" in n and "'rk4' is not used" in n for n in rk4.notes), rk4.notes
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_a_heaving_converter_absorbs_the_frequency_domain_power():
     """The ice cube on a vertical slide with a take-off damper, radiation and diffraction from its shipped
     solve, in 1 cm regular waves: the heave amplitude and the mean absorbed power (1/2) c omega^2 |xi|^2 a^2

@@ -82,6 +82,7 @@ def _predicted_surge_period(sim: Simulation, z_rest: float) -> float:
     return T
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_the_moored_buoy_surges_at_the_period_of_its_added_mass_and_mooring_stiffness():
     """Released 0.5 m off its rest position in calm water (the preset's sea at Hs 0: the same compiled kernels),
     the buoy swings back and forth at 2 pi sqrt((M + A_11) / k_mooring) within 3 %."""

@@ -8,6 +8,8 @@ import pytest
 from sim.integrators import INTEGRATORS
 from studies.accuracy import QUICK, ReportArgs, run_report
 
+pytestmark = pytest.mark.slow  # the quick report takes half a minute to make (the marker's rule: over 4 s)
+
 
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
@@ -16,7 +18,6 @@ def quick(tmp_path_factory):
     return out, data
 
 
-@pytest.mark.slow
 def test_writes_markdown_and_every_figure_it_references(quick):
     import matplotlib.pyplot as plt
 

@@ -51,7 +51,7 @@ def time_domain(system, start, omega: float, periods: int, per_period: int = 160
     return coef[1] + 1j * coef[2], (s.absorbed - start.absorbed) / (s.t - start.t)
 
 
-@pytest.mark.parametrize("joint", ["prismatic", "planar"])
+@pytest.mark.parametrize("joint", ["prismatic", pytest.param("planar", marks=pytest.mark.slow)])  # planar: over 4 s
 @pytest.mark.parametrize("period", [8.0, pytest.param(6.0, marks=pytest.mark.slow)])
 def test_rm3_take_off_power_and_relative_heave_match_the_frequency_domain(period, joint):
     """Started on the linear steady state, six wave periods of the two-body system (radiation memory coupling

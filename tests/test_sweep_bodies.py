@@ -21,6 +21,7 @@ def sweep(*flags: str, timeout: float = 600) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "sim", "sweep", *flags], capture_output=True, text=True, timeout=timeout)
 
 
+@pytest.mark.slow  # over 4 s (the marker's rule)
 def test_a_power_matrix_of_rm3_matches_linear_theory(tmp_path):
     """rm3 with linear hydro (stepped exactly) over two wave periods and two take-off dampers, 300 s each in 1 m waves:
     the mean power over each run's second half matches the frequency domain's 0.5 c omega^2 |a xi_rel|^2 within 2 %

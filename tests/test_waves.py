@@ -60,7 +60,9 @@ def test_jonswap_sea_has_the_asked_hs_and_tp_and_is_reproducible():
 
 
 @pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4", "rk45"])
+@pytest.mark.parametrize(
+    "integrator", ["euler", "splitting", "implicit", "rk4", pytest.param("rk45", marks=pytest.mark.slow)]
+)  # rk45: 5-10 s
 def test_zero_amplitude_is_still_water(forces, integrator):
     """The waves' general path (per-point surface, stretched pressure, water velocity, higher-order
     panel rule) with a = 0 reproduces still water to round-off."""

@@ -29,8 +29,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .forces import Model
+from .forces import Model, hydrostatic_energy
 from .rotation import matrix_to_quat, quat_to_matrix, rotation_quat
+from .surface import wet_panels
 from .water import StillWater
 
 STEP = 1e-4
@@ -79,9 +80,6 @@ class LinearLoads:
         """(6, 6) -df/dxi at rest."""
         self.X, self.omega = self._froude_krylov(model)
         self._excited: tuple = (None, None)
-        from .forces import hydrostatic_energy
-        from .surface import wet_panels
-
         self.E_hyd0 = hydrostatic_energy(still.water, wet_panels(model.body, still.water, self.x0, self.R0, 0.0))
 
     def _stiffness(self, still: Model) -> np.ndarray:
@@ -102,16 +100,10 @@ class LinearLoads:
             return np.zeros((0, 6), complex), np.zeros(0)
         calm = replace(water, amplitude=np.zeros_like(water.amplitude))  # the surface at z = 0, the force model's wave nodes
         wet = Model(model.body, calm, model.fluid).wetted(self.x0, self.R0, 0.0)
-        kx, ky = water.k * np.cos(water.direction), water.k * np.sin(water.direction)
-        p = wet.point
-        pressure = (
-            (water.rho * water.g * water.amplitude)
-            * water._decay(p[:, 2], "cosh")
-            * np.exp(1j * (np.multiply.outer(p[:, 0], kx) + np.multiply.outer(p[:, 1], ky) + water.phase))
-        )  # (m, n): each component's pressure at each node
+        pressure = water.pressure_amplitudes(wet.point)  # (m, n): each component at each node
         area = wet.weight[:, None] * wet.normal
         X = -np.concatenate([area.T @ pressure, (wet.weight[:, None] * np.cross(wet.lever, wet.normal)).T @ pressure]).T
-        return X, water.omega + kx * water.current[0] + ky * water.current[1]
+        return X, water.omega_met
 
     def xi(self, x: np.ndarray, R: np.ndarray) -> np.ndarray:
         return np.concatenate([x - self.x0, rotation_vector(R @ self.R0.T)])

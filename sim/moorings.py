@@ -237,8 +237,8 @@ class Moorings:
         text = spread.input_file(np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g)
         return cls(text, x0, R0, u0, omega0)
 
-    def _kinematics(self, x, R, u, omega) -> tuple[np.ndarray, np.ndarray]:
-        lever = self.r_body @ R.T
+    def _kinematics(self, x, R, u, omega, lever=None) -> tuple[np.ndarray, np.ndarray]:
+        lever = self.r_body @ R.T if lever is None else lever
         return (x + lever).ravel(), (u + lever @ skew(omega).T).ravel()  # u + omega x lever, row by row
 
     def _wrench(self, forces: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -247,7 +247,8 @@ class Moorings:
     def advance(self, x, R, u, omega, dt: float) -> np.ndarray:
         """Move the lines from self.t over dt with the fairleads at the body's pose and twist at self.t;
         return the wrench to hold over that step (the mean of the pull at both ends)."""
-        pos, vel = self._kinematics(x, R, u, omega)
+        lever = self.r_body @ R.T
+        pos, vel = self._kinematics(x, R, u, omega, lever)
         started = time.perf_counter()
         with _quiet():
             ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)
@@ -256,7 +257,6 @@ class Moorings:
             from .errors import SimulationDiverged
 
             raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments")
-        lever = self.r_body @ R.T
         now, later = self._forces.sum(axis=0), ahead.sum(axis=0)
         turn_now, turn_later = _moment(lever, self._forces), _moment(lever, ahead)
         self._forces, self.t = ahead, self.t + dt

@@ -93,11 +93,23 @@ class Waves:
     flat = False
     at_rest = False
 
+    @property
+    def omega_met(self) -> np.ndarray:
+        """(n,) each component's frequency as met at a fixed point: omega_i + k_i . U (carried by the current U)."""
+        return self.omega + self.k * (np.cos(self.direction) * self.current[0] + np.sin(self.direction) * self.current[1])
+
     def _psi(self, xy: np.ndarray, t: float) -> np.ndarray:
-        """(..., n) phases k_i . (x - U t) - omega_i t + phi_i: the waves carried by the current U."""
+        """(..., n) phases k_i . x - (omega_i + k_i . U) t + phi_i: the waves carried by the current U."""
         kx = self.k * np.cos(self.direction)
         ky = self.k * np.sin(self.direction)
-        return xy[..., :1] * kx + xy[..., 1:2] * ky - (self.omega + kx * self.current[0] + ky * self.current[1]) * t + self.phase
+        return xy[..., :1] * kx + xy[..., 1:2] * ky - self.omega_met * t + self.phase
+
+    def pressure_amplitudes(self, points: np.ndarray) -> np.ndarray:
+        """(m, n) complex: each component's linear (unstretched) dynamic pressure at (m, 3) points under z = 0, as the
+        amplitude of e^(-i omega_met t): rho g a_i E_i(z) e^(i (k_i . x + phi_i)), Pa. The Froude-Krylov force of linear theory."""
+        kx, ky = self.k * np.cos(self.direction), self.k * np.sin(self.direction)
+        phase = np.multiply.outer(points[:, 0], kx) + np.multiply.outer(points[:, 1], ky) + self.phase
+        return (self.rho * self.g * self.amplitude) * self._decay(points[:, 2], "cosh") * np.exp(1j * phase)
 
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
         return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
@@ -108,7 +120,7 @@ class Waves:
         components shorter than four spacings are left out and faded in up to eight, so that a coarse grid
         does not alias them into noise."""
         kx, ky = self.k * np.cos(self.direction), self.k * np.sin(self.direction)
-        start = self.amplitude * np.exp(1j * (self.phase - (self.omega + kx * self.current[0] + ky * self.current[1]) * t))
+        start = self.amplitude * np.exp(1j * (self.phase - self.omega_met * t))
         X = np.exp(1j * np.multiply.outer(np.asarray(xs, float), kx)) * start
         Y = np.exp(1j * np.multiply.outer(np.asarray(ys, float), ky))
         if spacing_x is not None:

@@ -37,6 +37,15 @@ def _compiled_kernels():
         warm_up(spec)  # from the disk cache
 
 
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
+def pytest_collection_modifyitems(items):
+    """One real browser at a time (`--dist loadgroup` in the pytest options): two chromiums drawing with
+    software WebGL on two cores starve each other's pages and the servers they talk to."""
+    for item in items:
+        if "browser_page" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("browser"))
+
+
 @pytest.fixture(autouse=True)
 def _fp_errors_raise():
     old = np.seterr(all="raise", under="ignore")

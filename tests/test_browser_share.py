@@ -92,11 +92,16 @@ def test_record_then_replay_offline_at_the_csv_poses(app, page, tmp_path):
     page.goto(app.url + "/?fixedDpr=0.5")
     page.get_by_role("button", name="Record").wait_for()
     wait_for(app, lambda s: app.connections == 1, what="the browser")
-    app.loop.post("reset", None)  # (set-up, not the feature under test) record the drop, not a body a slow start let settle
-    wait_for(app, lambda s: s.frame.t < 1.0, what="the reset")
+    # (set-up, not the feature under test) record the drop from its start, however slowly this machine clicks:
+    # the run waits, paused at its start, until the recording is under way
+    app.loop.post("pause", True)
+    app.loop.post("reset", None)
+    app.sync()
     page.get_by_role("button", name="Record").click()
     wait_for(app, lambda s: app.recorder.recording, what="recording to start")
     t0 = app.sync().frame.t
+    assert t0 == 0.0
+    app.loop.post("pause", False)
     wait_for(app, lambda s: s.frame.t > t0 + 2.0, what="two simulated seconds recorded")  # not wall time: a loaded machine runs slower
     downloads = []
     page.on("download", lambda d: downloads.append(d))

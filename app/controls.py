@@ -37,6 +37,7 @@ class Controls:
         gui = server.gui
         self._post = post
         self._quiet = threading.local()  # set while we write a handle ourselves: its callback must not post it back
+        self._written: dict[str, Any] = {}  # the value the loop last wrote to each control (pages may show it)
         self._handles: dict[str, Any] = {}
 
         self.notice = gui.add_markdown("", visible=False)
@@ -83,14 +84,18 @@ class Controls:
             return
         if field == "scene" and value not in handle.options:
             return
-        if handle.value == value:
-            return  # already shown: no echo to the pages (one dragging this slider would jump)
+        if handle.value == value:  # already shown: no echo to the pages (one dragging this slider would jump) ...
+            if self._written.get(field, value) != value:  # ... unless a page's update overtook our last write here: viser
+                handle._queue_update("value", value)  # echoes an update to the other pages only, so that page still shows our write
+                self._written[field] = value
+            return
         if hasattr(handle, "max") and isinstance(value, (int, float)):  # sliders: widen the range rather than refuse the value
             handle.max = max(handle.max, value)
             handle.min = min(handle.min, value)
         self._quiet.on = True
         try:
             handle.value = value
+            self._written[field] = value
         finally:
             self._quiet.on = False
 

@@ -206,7 +206,7 @@ class Moorings:
         self.r_body = (world - x0) @ R0
         """(k, 3) the fairleads in the body frame, m."""
         self._lines = [md.GetLine(self._system, i + 1) for i in range(md.GetNumberLines(self._system))]
-        x, v = self._kinematics(x0, R0, u0, omega0)
+        x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0)
         with _quiet():
             status = md.Init(self._system, x, v)
         if status:
@@ -237,8 +237,8 @@ class Moorings:
         text = spread.input_file(np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g)
         return cls(text, x0, R0, u0, omega0)
 
-    def _kinematics(self, x, R, u, omega, lever=None) -> tuple[np.ndarray, np.ndarray]:
-        lever = self.r_body @ R.T if lever is None else lever
+    def _kinematics(self, x, lever, u, omega) -> tuple[np.ndarray, np.ndarray]:
+        """The fairleads' positions and velocities, flat, from the body's pose and twist and their (k, 3) world levers."""
         return (x + lever).ravel(), (u + lever @ skew(omega).T).ravel()  # u + omega x lever, row by row
 
     def _wrench(self, forces: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -248,7 +248,7 @@ class Moorings:
         """Move the lines from self.t over dt with the fairleads at the body's pose and twist at self.t;
         return the wrench to hold over that step (the mean of the pull at both ends)."""
         lever = self.r_body @ R.T
-        pos, vel = self._kinematics(x, R, u, omega, lever)
+        pos, vel = self._kinematics(x, lever, u, omega)
         started = time.perf_counter()
         with _quiet():
             ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)

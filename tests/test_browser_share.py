@@ -216,12 +216,12 @@ def test_the_banners_link_drives_the_run_and_pages_without_the_token_cannot(brow
             wait_for(viewer, lambda s: viewer.refusals.count > refused, what="the update to be refused")
             assert viewer.sync().density == 500.0
         box = control_row(page, "Density (kg/m³)").locator("input.mantine-NumberInput-input")
-        for _ in range(6):  # the reason is shown (a notice lasts 10 s: a loaded machine may draw the page later; ask again)
+        for retry in range(6):  # the reason is shown (a notice lasts 10 s: a loaded machine may draw the page later; ask again)
             try:
                 page.get_by_text("this page has no access token", exact=False).first.wait_for(timeout=10_000)
                 break
             except Exception:  # noqa: BLE001 - Playwright's timeout
-                box.fill("700")
+                box.fill(str(710 + retry))  # a value the box does not show yet: the same one again would send nothing
                 box.press("Enter")
         else:
             raise AssertionError("the page refused without the token never showed why")

@@ -5,8 +5,8 @@ Joints (`[constraint] joint`):
 - `prismatic`: it slides along the world axis `axis` through its starting centre of mass, without turning;
   its coordinate s = axis . (x - x_0), m;
 - `revolute`: it turns about the world axis `axis` through the world point `pivot` (its centre of mass
-  swings on a circle about it); its coordinate theta, rad, from the starting pose, in (-pi, pi] (the
-  take-off's spring acts on that: a hinge that turns past half a turn meets it from the other side).
+  swings on a circle about it); its coordinate theta, rad, from the starting pose, counted on through whole
+  turns (the take-off's spring winds up: a hinge that turns past half a turn is not pulled the other way).
 
 The body's twist is J(theta) theta_dot, J the joint's twist per unit rate (6,). Its motion is the joint
 coordinate's: M_q theta_ddot = J . (F, T) + Q_pto, with M_q = J^T M J (M the rigid body's 6x6 mass in
@@ -88,14 +88,16 @@ class WorldJoint:
             return np.concatenate([np.cross(self.axis, x - self.pivot), self.axis])
         return np.zeros(6)
 
-    def coordinate(self, s: State) -> float:
-        """theta of a state on the joint."""
+    def coordinate(self, s: State, near: float = 0.0) -> float:
+        """theta of a state on the joint; a hinge's the turn of the pose nearest to `near` (the pose gives it
+        up to whole turns: the caller that steps on counts them by passing the last theta)."""
         if self.kind == "prismatic":
             return float(self.axis @ (s.x_world - self.x0))
         if self.kind == "revolute":
             turn = s.R_world_body @ self.R0.T
             sin = 0.5 * float(self.axis @ np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]]))
-            return math.atan2(sin, 0.5 * (np.trace(turn) - 1.0))
+            theta = math.atan2(sin, 0.5 * (np.trace(turn) - 1.0))
+            return theta + 2.0 * math.pi * round((near - theta) / (2.0 * math.pi))
         return 0.0
 
     def mass(self, body, R: np.ndarray, J: np.ndarray) -> float:
@@ -124,14 +126,15 @@ class WorldJoint:
         return -self.stiffness * theta - self.damping * rate
 
 
-def step(model, joint: WorldJoint, s: State, dt: float) -> tuple[State, float]:
-    """One Stormer-Verlet step on the joint's coordinate, twist terms and the take-off's damper implicit in
-    each half kick; returns the new state and the energy the take-off absorbed over the step, J."""
+def step(model, joint: WorldJoint, s: State, dt: float, theta: float = 0.0) -> tuple[State, float, float]:
+    """One Stormer-Verlet step on the joint's coordinate (`theta`: its last value, which counts a hinge's
+    whole turns), twist terms and the take-off's damper implicit in each half kick; returns the new state,
+    the energy the take-off absorbed over the step, J, and the new coordinate."""
     body = model.body
-    theta, rate = joint.coordinate(s), joint.rate(body, s)
+    theta, rate = joint.coordinate(s, near=theta), joint.rate(body, s)
     memory, radiated = s.memory, s.E_rad
     if not joint.dofs:
-        return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), memory, radiated), 0.0
+        return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), memory, radiated), 0.0, 0.0
     absorbed = 0.0
     for half in (0, 1):
         if half == 1:
@@ -139,7 +142,8 @@ def step(model, joint: WorldJoint, s: State, dt: float) -> tuple[State, float]:
             theta = theta + dt * rate
         rate, work = _kick(*_affine(model, joint, theta, rate, s.t + half * dt, memory), rate, 0.5 * dt, joint.damping)
         absorbed += work
-    return joint.state(body, s.t + dt, theta, rate, State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, radiated)), absorbed
+    new = joint.state(body, s.t + dt, theta, rate, State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, radiated))
+    return new, absorbed, theta
 
 
 def _drift_memory(model, joint: WorldJoint, theta0: float, theta1: float, rate: float, memory, radiated: float, dt: float):

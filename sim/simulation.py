@@ -285,9 +285,12 @@ class Simulation:
         start = initial_state(self.body, self.scene)
         self.joint = WorldJoint.of_scene(self.scene, start.x_world, start.R_world_body)
         self.pto_energy = 0.0
+        self.joint_theta = 0.0
+        """The joint's coordinate, a hinge's whole turns counted (the pose alone gives it up to them)."""
         if self.joint is not None:
             s = self.state
-            self.state = self.joint.state(self.body, s.t, self.joint.coordinate(s), self.joint.rate(self.body, s), s)
+            self.joint_theta = self.joint.coordinate(s)
+            self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
@@ -298,7 +301,8 @@ class Simulation:
         self.joint = WorldJoint.of_scene(self.scene, *start)
         if self.joint is not None:
             s = self.state
-            self.state = self.joint.state(self.body, s.t, self.joint.coordinate(s), self.joint.rate(self.body, s), s)
+            self.joint_theta = self.joint.coordinate(s, near=self.joint_theta if old is not None and old.kind == self.joint.kind else 0.0)
+            self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
         self._check_backend()
 
     def _moor(self) -> None:
@@ -394,7 +398,7 @@ class Simulation:
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
-        checked = self.state
+        checked, checked_theta = self.state, self.joint_theta
         if self.moorings is not None or self.joint is not None:
             self.state = self._advance_coupled(n)
         else:
@@ -407,7 +411,7 @@ class Simulation:
         energy = frame.E_total
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too
-            t, self.state = self.state.t, checked  # back to the last state that passed this check
+            t, self.state, self.joint_theta = self.state.t, checked, checked_theta  # back to the last state that passed this check
             what = (
                 f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"
                 if np.isfinite(energy)
@@ -450,10 +454,10 @@ class Simulation:
                 if self.joint is None:
                     self.state = advance(1)
                     continue
-                new, absorbed = joint_step(self.model, self.joint, s, self.dt)
+                new, absorbed, theta = joint_step(self.model, self.joint, s, self.dt, self.joint_theta)
                 if not new.is_finite():
                     raise SimulationDiverged(self.diagnose(s.t + self.dt, "the state became non-finite"))
-                self.state, self.pto_energy = new, self.pto_energy + absorbed
+                self.state, self.pto_energy, self.joint_theta = new, self.pto_energy + absorbed, theta
         finally:
             if self.moorings is not None:
                 held[:] = self.moorings.load  # the pull now, as the frame shows it

@@ -105,6 +105,26 @@ def test_a_hinged_body_swings_with_the_pendulum_period_at_large_amplitude():
     assert np.linalg.norm(sim.state.x_world - pivot) == pytest.approx(d, abs=1e-12)  # on its circle
 
 
+def test_a_hinge_winds_its_spring_up_through_whole_turns():
+    """In air, the cube on a vertical hinge through its centre with a torsion spring k, started at rest with
+    a spin of amplitude 4 rad (past half a turn): omega_z(t) = 4 W cos(W t), W = sqrt(k / I), whatever the
+    amplitude. A coordinate read from the pose alone would flip the spring's pull at half a turn."""
+    amplitude, k = 4.0, 2000.0
+    scene = with_overrides(load_scene("drop"), fluid__rho=0.0, fluid__forces="panels", constraint__joint="revolute",
+                           constraint__axis=(0.0, 0.0, 1.0), constraint__pto_stiffness=k, step__dt=0.002)  # fmt: skip
+    inertia = Simulation(scene, backend="numpy").body.inertia[2]
+    w = math.sqrt(k / inertia)
+    sim = Simulation(with_overrides(scene, initial__omega=(0.0, 0.0, amplitude * w)), backend="numpy")
+    t, spin = [], []
+    while sim.state.t < 1.6 * 2 * math.pi / w:
+        sim.step(5)
+        t.append(sim.state.t)
+        spin.append(sim.frame().omega_world[2])
+    t, spin = np.array(t), np.array(spin)
+    assert np.max(np.abs(spin - amplitude * w * np.cos(w * t))) < 1e-3 * amplitude * w
+    assert sim.joint_theta == pytest.approx(amplitude * math.sin(w * sim.state.t), abs=1e-3 * amplitude)
+
+
 def test_any_take_off_damping_is_stable_and_creeps_at_the_physical_rate():
     """c = 1e9 N s/m at dt = 0.01 s (c dt / m = 2e4): no blow-up; the body creeps down at the overdamped rate
     (rho g A) / c, its energy never rising."""

@@ -55,7 +55,7 @@ def test_ctrl_c_during_a_sweep_keeps_its_chunks_and_resume_finishes(tmp_path, ba
     args = ["sweep", "--param", "density=300:900:12", "--param", "orientation_seed=0:1:2", "--t-end", "200", "--chunk", "4",
             "--backend", backend, "--workers", "2", "--out", str(out)]  # fmt: skip
     done, stopped_in = interrupt(args, lambda: len(list(out.glob("chunk-*.parquet"))) >= 1)
-    assert done.returncode == 130 and stopped_in < 1.5, done.stderr
+    assert done.returncode == 130 and stopped_in < 3.0, done.stderr  # a chunk takes ~5 s here: not waited for (2 s once under load)
     assert "interrupted (Ctrl-C)" in done.stderr and "--resume" in done.stderr and "Traceback" not in done.stderr
     kept = len(list(out.glob("chunk-*.parquet")))
     assert 1 <= kept < 6 and not list(out.glob("*.partial"))

@@ -197,6 +197,7 @@ class SimLoop(Mailbox):
         self._history: collections.deque = collections.deque()  # (wall, sim t) for the real-time factor
         self._behind_until = 0.0
         self._step_cost = self._budget  # seconds per step, running estimate (unknown yet: one-step chunks)
+        self._check_cost = 0.0  # seconds of the blow-up check that ends every chunk (Simulation.check_seconds)
         self._steps = 0
         self._epoch = 0
         self._diverged = False
@@ -433,19 +434,24 @@ class SimLoop(Mailbox):
             self._history.popleft()
 
     def _step_within_budget(self, n: int) -> None:
-        """Up to n steps in chunks of about half the tick's budget; stop once the budget is spent.
+        """Up to n steps in chunks that fill what is left of the tick's budget; stop once it is spent.
 
+        One chunk a tick where the estimate holds: each chunk ends with the simulation's blow-up check (a
+        frame of diagnostics, which the publish then reuses), as dear as a step at high resolution in waves,
+        so the step's cost is measured without it.
         The chunk size comes from the measured cost per step, which a new integrator or body makes
         wrong: `_cost_unknown` starts those with one-step chunks, so a slow scheme cannot stall a tick.
         """
         started = time.perf_counter()
         done = 0
         while done < n and not self._paused:
-            k = min(n - done, max(1, int(0.5 * self._budget / self._step_cost)))
+            left = self._budget - (time.perf_counter() - started) - self._check_cost
+            k = min(n - done, max(1, int(left / self._step_cost)))
             chunk_started = time.perf_counter()
             self._step(k)
             done += k
-            cost = (time.perf_counter() - chunk_started) / k
+            self._check_cost = getattr(self.sim, "check_seconds", 0.0)
+            cost = max(time.perf_counter() - chunk_started - self._check_cost, 1e-9) / k  # a step's own, without the check
             self._step_cost = cost if k == 1 else 0.5 * self._step_cost + 0.5 * cost
             if time.perf_counter() - started > self._budget:
                 break

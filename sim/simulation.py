@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -407,7 +408,10 @@ class Simulation:
             rest = initial_state(self.body, self.scene).q_world_body
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
             self.largest_turn = max(self.largest_turn, turn)
+        started = time.perf_counter()
         frame = self.frame()
+        self.check_seconds = time.perf_counter() - started
+        """What the last step's blow-up check (the frame of the state reached) cost, s: a viewer sizes its chunks by it."""
         energy = frame.E_total
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too

@@ -450,7 +450,7 @@ class SimLoop(Mailbox):
             chunk_started = time.perf_counter()
             self._step(k)
             done += k
-            self._check_cost = getattr(self.sim, "check_seconds", 0.0)
+            self._check_cost = self.sim.check_seconds
             cost = max(time.perf_counter() - chunk_started - self._check_cost, 1e-9) / k  # a step's own, without the check
             self._step_cost = cost if k == 1 else 0.5 * self._step_cost + 0.5 * cost
             if time.perf_counter() - started > self._budget:

@@ -232,6 +232,8 @@ class Simulation:
         self.step_seconds: float | None = None
         """Wall-time budget of one step of an adaptive method (None: only its evaluation cap); past it the
         step stops with SimulationDiverged naming a better integrator. The viewer sets it."""
+        self.check_seconds = 0.0
+        """What the last `step` call's blow-up check (the frame of the state reached) cost, s: a viewer sizes its chunks by it."""
         self.expand_waves = True
         """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
         False: every component at every node (benchmarks and checks)."""
@@ -411,7 +413,6 @@ class Simulation:
         started = time.perf_counter()
         frame = self.frame()
         self.check_seconds = time.perf_counter() - started
-        """What the last step's blow-up check (the frame of the state reached) cost, s: a viewer sizes its chunks by it."""
         energy = frame.E_total
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too

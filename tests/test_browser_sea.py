@@ -63,6 +63,19 @@ def wait_until(condition, what: str, timeout: float = 20.0):
         time.sleep(0.2)
 
 
+def settled(read, quiet: float = 1.0, timeout: float = 20.0) -> np.ndarray:
+    """read() once it has not changed for `quiet` seconds."""
+    last, since = read(), time.monotonic()
+    deadline = since + timeout
+    while time.monotonic() - since < quiet:
+        assert time.monotonic() < deadline, "it never came to rest"
+        time.sleep(0.1)
+        now = read()
+        if np.any(now != last):
+            last, since = now, time.monotonic()
+    return last
+
+
 def projected(camera, x: np.ndarray) -> np.ndarray:
     """Where the point x falls in the page's frame, in half-widths and half-heights from its centre (viser's
     cameras are OpenCV's: +z forward, +y down; fov is vertical)."""
@@ -94,7 +107,7 @@ def test_follow_keeps_the_body_in_the_middle_half_of_the_frame_through_a_storm_a
                 break
             browser_page.mouse.wheel(0, -200)
             time.sleep(0.3)
-        zoomed = offset()
+        zoomed = settled(offset)  # the page's camera glides to a wheel's zoom: a loaded machine may still be on the way
         assert np.linalg.norm(zoomed) < 3.5
         spots, frozen, first = [], [], None
         t0 = app.sync().frame.t

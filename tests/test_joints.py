@@ -115,13 +115,15 @@ def test_a_hinge_winds_its_spring_up_through_whole_turns():
     inertia = Simulation(scene, backend="numpy").body.inertia[2]
     w = math.sqrt(k / inertia)
     sim = Simulation(with_overrides(scene, initial__omega=(0.0, 0.0, amplitude * w)), backend="numpy")
-    t, spin = [], []
+    t, spin, energy = [], [], []
     while sim.state.t < 1.6 * 2 * math.pi / w:
         sim.step(5)
         t.append(sim.state.t)
         spin.append(sim.frame().omega_world[2])
-    t, spin = np.array(t), np.array(spin)
+        energy.append(sim.frame().E_kin + 0.5 * k * sim.joint_theta**2)  # the spring's energy from the counted turns
+    t, spin, energy = np.array(t), np.array(spin), np.array(energy)
     assert np.max(np.abs(spin - amplitude * w * np.cos(w * t))) < 1e-3 * amplitude * w
+    assert np.ptp(energy) < 1e-4 * energy[0]
     assert sim.joint_theta == pytest.approx(amplitude * math.sin(w * sim.state.t), abs=1e-3 * amplitude)
 
 

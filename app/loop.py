@@ -197,7 +197,6 @@ class SimLoop(Mailbox):
         self._history: collections.deque = collections.deque()  # (wall, sim t) for the real-time factor
         self._behind_until = 0.0
         self._step_cost = self._budget  # seconds per step, running estimate (unknown yet: one-step chunks)
-        self._check_cost = 0.0  # seconds of the blow-up check that ends every chunk (Simulation.check_seconds)
         self._steps = 0
         self._epoch = 0
         self._diverged = False
@@ -445,13 +444,12 @@ class SimLoop(Mailbox):
         started = time.perf_counter()
         done = 0
         while done < n and not self._paused:
-            left = self._budget - (time.perf_counter() - started) - self._check_cost
+            left = self._budget - (time.perf_counter() - started) - self.sim.check_seconds  # the last chunk's check
             k = min(n - done, max(1, int(left / self._step_cost)))
             chunk_started = time.perf_counter()
             self._step(k)
             done += k
-            self._check_cost = self.sim.check_seconds
-            cost = max(time.perf_counter() - chunk_started - self._check_cost, 1e-9) / k  # a step's own, without the check
+            cost = max(time.perf_counter() - chunk_started - self.sim.check_seconds, 1e-9) / k  # a step's own, without the check
             self._step_cost = cost if k == 1 else 0.5 * self._step_cost + 0.5 * cost
             if time.perf_counter() - started > self._budget:
                 break

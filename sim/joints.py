@@ -126,7 +126,7 @@ class WorldJoint:
         return -self.stiffness * theta - self.damping * rate
 
 
-def step(model, joint: WorldJoint, s: State, dt: float, theta: float = 0.0) -> tuple[State, float, float]:
+def step(model, joint: WorldJoint, s: State, dt: float, theta: float) -> tuple[State, float, float]:
     """One Stormer-Verlet step on the joint's coordinate (`theta`: its last value, which counts a hinge's
     whole turns), twist terms and the take-off's damper implicit in each half kick; returns the new state,
     the energy the take-off absorbed over the step, J, and the new coordinate."""

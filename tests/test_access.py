@@ -222,16 +222,15 @@ def test_a_burst_of_updates_leaves_every_control_showing_what_runs():
                 for label, bad, good in pairs:
                     await page.update(label, bad)
                     await page.update(label, good)
-                runs = lambda _page: all(app.latest().settings.value(key) == good for key, good in last.items())  # noqa: E731
-                await page.read(20.0, until=runs)  # the server may still be reading the page's messages on a loaded machine
+                # the server may still be reading the page's messages on a loaded machine
+                await page.read(20.0, until=lambda _page: runs_last(app.latest()))
                 await page.read(1.0)  # and what it writes back then
                 return page
 
         last = {p[0].lower(): p[2] for p in pairs[:4]}
+        runs_last = lambda snap: all(snap.settings.value(key) == good for key, good in last.items())  # noqa: E731
         page = asyncio.run(burst())
-        snap = wait_for(
-            app, lambda s: all(s.settings.value(key) == good for key, good in last.items()), timeout=20.0, what="the burst's last values"
-        )
+        snap = wait_for(app, runs_last, timeout=20.0, what="the burst's last values")
         shown = asyncio.run(fresh_page(app.port))
         for label, key, _bad, good in ((p[0], p[0].lower(), *p[1:]) for p in pairs[:4]):
             assert snap.settings.value(key) == good, key

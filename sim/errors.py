@@ -1,4 +1,4 @@
-"""The two ways a run can fail that a user must hear about, each in one line."""
+"""The ways a run can fail that a user must hear about, each in one line."""
 
 
 class ConfigError(ValueError):
@@ -7,3 +7,12 @@ class ConfigError(ValueError):
 
 class SimulationDiverged(RuntimeError):
     """The state went non-finite or the energy blew up; the message names the time and a likely cause."""
+
+
+class WriteFailed(ConfigError):
+    """An output could not be written (a full disk, a mount gone): one line naming the file and why, exit 2 as for a
+    user mistake (the command that catches it adds what it kept)."""
+
+    def __init__(self, path, reason: str):
+        super().__init__(f"cannot write {path}: {reason}")
+        self.path, self.reason = str(path), reason

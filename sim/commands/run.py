@@ -13,11 +13,13 @@ import numpy as np
 import tyro
 
 from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
+from ..errors import WriteFailed
 from ..hydrostatics import describe_rest
 from ..limits import step_time
 from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged, default_backend
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
+from .output import LineFile
 from .progress import progress_bar
 
 STEP_SECONDS = 30.0
@@ -230,41 +232,49 @@ WRITE_FAILED = "write failed"
 def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int]:
     """Step `sim` (a Simulation, or anything with step, frame and state.t) to n_steps, writing `columns` and a row
     every args.every steps to args.out (if given), with a progress bar. (error, rows): error is the divergence
-    message, INTERRUPTED after Ctrl-C or WRITE_FAILED (said here, with the rows kept), or None."""
-    out = open(args.out, "w") if args.out else None
+    message, INTERRUPTED after Ctrl-C or WRITE_FAILED (said here, with the rows kept), or None. `rows` counts the
+    whole rows in the file: a write that fails (a full disk) cuts it back to the last of them."""
+    out = LineFile(args.out) if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)
-    rows = 0
 
     def write(frame):
-        nonlocal rows
         if out:
-            out.write(",".join(f"{v:.12g}" for v in frame.row()) + "\n")  # one call per whole line
-            rows += 1
+            out.write(",".join(f"{v:.12g}" for v in frame.row()))
 
     try:  # numpy's overflow warnings would only repeat what the divergence message says better
         if out:
-            out.write(",".join(columns) + "\n")
+            out.write(",".join(columns))
         write(sim.frame())
         if watch is not None:
             watch(sim)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
             error = _advance(sim, n_steps, args.every, bar, write, watch, stop)
-    except OSError as e:  # the disk filled up or went away mid-run
-        print(f"floatsim: cannot write {args.out}: {e.strerror} (kept {rows} whole rows)", file=sys.stderr)
-        return WRITE_FAILED, rows
+        if out:
+            out.close()  # the last rows reach the disk here: this can fail too
+    except WriteFailed as e:
+        print(f"floatsim: {e} ({kept_rows(out)})", file=sys.stderr)
+        return WRITE_FAILED, data_rows(out)
     finally:
         bar.close()
         if out:
-            try:
-                out.close()
-            except OSError:
-                pass
+            out.abandon()
     if error == INTERRUPTED:
-        kept = f"kept {rows} rows in {args.out}" if out else "nothing written"
-        print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {n_steps * sim.dt:g} s: {kept}", file=sys.stderr)
+        said = f"kept {data_rows(out)} rows in {args.out}" if out else "nothing written"
+        print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {n_steps * sim.dt:g} s: {said}", file=sys.stderr)
     elif error:
-        print(f"floatsim: {error}" + (f" (kept {rows} rows)" if out else ""), file=sys.stderr)
-    return error, rows
+        print(f"floatsim: {error}" + (f" (kept {data_rows(out)} rows)" if out else ""), file=sys.stderr)
+    return error, data_rows(out)
+
+
+def data_rows(out: LineFile | None) -> int:
+    """Whole rows of data in the file (its first line is the header)."""
+    return max(out.lines - 1, 0) if out else 0
+
+
+def kept_rows(out: LineFile) -> str:
+    if not out.lines:
+        return "kept nothing: the file is empty"
+    return f"kept the header and {data_rows(out)} whole rows; the file ends with the last of them"
 
 
 class Pace:

@@ -4,9 +4,10 @@ as a Parquet file as it completes; `--resume` finishes only what is missing."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
-import os
+import re
 import sys
 import time
 from collections import Counter
@@ -16,11 +17,12 @@ from typing import Annotated, Literal
 
 import tyro
 
-from ..errors import ConfigError
+from ..errors import ConfigError, WriteFailed
 from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from ..sweeps.backends import WorkerLost, run
 from ..sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 from .interrupt import EXIT, Interrupted, StopOnCtrlC
+from .output import reason, temporaries, write_whole
 from .progress import progress_bar
 
 MANIFEST = "_manifest.json"
@@ -166,6 +168,8 @@ def sweep(args: SweepArgs) -> int:
     out = Path(args.out)
     key = spec.key()
     files = open_folder(out, key, args.resume)
+    if out.is_dir():
+        remove_temporaries(out)
     todo = [(cid, idx) for cid, idx in enumerate(plan)]
     if files is not None:  # resuming: only chunks whose files check out count as done
         todo, files = verify(out, plan, files, bool(spec.history_every))
@@ -191,11 +195,17 @@ def sweep(args: SweepArgs) -> int:
 
     def done(cid: int, rows: dict, history: dict | None) -> None:
         nonlocal ran
-        name = chunk_name(cid)
-        files[name] = write(out / name, rows)
-        if history is not None:
-            files[f"{HISTORY}/{name}"] = write(out / HISTORY / name, history)
-        save_manifest()  # a chunk counts as done once its checksums are recorded here
+        names = [chunk_name(cid)] + ([f"{HISTORY}/{chunk_name(cid)}"] if history is not None else [])
+        try:
+            for name, columns in zip(names, (rows, history)):
+                files[name] = write(out / name, columns)
+            save_manifest()  # a chunk counts as done once its checksums are recorded here
+        except WriteFailed:  # not done: none of its files stays unrecorded (--resume runs it again)
+            for name in names:
+                files.pop(name, None)
+                with contextlib.suppress(OSError):
+                    (out / name).unlink(missing_ok=True)
+            raise
         statuses.update(rows["status"])
         ran += 1
         bar.update(len(rows["case"]))
@@ -206,6 +216,9 @@ def sweep(args: SweepArgs) -> int:
     except WorkerLost as e:
         print(f"floatsim: {e}: {ran} chunks of {len(todo)} written to {out}; rerun with --resume to finish", file=sys.stderr)
         return 4
+    except WriteFailed as e:  # a full disk: the chunks written before are whole and recorded
+        print(f"floatsim: {e}: {ran} chunks of {len(todo)} written to {out}; rerun with --resume to finish", file=sys.stderr)
+        return 2
     except Interrupted:
         print(f"floatsim: interrupted (Ctrl-C): {ran} chunks of {len(todo)} written to {out} ({sum(statuses.values())} cases); "
               "rerun with --resume to finish", file=sys.stderr)  # fmt: skip
@@ -311,21 +324,43 @@ def digest(path: Path) -> str:
 
 def write_text(path: Path, text: str) -> None:
     """A text file, whole or not at all."""
-    partial = path.with_suffix(".partial")
-    partial.write_text(text)
-    os.replace(partial, path)
+    write_whole(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def write(path: Path, columns: dict) -> list:
-    """A Parquet file, whole or not at all (written aside, then renamed): a killed run leaves no half file.
+    """A Parquet file, whole or not at all (written aside, then renamed): a killed run or a full disk leaves no half
+    file under its name, and the temporary's name starts with '_', which readers of the folder skip.
     Returns its record for the manifest: [sha256 of its bytes, rows]."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_suffix(".partial")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise WriteFailed(path.parent, reason(e)) from None
     table = pa.table(columns)
-    pq.write_table(table, partial)
-    record = [digest(partial), table.num_rows]
-    os.replace(partial, path)
-    return record
+
+    def parquet(tmp: str) -> list:
+        pq.write_table(table, tmp)
+        return [digest(Path(tmp)), table.num_rows]
+
+    return write_whole(path, parquet)
+
+
+OLD_TEMPORARY = re.compile(r"(chunk-\d{5}|_manifest)\.partial")
+"""The temporaries earlier versions named (chunk-00003.partial: pandas.read_parquet of the folder failed on them)."""
+
+
+def leftovers(folder: Path) -> list[Path]:
+    return temporaries(folder) + [p for p in folder.glob("*.partial") if OLD_TEMPORARY.fullmatch(p.name) and p.is_file()]
+
+
+def remove_temporaries(out: Path) -> None:
+    """Remove the temporaries a killed or failed write left in the sweep's folder (and its history's), with a note."""
+    found = leftovers(out) + leftovers(out / HISTORY)
+    for p in found:
+        with contextlib.suppress(OSError):
+            p.unlink()
+    if found:
+        print(f"floatsim: note: removed {len(found)} temporary file{'s' if len(found) > 1 else ''} of a write that did not finish "
+              f"({found[0].name}{', ...' if len(found) > 1 else ''})", file=sys.stderr)  # fmt: skip

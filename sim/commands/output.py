@@ -1,0 +1,118 @@
+"""Output files a full disk cannot leave half-written: a CSV is cut back to its last whole row (and says how
+many it holds), any other file is written aside and renamed, so it is whole under its name or absent.
+A failure is a WriteFailed (one line, exit 2), never a traceback."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import secrets
+from collections.abc import Callable
+from pathlib import Path
+from typing import TypeVar
+
+from ..errors import WriteFailed
+
+T = TypeVar("T")
+TEMPORARY = re.compile(r"_.+\.[0-9a-f]{8}\.partial(\.[a-z0-9]+)?")
+"""The names `write_whole` gives its temporaries: a leading '_' (pyarrow and pandas skip such files when they read
+a folder as one table, so a killed write never spoils the folder), 8 random hex digits, then '.partial'."""
+
+
+def reason(e: OSError) -> str:
+    """The system's words for the error ('No space left on device'), not a library's wrapping of them."""
+    return os.strerror(e.errno) if e.errno else (e.strerror or str(e).splitlines()[0])
+
+
+class LineFile:
+    """A text file written in whole lines: they collect in memory and reach the disk in blocks of BLOCK bytes
+    through os.write, whose count of bytes written is exact (a buffered file's is not); when a write fails, the
+    file is cut back to its last whole line and WriteFailed raised. `lines` counts the whole lines on the disk."""
+
+    BLOCK = io.DEFAULT_BUFFER_SIZE  # as often as a buffered file would: a killed run loses no more
+
+    def __init__(self, path: str | Path):
+        self.path = str(path)
+        try:
+            self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+        except OSError as e:
+            raise WriteFailed(self.path, reason(e)) from None
+        self._pending: list[bytes] = []
+        self._size = 0
+        self.end = 0
+        """Bytes on the disk, all of them whole lines."""
+        self.lines = 0
+
+    def write(self, line: str) -> None:
+        data = line.encode() + b"\n"
+        self._pending.append(data)
+        self._size += len(data)
+        if self._size >= self.BLOCK:
+            self.flush()
+
+    def flush(self) -> None:
+        data = memoryview(b"".join(self._pending))
+        self._pending, self._size = [], 0
+        done = 0
+        try:
+            while done < len(data):
+                done += os.write(self._fd, data[done:])
+        except BaseException as e:  # a second Ctrl-C too: whatever stops the write, the file ends on a whole line
+            self._cut(data[:done])
+            if isinstance(e, OSError):
+                raise WriteFailed(self.path, reason(e)) from None
+            raise
+        self.end += len(data)
+        self.lines += data.tobytes().count(b"\n")
+
+    def _cut(self, written: memoryview) -> None:
+        whole = bytes(written).rfind(b"\n") + 1
+        self.end += whole
+        self.lines += bytes(written[:whole]).count(b"\n")
+        try:
+            os.ftruncate(self._fd, self.end)
+        except OSError:
+            pass  # the count stays true of the whole lines; only a fragment after them may stay
+
+    def close(self) -> None:
+        """The lines still in memory written, then the file closed (also after a failure, which it does not repeat)."""
+        if self._fd is None:
+            return
+        try:
+            self.flush()
+        finally:
+            self.abandon()
+
+    def abandon(self) -> None:
+        """Closed without writing what is still in memory (after a failure: the disk is full)."""
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            self._pending, self._size = [], 0
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+def write_whole(path: str | Path, write: Callable[[str], T], suffix: str = "") -> T:
+    """`write(temporary)` into a new file beside `path`, renamed over `path` once whole: `path` is whole or as it was.
+    Returns what `write` returned. The temporary (named as TEMPORARY matches; `suffix` after it, e.g. '.mp4' for a
+    writer that reads the format from the name) is removed on any failure."""
+    path = Path(path)
+    tmp = str(path.parent / f"_{path.name}.{secrets.token_hex(4)}.partial{suffix}")  # made by `write`: the user's umask applies
+    try:
+        result = write(tmp)
+        os.replace(tmp, path)
+        return result
+    except OSError as e:
+        raise WriteFailed(path, reason(e)) from None
+    finally:
+        with contextlib.suppress(OSError):  # gone already (renamed), or not there to remove
+            os.unlink(tmp)
+
+
+def temporaries(folder: Path) -> list[Path]:
+    """Temporaries `write_whole` left in `folder` (a write killed before its rename)."""
+    return [p for p in folder.glob("_*.partial*") if TEMPORARY.fullmatch(p.name) and p.is_file()]

@@ -76,22 +76,18 @@ class Coefficients:
 
     def save(self, path: Path) -> None:
         """Written to a new temporary file beside it (mkstemp: O_EXCL, so never through a link someone placed),
-        then renamed over it: never a half-written cache file."""
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.npz")
-        try:
-            excitation = (
-                {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov}
-                if self.has_excitation
-                else {}
-            )
-            with os.fdopen(fd, "wb") as f:
-                np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
-                                    rho=self.rho, depth=self.depth, panels=self.panels, center=self.center, **excitation)  # fmt: skip
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        then renamed over it: never a half-written cache file. Its sha256 goes beside it (KEY.sha256, as
+        `sha256sum` writes it), checked when the cache is read (`verify_digest`)."""
+        excitation = (
+            {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov} if self.has_excitation else {}
+        )
+
+        def arrays(f) -> None:
+            np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
+                                rho=self.rho, depth=self.depth, panels=self.panels, center=self.center, **excitation)  # fmt: skip
+
+        digest = _replace(path, ".tmp.npz", arrays)
+        _replace(digest_path(path), ".tmp", lambda f: f.write(f"{digest}  {path.name}\n".encode()))
 
     @classmethod
     def load(cls, path: Path) -> Coefficients:
@@ -113,6 +109,51 @@ class Coefficients:
             raise ValueError(f"not a coefficients file ({type(e).__name__})") from None
         check(c)
         return c
+
+
+def _replace(path: Path, suffix: str, write) -> str:
+    """`write(file)` into a new temporary beside `path` (mkstemp: O_EXCL, never through a link), renamed over `path`
+    once whole; the sha256 of what was written."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        digest = file_sha256(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return digest
+
+
+def file_sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def digest_path(path: Path) -> Path:
+    """Where a cached file's sha256 is recorded: beside it, under its key (KEY.sha256)."""
+    return path.with_suffix(".sha256")
+
+
+def verify_digest(path: Path) -> None:
+    """ValueError unless `path` (a cached file) has the sha256 recorded beside it when it was written: plausible
+    numbers edited since (a damping 100 times too large passes `check`) are refused all the same."""
+    record = digest_path(path)
+    try:
+        recorded = record.read_text().split()[0]
+    except (OSError, UnicodeDecodeError, IndexError):
+        raise ValueError(f"no sha256 recorded beside it in {record.name}: cached by an older floatsim, or the record was lost") from None
+    try:
+        found = file_sha256(path)
+    except OSError as e:
+        raise ValueError(f"cannot read it ({e.strerror})") from None
+    if found != recorded:
+        raise ValueError(f"its content changed since it was cached: its sha256 is not the one recorded in {record.name}")
 
 
 def check(c: Coefficients) -> None:
@@ -254,12 +295,15 @@ def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth
 
 
 def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
-    """The shipped file or the user's cached one for `key`, else `solve_now()` (kept in the cache)."""
+    """The shipped file or the user's cached one for `key` (the cached one only with the sha256 recorded beside
+    it), else `solve_now()` (kept in the cache)."""
     cached = user_cache() / f"{key}.npz"
     bad, partial = [], None
     for path in (SHIPPED / f"{key}.npz", cached):
         if path.exists():
             try:
+                if path == cached:
+                    verify_digest(path)
                 found = Coefficients.load(path)
             except ValueError as e:
                 bad.append(f"{path} is not usable ({e})")
@@ -269,9 +313,8 @@ def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
             partial = partial or found
     what = "the wave excitation (diffraction)" if partial is not None else "radiation = 'bem'"
     try:
+        import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:
-            import capytaine  # noqa: F401  (said before a solve of minutes starts, or instead of it)
-
             note(
                 f"note: {bad[0]}: solving again"
                 if bad
@@ -288,6 +331,30 @@ def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
                             'pip install -e ".[bem]"') from None  # fmt: skip
     keep(result, cached)
     return result
+
+
+CAPYTAINE_CACHE = ("CAPYTAINE_CACHE_DIR", "XDG_CACHE_HOME")
+"""Where Capytaine makes its cache folder as it is imported, in the order it looks (else ~/.cache)."""
+
+
+def import_capytaine():
+    """Capytaine, imported (ImportError when it is not installed). It makes its cache folder as it loads: a
+    variable pointing where no folder can be made is a one-line ConfigError naming it, not a traceback."""
+    try:
+        import capytaine
+    except OSError as e:
+        raise ConfigError(cache_home_error(e)) from None
+    return capytaine
+
+
+def cache_home_error(e: OSError) -> str:
+    why = f"{e.strerror or e} at {e.filename}" if e.filename else (e.strerror or str(e))
+    name = next((n for n in CAPYTAINE_CACHE if os.environ.get(n, "").strip()), None)
+    if name is None:
+        return f"Capytaine cannot make its cache folder under ~/.cache ({why}): set XDG_CACHE_HOME to a folder it can write"
+    value = os.environ[name]
+    problem = "is a file, not a folder" if os.path.isfile(value) else f"cannot hold Capytaine's cache folder ({why})"
+    return f"{name}={value} {problem}: Capytaine keeps its cache under it; set {name} to a folder (or unset it)"
 
 
 def keep(result: Coefficients, path: Path) -> None:
@@ -317,7 +384,7 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     modes about its centre at every omega and at infinity, with a lid against irregular frequencies; with
     `headings`, the diffraction problem (the bodies held still) and the Froude-Krylov force for each."""
     try:
-        import capytaine as cpt
+        cpt = import_capytaine()
     except ImportError:
         raise MissingSolver(
             "radiation = 'bem' needs the boundary-element solver Capytaine for this body: pip install -e \".[bem]\""

@@ -1,7 +1,9 @@
 """The BEM cache trusts nothing it finds (issue 23, item 8), through `python -m sim run`: a damaged,
 wrongly shaped or non-passive coefficients file is refused in one line naming it (Capytaine is blocked
-here: no solve of tens of seconds), or solved again when a solver is there; the cache's temporary file
-is never written through a link someone placed; an unwritable cache costs a warning, not the run.
+here: no solve of tens of seconds), or solved again when a solver is there; so is a file whose content
+is not the sha256 recorded beside it when it was cached (a damping 100 times too large passes every other
+check); the cache's temporary file is never written through a link someone placed; an unwritable cache
+costs a warning, not the run; an XDG_CACHE_HOME that is a file is one line naming it.
 The solver, where one is needed, is a stand-in returning the shipped sphere's coefficients."""
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.bem import SHIPPED, Coefficients
+from sim.bem import SHIPPED, Coefficients, check, verify_digest
 
 ROOT = Path(__file__).resolve().parent.parent
 RUN = ["run", "--scene", "sphere", "--density", "400", "--t-end", "0.1"]
@@ -103,7 +105,58 @@ def test_a_link_at_the_old_temporary_name_is_not_written_through(key_name, tmp_p
     assert victim.read_text() == "precious" and link.is_symlink()
     path = cache / key_name
     assert not path.is_symlink() and Coefficients.load(path).panels == GOOD.panels
-    assert sorted(p.name for p in cache.iterdir()) == sorted([key_name, link.name])  # no temporary left behind
+    record = key_name.replace(".npz", ".sha256")
+    assert sorted(p.name for p in cache.iterdir()) == sorted([key_name, record, link.name])  # no temporary left behind
+
+
+def tamper(path: Path) -> None:
+    """The damping times 100, saved in the same format (plausible: it passes the check)."""
+    with np.load(path) as f:
+        arrays = {k: f[k] for k in f.files}
+    arrays["damping"] = 100 * arrays["damping"]
+    check(sphere(damping=arrays["damping"]))
+    np.savez_compressed(path, **arrays)
+
+
+@pytest.mark.parametrize("change", ["damping x 100", "record lost"])
+def test_a_cached_file_unlike_its_recorded_sha256_is_solved_again(change, key_name, tmp_path):
+    path = tmp_path / key_name
+    GOOD.save(path)
+    verify_digest(path)  # the record written with it
+    tamper(path) if change == "damping x 100" else path.with_suffix(".sha256").unlink()
+    done = cli(tmp_path)
+    assert done.returncode == 0, done.stderr
+    notes = [line for line in done.stderr.splitlines() if line.startswith("floatsim:")]
+    why = "its content changed since it was cached" if change == "damping x 100" else "no sha256 recorded beside it"
+    assert len(notes) == 1 and f"note: {path} is not usable ({why}" in notes[0] and "solving again" in notes[0], done.stderr
+    np.testing.assert_array_equal(Coefficients.load(path).damping, GOOD.damping)
+    verify_digest(path)  # cached again with its record
+
+
+def test_a_tampered_cache_file_is_refused_in_one_line_without_a_solver(key_name, no_solver, tmp_path):
+    path = tmp_path / key_name
+    GOOD.save(path)
+    tamper(path)
+    done = cli(tmp_path, no_solver)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert (
+        f"{path} is not usable (its content changed since it was cached" in done.stderr and "solving again needs Capytaine" in done.stderr
+    )
+
+
+NO_SOLVE = ("import sys, sim.bem as bem\n"
+            "bem.solve_parts = lambda *a, **k: sys.exit('the test failed: a BEM solve started')\n"
+            "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
+
+
+def test_xdg_cache_home_set_to_a_file_is_one_line_naming_it(tmp_path):
+    home = tmp_path / "cache-home"
+    home.write_text("a file, not a folder\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("FLOATSIM_BEM_CACHE", "CAPYTAINE_CACHE_DIR")}
+    env.update(XDG_CACHE_HOME=str(home), PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", NO_SOLVE, *RUN], capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"XDG_CACHE_HOME={home} is a file, not a folder" in done.stderr and done.stdout == ""
 
 
 def test_an_unwritable_cache_costs_a_warning_not_the_run(tmp_path):

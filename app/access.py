@@ -7,9 +7,7 @@ and nothing else. `own_origin_only` wraps that `process_request` while viser bui
 websocket handshake whose `Origin` is present and is not this viewer's own address is answered 403 before
 any message is read. Connections with no `Origin` (scripts, tests) are not pages: they stay allowed.
 
-Share tunnel: viser registers `ShareUrlRequest` / `ShareUrlDisconnect` for every client; one message makes
-the server open a tunnel to viser's public share service, after which anyone with its URL can reach the
-run. `refuse_share` replaces both handlers unless the user gave `--share`.
+What a page may send once connected is app/gate.py's concern.
 """
 
 from __future__ import annotations
@@ -18,7 +16,6 @@ import contextlib
 import http
 import ipaddress
 import threading
-from collections.abc import Callable
 from urllib.parse import urlsplit
 
 WILDCARDS = ("0.0.0.0", "::", "")
@@ -82,23 +79,13 @@ def own_origin_only(host: str):
 def _checked(inner, host: str):
     def process_request(connection, request):
         headers = request.headers
-        if headers.get("Upgrade", "").lower() == "websocket":
+        if "websocket" in (v.lower() for v in headers.get_all("Upgrade")):
             port = connection.local_address[1]
-            if not origin_allowed(headers.get("Origin"), host, port, headers.get("Host")):
+            origins, hosts = headers.get_all("Origin"), headers.get_all("Host")
+            if len(origins) > 1 or len(hosts) > 1:  # which one would a check believe? neither (and .get raised: HTTP 500)
+                return connection.respond(http.HTTPStatus.FORBIDDEN, "Repeated Origin or Host headers.\n")
+            if not origin_allowed(origins[0] if origins else None, host, port, hosts[0] if hosts else None):
                 return connection.respond(http.HTTPStatus.FORBIDDEN, "A page from another site may not use this viewer.\n")
         return inner(connection, request) if inner is not None else None
 
     return process_request
-
-
-def refuse_share(server, refused: Callable[[str], None]) -> None:
-    """Replace viser's handlers of a page's share-tunnel messages with a refusal (`refused(why)`)."""
-    from viser import _messages
-
-    handlers = server._websock_server._incoming_handlers
-
-    def refuse(client_id, message) -> None:
-        refused("this viewer was started without --share")
-
-    for kind in (_messages.ShareUrlRequest, _messages.ShareUrlDisconnect):
-        handlers[kind] = [refuse]

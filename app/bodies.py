@@ -18,6 +18,7 @@ import threading
 import time
 from dataclasses import dataclass
 from typing import Any
+from urllib.parse import quote
 
 import numpy as np
 import viser
@@ -27,7 +28,9 @@ from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
 from sim.system import Assembly, AssemblyFrame
 
-from .loop import Mailbox
+from .controls import Bound, _control
+from .gate import Gate
+from .loop import SPEED, Mailbox
 from .recorder import RecordPanel
 from .scene import LINE_COLOUR, LINES_HZ
 from .take import MAX_SHOTS, Take
@@ -76,6 +79,8 @@ class BodiesLoop(Mailbox):
         self._loaded: set = set()
         self._failed: set = set()
         self.publish = None
+        self.on_setting = None
+        """`on_setting(field, value)`: the GUI shows a value the loop chose (a clamped speed, a pause it made)."""
         self._speed, self._paused, self._diverged = 1.0, False, False
         self._notice, self._notice_id = "", 0
         self._epoch = self._steps = 0
@@ -123,6 +128,8 @@ class BodiesLoop(Mailbox):
                 for name, value in commands:
                     if name in ("pause", "step", "reset", "speed", "notice"):
                         getattr(self, f"_cmd_{name}")(value)
+                if any(name == "speed" for name, _ in commands):  # once per batch, after its last value (app/loop.py: _show_used)
+                    self._tell("speed", self._speed)
                 self._ensure_kernels()
                 now = time.monotonic()
                 if now >= next_tick:
@@ -130,7 +137,7 @@ class BodiesLoop(Mailbox):
                     try:
                         self._advance(now)
                     except Exception as e:  # noqa: BLE001 -- the thread must survive anything: pause and say why
-                        self._paused = True
+                        self._pause()
                         self._raise(f"Paused: the step failed: {type(e).__name__}: {e}")
                     self._publish_now()
                 elif barriers:
@@ -167,7 +174,8 @@ class BodiesLoop(Mailbox):
             self.run.step(n)
             self._steps += n
         except SimulationDiverged as e:
-            self._diverged = self._paused = True
+            self._diverged = True
+            self._pause()
             self._raise(f"Paused: {e}. Press Reset.")
 
     def _ensure_kernels(self) -> None:
@@ -210,12 +218,24 @@ class BodiesLoop(Mailbox):
             return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - compiling[0].started:.0f} s so far)"
         return "numpy reference (loading the fast kernels)" if self._jobs else "numpy reference"
 
+    def _pause(self) -> None:
+        """A pause the loop makes (a step, a divergence): the GUI is told."""
+        self._paused = True
+        self._tell("paused", True)
+
+    def _tell(self, field: str, value) -> None:
+        if self.on_setting is not None:
+            try:
+                self.on_setting(field, value)
+            except Exception as e:  # noqa: BLE001 -- a drawing failure must not stop the run
+                print(f"floatsim viewer: showing {field} failed: {type(e).__name__}: {e}", file=sys.stderr)
+
     def _cmd_pause(self, value) -> None:
-        self._paused = bool(value)
+        self._paused = value is True  # the gate lets only yes/no through; anything else runs
         self._anchor = None
 
     def _cmd_step(self, _value) -> None:
-        self._paused = True
+        self._pause()
         if not self._diverged:
             self._step(1)
 
@@ -226,10 +246,9 @@ class BodiesLoop(Mailbox):
         self._history.clear()
 
     def _cmd_speed(self, value) -> None:
-        speed = float(value) if isinstance(value, (int, float)) and math.isfinite(value) else 1.0
-        self._speed = min(max(speed, 0.01), 100.0)
-        if self._speed != value:
-            self._raise(f"Speed must be within 0.01-100: {self._speed:g} is used.")
+        self._speed, note = SPEED.clamp(value, self._speed)
+        if note:
+            self._raise(note)
         self._anchor = None
 
     def _cmd_notice(self, value) -> None:
@@ -332,6 +351,22 @@ class BodiesTake(Take):
         return view
 
 
+class BodiesControls(Bound):
+    """Pause, Step, Reset and Speed: a page's update posts a command; `show_setting` shows what the loop chose."""
+
+    def __init__(self, gui, post):
+        super().__init__(post)
+        with gui.add_folder("Run"):
+            self.paused = gui.add_checkbox("Pause", False, hint="Freeze the simulation (the view stays live)")
+            self.step = gui.add_button("Step", hint="Advance one time step")
+            self.reset = gui.add_button("Reset", hint="Back to the scene's initial state")
+            self.speed = _control(gui, SPEED, 1.0)
+        self._bind("paused", "pause")
+        self._bind("speed", "speed")
+        self.step.on_click(lambda _: post("step"))
+        self.reset.on_click(lambda _: post("reset"))
+
+
 class BodiesView:
     """The live viewer's scene and panel for a BodiesLoop; `show` runs on the simulation thread."""
 
@@ -340,11 +375,8 @@ class BodiesView:
         system = loop.run.system
         self.scene = BodiesScene(server, system)
         gui = server.gui
-        with gui.add_folder("Run"):
-            self.pause = gui.add_checkbox("Pause", False)
-            self.step = gui.add_button("Step")
-            self.reset = gui.add_button("Reset")
-            self.speed = gui.add_slider("Speed", 0.1, 10.0, 0.1, 1.0)
+        self.controls = BodiesControls(gui, loop.post)
+        loop.on_setting = self.controls.show_setting
         self.text = gui.add_markdown("")
         names = [g.name for g in system.joints if g.damping > 0]  # the joints with a take-off's damper
         self.takeoffs = names
@@ -354,10 +386,6 @@ class BodiesView:
                                   scales={"x": {"time": False}}, legend={"show": True}, aspect=2.2, visible=bool(names))  # fmt: skip
         self.recorder = RecordPanel(server, lambda text, client=None, error=False: loop.post("notice", text),
                                     new_take=lambda: BodiesTake(system, loop.run.columns()))  # fmt: skip
-        self.pause.on_update(lambda _: loop.post("pause", self.pause.value))
-        self.step.on_click(lambda _: loop.post("step"))
-        self.reset.on_click(lambda _: loop.post("reset"))
-        self.speed.on_update(lambda _: loop.post("speed", self.speed.value))
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._plotted, self._epoch, self._notice_id = -math.inf, -1, 0
 
@@ -365,8 +393,6 @@ class BodiesView:
         self.recorder.capture(snap)
         with self.server.atomic():
             self.scene.show(snap)
-            if self.pause.value != snap.paused:
-                self.pause.value = snap.paused
             self._readouts(snap)
         if snap.notice_id != self._notice_id:
             self._notice_id = snap.notice_id
@@ -413,20 +439,24 @@ def describe(snap: BodiesSnapshot, takeoffs: list[str]) -> str:
 
 
 class BodiesApp:
-    """A running viewer of several bodies: the server, the loop and the view (start_bodies)."""
+    """A running viewer of several bodies: the server, the loop and the view (start_bodies), behind the same gate
+    as the one-body viewer (app/gate.py)."""
 
-    def __init__(self, server: viser.ViserServer, loop: BodiesLoop, host: str):
-        self.server, self.loop = server, loop
+    def __init__(self, server: viser.ViserServer, loop: BodiesLoop, host: str, token: str | None = None, share: bool = False):
+        self.server, self.loop, self.token = server, loop, token
+        self.gate = Gate(server, lambda text: loop.post("notice", text), token=token, share=share)
         self.port = server.get_port()
         shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
         self.url = f"http://{shown}:{self.port}"
+        server.gui.configure_theme(show_share_button=share)
         self.view = BodiesView(server, loop)
-        self.recorder = self.view.recorder
+        self.controls, self.recorder = self.view.controls, self.view.recorder
         loop.publish = self.view.show
         loop.start()
 
     def address(self) -> str:
-        return self.url
+        """The link the banner prints: with a token, the page it opens may drive the run."""
+        return f"{self.url}/?token={quote(self.token, safe='')}" if self.token else self.url
 
     def latest(self) -> BodiesSnapshot:
         return self.loop.latest()
@@ -435,5 +465,6 @@ class BodiesApp:
         return self.loop.sync(timeout)
 
     def stop(self) -> None:
+        self.gate.stop()
         self.loop.stop()
         self.server.stop()

@@ -29,43 +29,15 @@ FOLDERS = {
 VECTOR_STEP = 0.1
 
 
-class Controls:
-    """Handles of every control by parameter key (`controls.density.value = 500` runs the same path as
-    the browser), plus paused, step, reset, speed and scene."""
+class Bound:
+    """Controls bound to a simulation thread's commands: a page's update posts its command (`_bind`), and
+    `show_setting` shows a value the loop chose without posting it again. Subclasses hold the handles as
+    attributes named by field."""
 
-    def __init__(self, server: viser.ViserServer, post: Callable[[str, Any], None], settings: Settings, scene_options: tuple[str, ...]):
-        gui = server.gui
+    def __init__(self, post: Callable[[str, Any], None]):
         self._post = post
         self._quiet = threading.local()  # set while we write a handle ourselves: its callback must not post it back
         self._written: dict[str, Any] = {}  # the value the loop last wrote to each control (pages may show it)
-        self._handles: dict[str, Any] = {}
-
-        self.notice = gui.add_markdown("", visible=False)
-        with gui.add_folder("Run"):
-            self.paused = gui.add_checkbox("Pause", settings.paused, hint="Freeze the simulation (the view stays live)")
-            self.step = gui.add_button("Step", hint="Advance one time step")
-            self.reset = gui.add_button("Reset", hint="Back to the scene's initial state, keeping these parameters")
-            self.speed = _control(gui, SPEED, settings.speed)
-            self.scene = gui.add_dropdown(
-                "Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters"
-            )
-        for title, sections in FOLDERS.items():
-            params = [p for p in CONTROLLED.values() if p.section in sections]
-            if params:
-                with gui.add_folder(title):
-                    for p in params:
-                        self._handles[p.key] = _control(gui, p, settings.value(p.key))
-        for key in (*CONTROLLED, "speed", "scene"):
-            self._bind(key, key)
-        self._bind("paused", "pause")
-        self.step.on_click(lambda _: self._post("step", None))
-        self.reset.on_click(lambda _: self._post("reset", None))
-
-    def __getattr__(self, key: str):
-        handles = self.__dict__.get("_handles", {})
-        if key in handles:
-            return handles[key]
-        raise AttributeError(key)
 
     def _bind(self, field: str, command: str) -> None:
         handle = getattr(self, field)
@@ -98,6 +70,43 @@ class Controls:
             self._written[field] = value
         finally:
             self._quiet.on = False
+
+
+class Controls(Bound):
+    """Handles of every control by parameter key (`controls.density.value = 500` runs the same path as
+    the browser), plus paused, step, reset, speed and scene."""
+
+    def __init__(self, server: viser.ViserServer, post: Callable[[str, Any], None], settings: Settings, scene_options: tuple[str, ...]):
+        super().__init__(post)
+        gui = server.gui
+        self._handles: dict[str, Any] = {}
+
+        self.notice = gui.add_markdown("", visible=False)
+        with gui.add_folder("Run"):
+            self.paused = gui.add_checkbox("Pause", settings.paused, hint="Freeze the simulation (the view stays live)")
+            self.step = gui.add_button("Step", hint="Advance one time step")
+            self.reset = gui.add_button("Reset", hint="Back to the scene's initial state, keeping these parameters")
+            self.speed = _control(gui, SPEED, settings.speed)
+            self.scene = gui.add_dropdown(
+                "Scene", scene_options, initial_value=settings.scene, hint="Load a preset with its own parameters"
+            )
+        for title, sections in FOLDERS.items():
+            params = [p for p in CONTROLLED.values() if p.section in sections]
+            if params:
+                with gui.add_folder(title):
+                    for p in params:
+                        self._handles[p.key] = _control(gui, p, settings.value(p.key))
+        for key in (*CONTROLLED, "speed", "scene"):
+            self._bind(key, key)
+        self._bind("paused", "pause")
+        self.step.on_click(lambda _: self._post("step", None))
+        self.reset.on_click(lambda _: self._post("reset", None))
+
+    def __getattr__(self, key: str):
+        handles = self.__dict__.get("_handles", {})
+        if key in handles:
+            return handles[key]
+        raise AttributeError(key)
 
     def show_shape(self, shape: str) -> None:
         """Only the sampling control that applies to the body at hand: points per edge for a cube or

@@ -1,13 +1,13 @@
-"""Every GUI update a browser sends is checked before viser applies it.
+"""What a GUI update from a browser may carry, checked (by app/gate.py) before viser applies it.
 
 viser applies a client's `GuiUpdateMessage` to the handle's state (any property it names, any value
 its type can be cast to), broadcasts it to every other client, and only then runs our callbacks. So
 one message could leave a value no client can decode (an int of 1e300 dropped every connection, for
 good), switch controls off for everyone (`disabled`, `visible`, `min`...), or make the server send a
-20 MB string to every tab. `guard_gui` puts a check in front of viser's handler: only the `value`
-property, of the handle's own type (finite, bounded numbers; capped strings; a dropdown's own
-options; vectors of its length). Anything else is dropped whole, with a short notice that never
-repeats the input. Range clamps with a visible note stay the simulation loop's job (app/loop.py).
+20 MB string to every tab. `refusal` lets through only the `value` property, of the handle's own type
+(finite, bounded numbers; capped strings; a dropdown's own options; vectors of its length). Anything
+else is dropped whole, with a short notice (`Refusals`) that never repeats the input. Range clamps with
+a visible note stay the simulation loop's job (app/loop.py).
 
 A control's declared properties live in `handle._impl.props` (viser 1.1.1: `props.label`, `props.options`);
 its value in `handle._impl.value`. An update from a page viser does not count as connected yet (it sent no
@@ -97,46 +97,3 @@ class Refusals:
             n, why, self._pending, self._last = self._pending, self._why, 0, time.monotonic()
         if n:
             self.notify(f"Ignored {n} {self.what}{'s' if n > 1 else ''} from a browser: {why}.")
-
-
-def guard_gui(gui, refused: Callable[[str], None], may_drive: Callable[[int, object], bool] | None = None) -> None:
-    """Put `refusal` in front of `gui`'s (a viser GuiApi's) handler of client GUI updates; with
-    `may_drive(client_id, handle)`, also refuse updates and uploads from pages it does not allow."""
-    from viser import _messages
-
-    handlers = gui._websock_interface._incoming_handlers
-    original = gui._handle_gui_updates
-    if original not in handlers.get(_messages.GuiUpdateMessage, []):
-        return  # already guarded, or a viser that handles updates elsewhere (then its own checks apply)
-
-    async def guarded(client_id, message) -> None:
-        handle = gui._gui_input_handle_from_uuid.get(message.uuid, None)
-        if handle is None:
-            return
-        if gui._resolve_client(client_id) is None:
-            refused(NOT_CONNECTED)
-            return
-        if may_drive is not None and not may_drive(client_id, handle):
-            refused(NO_TOKEN)
-            return
-        why = refusal(handle._impl, message.updates)
-        if why is not None:
-            refused(why)
-            return
-        await original(client_id, message)
-
-    updates = handlers[_messages.GuiUpdateMessage]
-    updates[updates.index(original)] = guarded
-    upload = gui._handle_file_transfer_start
-    starts = handlers.get(_messages.FileTransferStartUpload, [])
-    if may_drive is not None and upload in starts:
-
-        async def guarded_upload(client_id, message) -> None:
-            if not may_drive(client_id, None):
-                refused(NO_TOKEN)
-                return
-            result = upload(client_id, message)
-            if hasattr(result, "__await__"):
-                await result
-
-        starts[starts.index(upload)] = guarded_upload

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import hmac
 import signal
 import socket
 import sys
 import threading
 import time
 from pathlib import Path
-from urllib.parse import parse_qsl, quote
+from urllib.parse import quote
 
 import viser
 
@@ -17,21 +16,17 @@ from sim.config import ConfigError, load_scene, one_body_scenes
 from sim.hydrostatics import describe_rest
 
 from .about import About
-from .access import own_origin_only, refuse_share
+from .access import own_origin_only
 from .args import ViewArgs
 from .camera import CameraView
 from .controls import Controls, Layers
-from .guard import big_blocks_go_back, quiet_repeated_tracebacks, release_memory
-from .gui_guard import Refusals, guard_gui
+from .gate import Gate
 from .loop import SimLoop, Snapshot
 from .readouts import Readouts
 from .recorder import RecordPanel
 from .scene import SceneView
-from .share import PROBE, copy_button_html, link_query, mesh_left_out, parse_link, probe_address
+from .share import copy_button_html, link_query, mesh_left_out, parse_link
 from .upload import BodyFile
-from .upload_guard import guard_uploads
-
-TRIM_SECONDS = 5.0
 
 
 class ViewerApp:
@@ -43,6 +38,10 @@ class ViewerApp:
         self.port = server.get_port()
         shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
         self.url = f"http://{shown}:{self.port}"
+        self.token = token
+        self.gate = Gate(server, lambda text: loop.post("notice", text), token=token, share=share, on_link=self._apply_link)
+        """Checks every message a page sends (app/gate.py), from before the first control exists."""
+        self.refusals, self.uploads, self.drivers = self.gate.refusals, self.gate.uploads, self.gate.drivers
         server.gui.configure_theme(control_width="large", show_share_button=share)
         snap = loop.latest()
         tabs = server.gui.add_tab_group()  # the panel's top: the guide first, the live numbers and plots one click away
@@ -55,6 +54,7 @@ class ViewerApp:
         self._view_of = snap.settings.scene
         self.layers = Layers(server)
         self.body_file = BodyFile(server, loop.post, lambda text, client=None: loop.post("notice", text))
+        self.body_file.running = self._running_mesh
         self.recorder = RecordPanel(server, self._notify)
         with server.gui.add_folder("Share a link"):
             self.link = server.gui.add_html(copy_button_html(link_query(snap.settings)))
@@ -65,18 +65,7 @@ class ViewerApp:
         self._described = None
         self.connections = 0
         """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
-        self.refusals = Refusals(lambda text: loop.post("notice", text))
-        """Counts GUI updates refused before viser applied them (app/gui_guard.py)."""
-        self.token = token
-        self.drivers: set[int] = set()
-        """Pages that showed the token (all pages when there is none)."""
-        guard_gui(server.gui, self.refusals, self._may_drive if token else None)
-        if not share:  # a public tunnel only when the user asked for one (app/access.py)
-            refuse_share(server, Refusals(lambda text: loop.post("notice", text), "request for a public share link"))
-        self.uploads = guard_uploads(server.gui, self.body_file, loop)  # bytes capped as they arrive; the uploads folder bounded
         server.on_client_connect(self._connected)
-        self._stopped = threading.Event()
-        threading.Thread(target=self._trim, name="floatsim-trim", daemon=True).start()
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()
 
@@ -84,31 +73,19 @@ class ViewerApp:
         """The link the banner prints: with a token, the page it opens may drive the run."""
         return f"{self.url}/?token={quote(self.token, safe='')}" if self.token else self.url
 
-    def _trim(self) -> None:
-        """Every few seconds, hand back to the system what refused oversized messages took (app/guard.py; ~5 ms)."""
-        while not self._stopped.wait(TRIM_SECONDS):
-            release_memory()
-
     def _connected(self, client: viser.ClientHandle) -> None:
-        """A new page: the first browser restarts the run; every page's address may carry a setup."""
+        """A new page: the first browser restarts the run (its address, which may carry a setup, comes to _apply_link)."""
         self.connections += 1
-        guard_gui(client.gui, self.refusals, self._may_drive if self.token else None)  # its own controls (address probe, README modal)
         if len(self.server.get_clients()) <= 1:
             self.loop.post("reset")
-        probe_address(client, self._apply_link)
 
-    def _may_drive(self, client_id: int, handle) -> bool:
-        """With a token, a page drives the run only once its address showed it; the probe that reads
-        the address is always let through."""
-        props = getattr(getattr(handle, "_impl", None), "props", None)  # viser 1.1.1 keeps the label there
-        return client_id in self.drivers or getattr(props, "label", None) == PROBE
+    def _running_mesh(self) -> str | None:
+        """The running body's mesh file, which the uploads folder's bound never removes."""
+        body = self.loop.latest().settings.config.body
+        return str(body.mesh) if body.shape == "mesh" and body.mesh else None
 
     def _apply_link(self, client: viser.ClientHandle, query: str) -> None:
-        if self.token:
-            given = dict(parse_qsl(query.lstrip("?"))).get("token", "")
-            if not hmac.compare_digest(given.encode(), self.token.encode()):
-                return  # it may watch; its setup and its controls are refused
-            self.drivers.add(client.client_id)
+        """A page's address (its token, if one is asked, already checked by the gate): the setup it carries."""
         commands, problems = parse_link(query, self.loop.scene_options)
         for name, value in commands:
             self.loop.post(name, value)
@@ -131,7 +108,7 @@ class ViewerApp:
         return self.loop.sync(timeout)
 
     def stop(self) -> None:
-        self._stopped.set()
+        self.gate.stop()
         self.loop.stop()
         self.server.stop()
 
@@ -216,8 +193,6 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
     port = check_address(args.host, args.port)
     presets = one_body_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
-    quiet_repeated_tracebacks()
-    big_blocks_go_back()
     loop = SimLoop(
         scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True, kernels=kernels
     )
@@ -237,16 +212,14 @@ def start_bodies(args: ViewArgs, scene, *, publish_hz: float = 30.0, kernels: bo
     """The viewer of a scene of several bodies (app/bodies.py)."""
     from .bodies import BodiesApp, BodiesLoop
 
-    for flag, given in (("--mesh", args.mesh is not None), ("--token", args.token), ("--share", args.share)):
-        if given:
-            raise ConfigError(f"{flag} is for one-body scenes: the viewer of several bodies ({args.scene}) has no such control yet")
+    if args.mesh is not None:
+        raise ConfigError(f"--mesh is for one-body scenes: the viewer of several bodies ({args.scene}) has no such control yet")
     port = check_address(args.host, args.port)
     loop = BodiesLoop(scene, args.scene, publish_hz=publish_hz, kernels=kernels)
     with own_origin_only(args.host):
         server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
-    refuse_share(server, Refusals(lambda text: loop.post("notice", text), "request for a public share link"))
     try:
-        return BodiesApp(server, loop, args.host)
+        return BodiesApp(server, loop, args.host, args.token, args.share)
     except BaseException:
         loop.stop()
         server.stop()

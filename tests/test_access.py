@@ -11,10 +11,10 @@ import io
 
 import pytest
 import websockets
-from page import Page, opened_with
 from viewer import wait_for
 
 from app.loop import CONTROLLED
+from app.page import Page, opened_with
 
 DENSITY_MAX = (CONTROLLED["density"].live or (CONTROLLED["density"].lo, CONTROLLED["density"].hi))[1]
 
@@ -163,7 +163,23 @@ def test_pages_from_another_site_cannot_connect():
         assert asyncio.run(status(port, f"http://127.0.0.1:{port}")) is True
         assert asyncio.run(status(port, f"http://localhost:{port}")) is True
         assert asyncio.run(status(port, None)) is True  # a script, not a page
+        assert upgrade_status(port, ("Origin: http://127.0.0.1", "Origin: http://evil.example")) == 403  # not a 500
+        assert upgrade_status(port, ("Host: 127.0.0.1", "Host: evil.example")) == 403
+        assert upgrade_status(port, ("Origin: http://127.0.0.1",)) == 101
         assert app.loop.is_alive()
+
+
+def upgrade_status(port: int, headers: tuple[str, ...]) -> int:
+    """The HTTP status a websocket handshake with these extra header lines gets (a raw request: clients send one of each)."""
+    import socket
+
+    lines = ["GET / HTTP/1.1", "Upgrade: websocket", "Connection: Upgrade", "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==",
+             "Sec-WebSocket-Version: 13", f"Sec-WebSocket-Protocol: viser-v{__import__('viser').__version__}", *headers]  # fmt: skip
+    if not any(h.startswith("Host:") for h in headers):
+        lines.insert(1, f"Host: 127.0.0.1:{port}")
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(("\r\n".join(lines) + "\r\n\r\n").encode())
+        return int(s.recv(1024).split(b" ", 2)[1])
 
 
 @pytest.mark.slow

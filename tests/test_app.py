@@ -745,8 +745,7 @@ def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_
     own coordinates and stays; Reset view sends the starting camera; still water starts with Follow off."""
     import asyncio
 
-    from page import Page
-
+    from app.page import Page
     from app.scene import ROOT
 
     app = start(ViewArgs(scene="waves", port=0), kernels=False, publish_hz=20.0)

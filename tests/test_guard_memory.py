@@ -27,11 +27,6 @@ def test_heap_trim_forks_no_process_after_the_first(monkeypatch):
     assert hasattr(guard._libc(), "malloc_trim")  # glibc here: the trim really runs
 
 
-CAMERA = {"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (3.0, 3.0, 3.0), "fov": 1.0, "near": 0.01, "far": 100.0,
-          "image_height": 600, "image_width": 800, "look_at": (0.0, 0.0, 0.0), "up_direction": (0.0, 0.0, 1.0)}  # fmt: skip
-"""What a browser sends first; viser counts a page as connected (and runs our on-connect) only after it."""
-
-
 @pytest.mark.slow
 def test_pages_that_come_and_go_leave_nothing_behind():
     """300 pages connect (speaking viser's protocol), get the scene and the address probe, and leave:
@@ -49,6 +44,7 @@ def test_pages_that_come_and_go_leave_nothing_behind():
     from app.args import ViewArgs
     from app.guard import release_memory
     from app.main import start
+    from app.page import CAMERA
     from tests.test_gui_guard import rss_mib
 
     camera = msgspec.msgpack.encode(CAMERA)

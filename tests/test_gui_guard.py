@@ -15,9 +15,9 @@ import msgspec
 import pytest
 import viser
 import websockets
-from page import CAMERA
 
 from app.gui_guard import MAX_NUMBER, Refusals, refusal
+from app.page import CAMERA
 
 BAD_UPDATES = (
     {"value": 1e300}, {"value": -1e300}, {"value": math.inf}, {"value": math.nan}, {"value": 2.0 * MAX_NUMBER},

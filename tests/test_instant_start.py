@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from page import Page
 
 import sim
+from app.page import Page
 
 ROOT = Path(__file__).resolve().parents[1]
 READOUT = re.compile(r"t = \*\*([-0-9.]+) s\*\*")

@@ -21,9 +21,9 @@ import viser
 import websockets
 from viewer import wait_for
 
+from app.page import CAMERA
+
 PART = 512 * 1024  # what viser's page sends per part
-CAMERA = {"type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [3.0, 3.0, 2.0], "fov": 1.0, "near": 0.01, "far": 100.0,
-          "image_height": 600, "image_width": 800, "look_at": [0.0, 0.0, 0.0], "up_direction": [0.0, 0.0, 1.0]}  # fmt: skip
 DEGENERATE_OBJ = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n"  # two triangles back to back: closed, no volume
 
 

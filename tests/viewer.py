@@ -11,6 +11,6 @@ def wait_for(app, condition, timeout=30.0, what="condition"):
         if condition(snap):
             return snap
         if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}; last: t={snap.frame.t}, z={snap.frame.x_world[2]}, "
-                                 f"density={snap.density}, notice={snap.notice!r}")  # fmt: skip
+            where = f"z={snap.frame.x_world[2]}, density={snap.density}" if hasattr(snap, "density") else f"paused={snap.paused}"
+            raise AssertionError(f"timed out waiting for {what}; last: t={snap.frame.t}, {where}, notice={snap.notice!r}")
         time.sleep(0.05)

@@ -494,14 +494,18 @@ class Simulation:
 
     def _rebase_energy(self) -> None:
         """Energy reference for blow-up detection: a rise of 10x the body's energy scale
-        (its weight and displaced water lifted by its own size, plus its kinetic energy) is no drift."""
+        (its weight and displaced water lifted by its own size, plus its kinetic energy, plus M |U|^2 in a
+        current U) is no drift."""
         frame = self.frame()
         body, p = self.body, self.params
         if not (np.isfinite(frame.E_total) and np.all(np.isfinite(frame.force_world)) and np.all(np.isfinite(frame.torque_world))):
             raise SimulationDiverged(f"the state at t = {self.state.t:g} s gives non-finite forces or energy: check the initial "
                                      "position, velocities and the body's size and density")  # fmt: skip
         self._E_ref = frame.E_total
-        self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin
+        # The energy is the seabed's: a current feeds a body up to its speed, 1/2 M |u' + U|^2 <= M |u'|^2 + M |U|^2
+        # (u' its motion in the water): without that term a small body carried by a strong current read as a blow-up.
+        carried = body.mass * float(np.dot(self.scene.water.current, self.scene.water.current))
+        self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin + carried
 
     def stability_numbers(self) -> dict[str, float]:
         """The step's dimensionless numbers against the integrator's stability limits (sim/stability.py)."""

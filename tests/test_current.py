@@ -81,3 +81,24 @@ def test_a_current_with_radiation_is_refused_in_one_line():
                           timeout=120)  # fmt: skip
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and "current with radiation" in done.stderr, done.stderr
+
+
+def test_a_small_body_released_in_a_strong_current_runs_as_the_same_body_thrown_into_water_at_rest(tmp_path):
+    """Issue 37: a 0.3 m cube released at rest in a 20 m/s current (the range's limit) was stopped as a divergence at
+    t = 0.7 s: the blow-up check measured the energy the current gives it (1/2 M U^2, 4.9 kJ) against the cube's own
+    scale (10.5 J at rest). Through the CLI it now runs, and is (Galilean invariance) the cube thrown at -U into water
+    at rest, seen moving with the water: positions shifted by U t, velocities by U."""
+    out = tmp_path / "strong.csv"
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "damped", "--size", "0.3", "--current", "20", "0", "--t-end", "1.5",
+                           "--every", "10", "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 0 and "diverged" not in done.stderr, done.stderr
+    rows = np.genfromtxt(out, delimiter=",", names=True)
+    U = np.array([20.0, 0.0, 0.0])
+    thrown = Simulation(with_overrides(load_scene("damped"), body__size=0.3, initial__velocity=tuple(-U)), backend="numpy")
+    for row in rows[1:]:
+        thrown.step(10)
+        s = thrown.state
+        assert row["t"] == pytest.approx(s.t, abs=1e-9)
+        np.testing.assert_allclose([row["x"], row["y"], row["z"]], s.x_world + U * s.t, rtol=0, atol=1e-6)
+        np.testing.assert_allclose([row["ux"], row["uy"], row["uz"]], s.u_world + U, rtol=0, atol=1e-6)
+    assert rows["ux"][-1] > 0.9 * U[0]  # carried up to the current's speed

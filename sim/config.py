@@ -19,6 +19,7 @@ from .forces import TERMS
 from .integrators import INTEGRATORS
 from .joints import JOINTS
 from .limits import check_samples
+from .moorings import SURFACE, check_start, lines_of
 from .parameters import Param
 from .surface import FORCE_MODELS
 
@@ -374,6 +375,12 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):
         raise ConfigError(f"[moorings] lines = {m.lines} but {len(m.anchors)} anchors: give one or the other (anchors: a line each)")
+    for i, anchor in enumerate(m.anchors):
+        if anchor[2] > SURFACE:
+            raise ConfigError(f"[moorings] anchor {i + 1} is at z = {anchor[2]:g} m, above the water: MoorDyn would take its line as "
+                              "submerged all along; put anchors at or below z = 0")  # fmt: skip
+    if not m.line_file and (spread := lines_of(m)) is not None:
+        check_start(spread, checked["fluid"].rho)  # before MoorDyn: its start-up cannot be cut short
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)

@@ -22,6 +22,9 @@ import contextlib
 import ctypes
 import math
 import os
+import re
+import signal
+import struct
 import sys
 import tempfile
 import time
@@ -39,6 +42,17 @@ REACH = 1.1
 """A line may span at most this times its unstretched length (a 10 % stretch) at the start."""
 SEABED_STIFFNESS = 3.0e6
 """Seabed stiffness, Pa/m: MoorDyn's usual value (a node sinks 0.3 mm per kPa of its weight on the seabed)."""
+RELAX_SECONDS = 200.0
+"""MoorDyn's start-up (Init) relaxes the lines towards their rest shape for at most this long (TmaxIC), in its own steps;
+it stops sooner once the fairleads' pull settles (0.2 s wall for moored-buoy, 0.5 s for rm3-moored)."""
+NS_PER_SEGMENT_STEP = 300.0
+"""Wall time of one segment over one MoorDyn step, ns: measured 140-230 ns in its start-up's steps and 260-320 ns in a
+run's (RK2, with the coupling's calls) on this machine (2 cores, under load); the larger, so an estimate is an upper bound."""
+START_SECONDS = 120.0
+"""The most MoorDyn's start-up may take at its longest (RELAX_SECONDS of relaxation): lines that need more are refused
+before the run. The presets' estimates: 3.5 s (moored-buoy), 2.5 s (rm3-moored)."""
+SURFACE = 0.0
+"""The still water's height, m: MoorDyn's water reaches it (a line above it is treated as submerged all the same)."""
 
 
 def moordyn():
@@ -95,6 +109,9 @@ class LineSet:
     anchors: tuple = ()
     fairleads: tuple = ()
 
+    def count(self) -> int:
+        return len(self.anchors) or self.lines
+
     def headings(self) -> np.ndarray:
         return np.radians(self.first_heading) + 2 * math.pi * np.arange(self.lines) / self.lines
 
@@ -119,13 +136,20 @@ class LineSet:
         a heavy chain; on a light line it would be the stiffest rate of all)."""
         return 2 * math.sqrt(SEABED_STIFFNESS * self.line_mass / self.line_diameter)
 
+    def limits(self, rho: float) -> dict[str, float]:
+        """The times MoorDyn's explicit steps must resolve, s: an axial wave's crossing of a segment (MoorDyn's CFL rule:
+        the node's natural period, with the mass that moves along the line, its own plus CaAx's added water: none) and
+        the seabed contact's period over 2 pi."""
+        along = self.line_mass + LINE_DRAG[3] * rho * math.pi * self.line_diameter**2 / 4
+        return {
+            "axial": (self.line_length / self.segments) / math.sqrt(self.line_stiffness / along),
+            "seabed": math.sqrt(self.line_mass / (SEABED_STIFFNESS * self.line_diameter)),
+        }
+
     def sub_step(self, rho: float) -> float:
-        """MoorDyn's time step: a quarter of the time an axial wave takes along a segment, and of the seabed
-        contact's period over 2 pi (its explicit scheme's stability, with room)."""
-        mass = self.line_mass + rho * math.pi * self.line_diameter**2 / 4  # with the water it carries
-        axial = (self.line_length / self.segments) / math.sqrt(self.line_stiffness / mass)
-        bed = math.sqrt(self.line_mass / (SEABED_STIFFNESS * self.line_diameter))
-        return 0.25 * min(axial, bed)
+        """MoorDyn's time step (its dtM): a quarter of the shorter of the two limits (its scheme's stability, with room;
+        MoorDyn's own CFL default is pi times the crossing)."""
+        return 0.25 * min(self.limits(rho).values())
 
     def input_file(self, x0: np.ndarray, R0: np.ndarray, rho: float, g: float) -> str:
         """The MoorDyn v2 input file of the spread: anchors about the world's z axis, fairleads on a body at x0
@@ -174,6 +198,112 @@ ID LineType AttachA AttachB UnstrLen NumSegs Outputs
 """
 
 
+def start_seconds(dt: float, segments: int, relax: float = RELAX_SECONDS) -> float:
+    """The longest MoorDyn's start-up can take, s: every step of its relaxation, over every segment."""
+    return relax / dt * segments * NS_PER_SEGMENT_STEP * 1e-9
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 600:
+        return f"{seconds:.3g} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
+
+
+def _two_digits(x: float, up: bool) -> str:
+    """x to two significant digits, rounded up or down (a suggested value must itself pass)."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return f"{(math.ceil if up else math.floor)(x / unit * (1 - 1e-12 if up else 1 + 1e-12)) * unit:.2g}"
+
+
+def check_start(lines: LineSet, rho: float) -> None:
+    """Refuse lines whose MoorDyn step would make its start-up longer than START_SECONDS (and the run as slow), before
+    MoorDyn is called: one line with the step they need, the time it would take and what to change."""
+    dt, limits, segments = lines.sub_step(rho), lines.limits(rho), lines.count() * lines.segments
+    seconds = start_seconds(dt, segments)
+    if seconds <= START_SECONDS:
+        return
+    floor = dt * seconds / START_SECONDS  # the shortest step the budget allows with these segments
+    if limits["axial"] <= limits["seabed"]:
+        why = f"a quarter of an axial wave's {limits['axial']:.3g} s crossing of a {lines.line_length / lines.segments:.3g} m segment"
+    else:
+        why = f"a quarter of the seabed contact's period over 2 pi, {limits['seabed']:.3g} s for this line_mass and line_diameter"
+    if limits["axial"] <= limits["seabed"] and limits["seabed"] >= 4 * floor:  # the stiffness alone can bring the step up
+        stiffness = lines.line_stiffness * (limits["axial"] / (4 * floor)) ** 2
+        change = f"lower [moorings] line_stiffness to {_two_digits(stiffness, up=False)} N or less, or use fewer segments"
+    else:  # both limits grow as sqrt(line_mass)
+        heavier = _two_digits(lines.line_mass * (seconds / START_SECONDS) ** 2, up=True)
+        change = f"use a heavier [moorings] line_mass ({heavier} kg/m or more) or a thinner line_diameter"
+    raise ConfigError(f"the mooring lines need MoorDyn steps of {dt:.3g} s ({why}): MoorDyn's start-up could take up to {_duration(seconds)} "
+                      f"({RELAX_SECONDS:g} s of relaxation, {RELAX_SECONDS / dt:.2g} steps of {segments} segments) and every simulated second "
+                      f"of the run {_duration(seconds / RELAX_SECONDS)}, "
+                      f"over the {START_SECONDS:g} s allowed for the start-up (steps of {floor:.2g} s or longer); {change}")  # fmt: skip
+
+
+MOORDYN_RELAX = 120.0
+"""MoorDyn v2's TmaxIC where its input file gives none, s."""
+
+
+def _option(options: str, names: tuple[str, ...], default: float) -> float:
+    """An option's value from a MoorDyn file's OPTIONS section ("value name" lines, names in any case; the last one given)."""
+    found = re.findall(rf"(?im)^\s*(\S+)\s+({'|'.join(names)})\b", options)
+    try:
+        return float(found[-1][0]) if found else default
+    except ValueError:
+        return default
+
+
+def _settle(md, system, x, v) -> int:
+    """MoorDyn's Init (the lines' rest shape, its relaxation: up to START_SECONDS) in a forked child, whose state this
+    process then loads: a C call cannot be interrupted, a child can be ended (Ctrl-C stops it at once). MoorDyn's status."""
+    if not hasattr(os, "fork"):  # (no fork: in this process, as before)
+        with _quiet():
+            return md.Init(system, x, v)
+    status, state = _init_in_child(md, system, x, v)
+    if status == 0:
+        with _quiet():
+            md.Init_NoIC(system, x, v)  # set up as Init does, without the relaxation; then the child's state, to the bit
+        md.Deserialize(system, state)
+    return status
+
+
+def _init_in_child(md, system, x, v) -> tuple[int, bytes]:
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read)
+        _child(md, system, x, v, write)  # never returns
+    os.close(write)
+    try:
+        with open(read, "rb") as pipe:
+            data = pipe.read()
+    except BaseException:  # Ctrl-C (KeyboardInterrupt) while it relaxes: end it now
+        os.kill(pid, signal.SIGKILL)
+        raise
+    finally:
+        _, code = os.waitpid(pid, 0)
+    if os.waitstatus_to_exitcode(code) != 0 or len(data) < 4:
+        why = f"signal {-os.waitstatus_to_exitcode(code)}" if os.WIFSIGNALED(code) else f"exit status {os.waitstatus_to_exitcode(code)}"
+        raise ConfigError(f"MoorDyn stopped while finding the lines' rest shape ({why})")
+    return struct.unpack("<i", data[:4])[0], data[4:]
+
+
+def _child(md, system, x, v, fd: int) -> None:
+    """In the forked child: Init on its copy of the system, the status and state down the pipe, then out with os._exit
+    (no Python clean-up: the temporary folder and any open output are the parent's)."""
+    code = 1
+    try:
+        with contextlib.suppress(Exception):
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a terminal's Ctrl-C reaches the whole group: the parent decides
+            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # Linux's PR_SET_PDEATHSIG: die with the parent
+        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)  # MoorDyn's progress ("t = ...") is not the parent's stdout
+        status = md.Init(system, x, v)
+        with open(fd, "wb") as pipe:
+            pipe.write(struct.pack("<i", status) + (md.Serialize(system) if status == 0 else b""))
+        code = 0
+    finally:
+        os._exit(code)
+
+
 def lines_of(section) -> LineSet | None:
     """The [moorings] table's lines (None when it declares none: no spread, no anchors)."""
     if not section.lines and not section.anchors:
@@ -206,18 +336,40 @@ class Moorings:
         self.r_body = (world - x0) @ R0
         """(k, 3) the fairleads in the body frame, m."""
         self._lines = [md.GetLine(self._system, i + 1) for i in range(md.GetNumberLines(self._system))]
+        try:
+            self._check_input(text, [p for p in points if md.GetPointType(p) == md.POINT_TYPE_FIXED])
+        except ConfigError:
+            self.close()
+            raise
         x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0)
-        with _quiet():
-            status = md.Init(self._system, x, v)
+        status = _settle(md, self._system, x, v)
         if status:
             self.close()
             raise ConfigError(f"MoorDyn could not find the lines' rest shape (error {status})")
+        md.SetVerbosity(self._system, md.LEVEL_NONE)  # a step's failure is said in one line below, not in MoorDyn's two
         self.t = float(t0)
         self.seconds = 0.0
         """Wall time spent in MoorDyn's steps so far, s (the benchmark's split)."""
         self._forces = np.array([md.GetPointForce(p) for p in self._fairleads], float)  # at t, on the fairleads
         self.load = self._wrench(self._forces, R0)
         """(6,) the lines' force and moment about the centre of mass on the body, world frame, N and N m."""
+
+    def _check_input(self, text: str, anchors: list) -> None:
+        """What scene validation checks of a spread, for a MoorDyn file: anchors in the water, and a start-up within
+        START_SECONDS at the file's dtM and TmaxIC (a file without dtM lets MoorDyn pick its step: not checked)."""
+        md = self._md
+        for i, p in enumerate(anchors):
+            z = md.GetPointPos(p)[2]
+            if z > SURFACE:
+                raise ConfigError(f"mooring anchor (Fixed point) {i + 1} is {z:g} m above the water: MoorDyn would take its line as submerged; "
+                                  "put it at or below z = 0")  # fmt: skip
+        options = re.split(r"(?im)^-+\s*options\b.*$", text)[-1]
+        dt, relax = _option(options, ("dtm", "dt"), math.inf), _option(options, ("tmaxic", "ictmax"), MOORDYN_RELAX)
+        segments = sum(md.GetLineN(line) for line in self._lines)
+        if math.isfinite(dt) and (seconds := start_seconds(dt, segments, relax)) > START_SECONDS:
+            raise ConfigError(f"the mooring input's MoorDyn step dtM = {dt:g} s over {segments} segments: its start-up could take "
+                              f"{_duration(seconds)} ({relax:g} s of relaxation, TmaxIC), over the {START_SECONDS:g} s allowed; "
+                              "raise dtM or lower TmaxIC in the mooring file, or use fewer segments")  # fmt: skip
 
     @classmethod
     def of_scene(cls, scene, x0, R0, u0, omega0) -> Moorings | None:
@@ -250,13 +402,17 @@ class Moorings:
         lever = self.r_body @ R.T
         pos, vel = self._kinematics(x, lever, u, omega)
         started = time.perf_counter()
-        with _quiet():
-            ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)
+        try:
+            with _quiet():
+                ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)
+        except RuntimeError:  # MoorDyn found NaN in its nodes: its own step was too long for the lines
+            ahead = np.full((len(self._fairleads), 3), np.nan)
         self.seconds += time.perf_counter() - started
         if not np.all(np.isfinite(ahead)):
             from .errors import SimulationDiverged
 
-            raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments")
+            raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments "
+                                     "(a mooring file's dtM: at most a quarter of an axial wave's crossing of a segment, sqrt(mass / EA) per metre)")  # fmt: skip
         now, later = self._forces.sum(axis=0), ahead.sum(axis=0)
         turn_now, turn_later = _moment(lever, self._forces), _moment(lever, ahead)
         self._forces, self.t = ahead, self.t + dt

@@ -234,3 +234,141 @@ def test_anchors_and_fairleads_given_point_by_point_are_the_spread_they_describe
     scene_file.write_text(text.replace(f"anchors = {anchors}", f"anchors = {deep}"))
     done, _ = run_cli(tmp_path, "--scene", str(scene_file), "--t-end", "0.1")
     assert done.returncode == 2 and "below the seabed" in done.stderr and "Traceback" not in done.stderr, done.stderr
+
+
+@pytest.mark.parametrize(
+    "given, step",
+    [({"line_stiffness": 1e13}, "1.11e-07 s"), ({"line_mass": 1e-9}, "3.23e-08 s"), ({"segments": 500, "lines": 8}, "4.43e-05 s")],
+)
+def test_lines_whose_moordyn_start_up_would_take_too_long_are_refused_before_it(tmp_path, given, step):
+    """Issue 37: values inside the accepted ranges used to sit in MoorDyn's start-up for hours (1.8e9 steps of 1.1e-7 s).
+    Now one line, exit 2, at once: the step they need, the time it would take, what to change; the value it
+    suggests passes the same rule (and the preset as shipped does)."""
+    import re
+    import time
+
+    from sim.moorings import check_start
+
+    flags = [a for k, v in given.items() for a in (f"--{k.replace('_', '-')}", f"{v:g}")]
+    started = time.monotonic()
+    done, _ = run_cli(tmp_path, "--scene", "moored-buoy", "--t-end", "0.1", *flags)
+    assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert (
+        f"MoorDyn steps of {step}" in done.stderr and "start-up could take up to" in done.stderr and "over the 120 s allowed" in done.stderr
+    )
+    assert time.monotonic() - started < 30.0  # refused before MoorDyn, not after
+    key, value = re.search(r"(line_stiffness|line_mass) (?:to |\()([0-9.e+-]+) (?:N|kg/m)", done.stderr).groups()
+    scene = load_scene("moored-buoy")
+    overrides = {f"moorings__{k}": v for k, v in given.items()}
+    with pytest.raises(ConfigError, match=f"MoorDyn steps of {step}"):
+        with_overrides(scene, **overrides)
+    check_start(lines_of(with_overrides(scene, **{**overrides, f"moorings__{key}": float(value)}).moorings), RHO)  # passes
+    check_start(lines_of(scene.moorings), RHO)
+
+
+def test_ctrl_c_stops_moordyns_start_up_at_once(tmp_path):
+    """MoorDyn's start-up is one C call that Python cannot interrupt: it runs in a forked child, which Ctrl-C ends.
+    Stiffer lines (EA 1e8: steps of 3.5e-5 s, a start-up of several seconds, under the 120 s budget) stopped
+    in the middle of it: out within 2 s, exit 130, one line, and the child gone with it."""
+    import signal
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "sim", "run", "--scene", "moored-buoy", "--line-stiffness", "1e8", "--t-end", "1"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    deadline = time.monotonic() + 120
+    while proc.poll() is None and not children.read_text().split() and time.monotonic() < deadline:
+        time.sleep(0.02)  # until the start-up's child exists
+    assert proc.poll() is None, proc.communicate()
+    child = children.read_text().split()[0]
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    sent = time.monotonic()
+    _, err = proc.communicate(timeout=60)
+    stopped_in = time.monotonic() - sent
+    print(f"stopped {stopped_in:.2f} s after Ctrl-C")
+    assert proc.returncode == 130 and stopped_in < 2.0, (proc.returncode, stopped_in, err)
+    assert "Traceback" not in err and err.count("\n") == 1 and "interrupted (Ctrl-C)" in err, err
+    assert not Path(f"/proc/{child}").exists()
+
+
+def test_a_moordyn_file_is_held_to_the_same_rules(tmp_path):
+    """[moorings] line_file: its dtM and TmaxIC against the start-up budget, its Fixed points (anchors) in the water."""
+    scene = load_scene("moored-buoy")
+    text = lines_of(scene.moorings).input_file(np.array(scene.initial.position), np.eye(3), RHO, G)
+    path = tmp_path / "lines.txt"
+    path.write_text(text.replace(f"{lines_of(scene.moorings).sub_step(RHO):.6g} dtM", "1e-7 dtM"))
+    done, _ = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "0", "--line-file", str(path), "--t-end", "0.1", "--radiation", "none")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1 and "dtM = 1e-07 s over 60 segments" in done.stderr, (
+        done.stderr
+    )
+    anchor = text.splitlines()[text.splitlines().index("(#) (-) (m) (m) (m) (kg) (m^3) (m^2) (-)") + 1]
+    path.write_text(text.replace(anchor, anchor.replace(" -10 0 0 0 0", " 2 0 0 0 0")))
+    done, _ = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "0", "--line-file", str(path), "--t-end", "0.1", "--radiation", "none")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1 and "2 m above the water" in done.stderr, done.stderr
+
+
+def test_anchors_above_the_water_are_refused(tmp_path):
+    """MoorDyn takes a line as submerged all along, so an anchor above z = 0 would hang in water that is not there:
+    one line, exit 2; on the surface it is still in the water."""
+    base = load_scene("moored-buoy")
+    ends = lines_of(base.moorings).ends(np.zeros(3), np.eye(3))
+    fairleads = [[float(v) for v in f] for _, f in ends]
+    scene_file = tmp_path / "airborne.toml"
+    for z in (0.5, 0.0):
+        anchors = [[float(v) for v in a] for a, _ in ends]
+        anchors[1][2] = z
+        text = (ROOT / "assets/scenes/moored-buoy.toml").read_text()
+        scene_file.write_text(text.replace("lines = 3\n", f"anchors = {anchors}\nfairleads = {fairleads}\n"))
+        if z > 0:
+            done, _ = run_cli(tmp_path, "--scene", str(scene_file), "--t-end", "0.1")
+            assert done.returncode == 2 and "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+            assert "[moorings] anchor 2 is at z = 0.5 m, above the water" in done.stderr
+        else:
+            assert load_scene(str(scene_file)).moorings.anchors[1][2] == 0.0
+
+
+def test_the_start_up_in_a_child_leaves_moordyn_as_the_start_up_here_would(monkeypatch):
+    """The forked start-up hands its state back through MoorDyn's Serialize: the same pull and the same next 50
+    steps, to the bit, as MoorDyn's Init in this process (where there is no fork)."""
+    import os
+
+    from sim.moorings import Moorings
+
+    scene = load_scene("moored-buoy")
+    x0 = np.array(scene.initial.position)
+    text = lines_of(scene.moorings).input_file(x0, np.eye(3), RHO, G)
+    runs = []
+    for fork in (True, False):
+        if not fork:
+            monkeypatch.delattr(os, "fork")
+        with Moorings(text, x0, np.eye(3), np.zeros(3), np.zeros(3)) as lines:
+            pulls = [lines.load.copy()]
+            for k in range(50):
+                pulls.append(lines.advance(x0 + [0.002 * k, 0.0, 0.001 * k], np.eye(3), np.array([0.2, 0.0, 0.1]), np.zeros(3), 0.01))
+            runs.append(np.array(pulls))
+    assert np.abs(runs[0][0]).max() > 100.0 and np.ptp(runs[0][:, 0]) > 1.0  # the lines pull, and the pull changes
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
+def test_a_moordyn_file_whose_step_is_too_long_for_its_lines_stops_in_one_line(tmp_path):
+    """A light line (10 g/m, EA 3 MN, one line of 10 segments) stepped at 1.02e-4 s, the old rule's step (it counted the
+    water around the line as moving along it, where MoorDyn's CaAx = 0): MoorDyn found NaN in its nodes and the run
+    ended in a RuntimeError's traceback. Such a file now stops as a divergence in one line, exit 3; floatsim's own
+    rule (4.0e-5 s, the line's own mass) runs the same line."""
+    import dataclasses
+
+    scene = load_scene("moored-buoy")
+    light = dataclasses.replace(lines_of(scene.moorings), lines=1, segments=10, line_mass=0.01, line_stiffness=3e6)
+    text = light.input_file(np.array(scene.initial.position), np.eye(3), RHO, G)
+    path = tmp_path / "light.txt"
+    path.write_text(text.replace(f"{light.sub_step(RHO):.6g} dtM", "1.02e-4 dtM"))
+    still = ("--radiation", "none", "--waves", "still", "--t-end", "0.5")
+    done, _ = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "0", "--line-file", str(path), *still)
+    assert done.returncode == 3 and "Traceback" not in done.stderr, done.stderr
+    said = [line for line in done.stderr.splitlines() if "note:" not in line]
+    assert len(said) == 1 and "the mooring lines (MoorDyn) diverged at t = " in said[0], done.stderr
+    assert light.sub_step(RHO) == pytest.approx(4.04e-5, rel=1e-3)
+    flags = ("--lines", "1", "--segments", "10", "--line-mass", "0.01", "--line-stiffness", "3e6")
+    done, rows = run_cli(tmp_path, "--scene", "moored-buoy", *flags, *still)
+    assert done.returncode == 0 and np.isfinite(rows["T_fair_max"]).all() and rows["T_fair_max"].max() > 1.0, done.stderr

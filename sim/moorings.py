@@ -27,6 +27,7 @@ import signal
 import struct
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -254,8 +255,11 @@ def _option(options: str, names: tuple[str, ...], default: float) -> float:
 
 def _settle(md, system, x, v) -> int:
     """MoorDyn's Init (the lines' rest shape, its relaxation: up to START_SECONDS) in a forked child, whose state this
-    process then loads: a C call cannot be interrupted, a child can be ended (Ctrl-C stops it at once). MoorDyn's status."""
-    if not hasattr(os, "fork"):  # (no fork: in this process, as before)
+    process then loads: a C call cannot be interrupted, a child can be ended (Ctrl-C stops it at once). MoorDyn's status.
+    The scene's validation has already refused lines whose start-up would pass its budget (`check_start`)."""
+    if not hasattr(os, "fork") or threading.current_thread() is not threading.main_thread():
+        # in this process: where there is no fork, and off the main thread (the viewer's simulation thread), where no
+        # Ctrl-C arrives and a fork would copy a process whose other threads may hold locks the child needs
         with _quiet():
             return md.Init(system, x, v)
     status, state = _init_in_child(md, system, x, v)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import io
+import time
 
 import pytest
 from viewer import wait_for
@@ -215,3 +216,25 @@ def test_wrong_tokens_from_one_address_are_slowed():
     assert all("too many wrong tokens" in a for a in answers[FREE_GUESSES:])
     assert "too many" in guesses.check("10.0.0.1", "right", "right")  # even the right one waits: no oracle in the wait
     assert guesses.check("10.0.0.2", "right", "right") is None  # another address is not slowed
+
+
+@pytest.mark.slow
+def test_no_setting_a_page_may_choose_keeps_the_run_from_answering():
+    """The dearest settings a page may pick in storm on the numpy reference (100 points per edge: 60 000 samples in a
+    64-component sea; an adaptive method with a 1 s output step): the simulation thread still answers within 3 s, and
+    the adaptive step stops at its wall-time budget with a note (one step took 31 s when the budget was checked every
+    64 force evaluations)."""
+    with viewer("storm") as app:
+        c = app.controls
+        c.points_per_edge.value = 100
+        c.dt.value = 1.0
+        for method in ("rk45", "dop853", "radau"):
+            c.integrator.value = method
+            c.paused.value = False
+            started = time.monotonic()
+            snap = wait_for(app, lambda s: s.settings.paused, timeout=30.0, what=f"{method}'s budget to stop it")
+            assert "of wall time for one 1 s step" in snap.notice and time.monotonic() - started < 10.0
+            for _ in range(3):
+                asked = time.monotonic()
+                app.sync(timeout=3.0)
+                assert time.monotonic() - asked < 3.0

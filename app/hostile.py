@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import gc
 import io
 import logging
 import math
@@ -395,6 +396,7 @@ def main(args: HostileArgs) -> int:
     growth = []
     try:
         time.sleep(2.0)
+        gc.collect()
         release_memory()
         before = rss_mib()
         for k in range(args.rounds):
@@ -402,6 +404,7 @@ def main(args: HostileArgs) -> int:
             if _one_body(app):
                 app.loop.post("scene", args.scene)  # back to the setup measured before: what stays is what was retained
             app.sync()
+            gc.collect()  # what is still held, not garbage awaiting collection
             release_memory()
             growth.append(rss_mib() - before)
             print(f"round {k + 1}/{args.rounds}: RSS {growth[-1]:+.1f} MiB since the start, lockouts {tally.lockouts}, "
@@ -412,6 +415,7 @@ def main(args: HostileArgs) -> int:
     print(f"{'scene':>32}: {args.scene}")
     print("\n".join(f"{k:>32}: {v:.1f}" if isinstance(v, float) else f"{k:>32}: {v}" for k, v in vars(tally).items() if k != "notes"))
     print(f"{'RSS growth per round (MiB)':>32}: " + ", ".join(f"{b - a:+.1f}" for a, b in zip([0.0] + growth, growth)))
+    print(f"{'RSS after each round (MiB)':>32}: " + ", ".join(f"{g:+.1f}" for g in growth) + " (from the start)")
     for note in tally.notes[:10]:
         print("  note:", note)
     return 1 if tally.bad() else 0

@@ -8,6 +8,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import io
+import subprocess
+import sys
 import time
 
 import pytest
@@ -238,3 +240,19 @@ def test_no_setting_a_page_may_choose_keeps_the_run_from_answering():
                 asked = time.monotonic()
                 app.sync(timeout=3.0)
                 assert time.monotonic() - asked < 3.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", ["damped", "rm3-moored"])
+def test_the_hostile_campaign_gets_nothing_through(scene):
+    """`python -m app.hostile` as its user runs it, one round, on a one-body and a moored several-body preset: exit 0,
+    and the summary's counts of what got through all zero."""
+    pytest.importorskip("moordyn")
+    done = subprocess.run([sys.executable, "-m", "app.hostile", "--rounds", "1", "--updates", "150", "--connections", "30", "--scene", scene],
+                          capture_output=True, text=True, timeout=600, check=False)  # fmt: skip
+    summary = dict(line.split(":", 1) for line in done.stdout.splitlines() if ":" in line and not line.startswith("  note"))
+    summary = {k.strip(): v.strip() for k, v in summary.items()}
+    assert done.returncode == 0, done.stdout[-2000:]
+    for count in ("lockouts", "mismatched", "mismatched_on_a_new_page", "pages_refused", "tunnels", "foreign_accepted", "tracebacks"):
+        assert summary[count] == "0", count
+    assert int(summary["transfers_at_controls"]) > 10 and float(summary["held_for_refused_transfers_mib"]) == 0.0

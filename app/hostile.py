@@ -23,8 +23,10 @@ import gc
 import io
 import logging
 import math
+import os
 import random
 import sys
+import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
@@ -382,6 +384,8 @@ def main(args: HostileArgs) -> int:
     handler.emit = lambda record: logged.append(record) if record.exc_info or record.exc_text else None
     logging.getLogger().addHandler(handler)
     threading.excepthook = lambda hook_args: logged.append(hook_args)
+    scratch = tempfile.TemporaryDirectory(prefix="floatsim-hostile-")
+    os.chdir(scratch.name)  # the fuzz presses Record and Export video too: their files go here, and with it
     with contextlib.redirect_stdout(io.StringIO()):
         app = start(ViewArgs(scene=args.scene, port=0), kernels=args.kernels)
     rng, tally = random.Random(args.seed), Tally()
@@ -411,6 +415,7 @@ def main(args: HostileArgs) -> int:
                   f"mismatched {tally.mismatched + tally.mismatched_on_a_new_page}", file=sys.__stderr__, flush=True)  # fmt: skip
     finally:
         app.stop()
+        scratch.cleanup()
     tally.tracebacks = counter.count + len(logged)
     print(f"{'scene':>32}: {args.scene}")
     print("\n".join(f"{k:>32}: {v:.1f}" if isinstance(v, float) else f"{k:>32}: {v}" for k, v in vars(tally).items() if k != "notes"))

@@ -384,10 +384,11 @@ def main(args: HostileArgs) -> int:
     handler.emit = lambda record: logged.append(record) if record.exc_info or record.exc_text else None
     logging.getLogger().addHandler(handler)
     threading.excepthook = lambda hook_args: logged.append(hook_args)
+    scene = os.path.abspath(args.scene) if os.path.exists(args.scene) else args.scene  # a scene file named from here
     scratch = tempfile.TemporaryDirectory(prefix="floatsim-hostile-")
     os.chdir(scratch.name)  # the fuzz presses Record and Export video too: their files go here, and with it
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene=args.scene, port=0), kernels=args.kernels)
+        app = start(ViewArgs(scene=scene, port=0), kernels=args.kernels)
     rng, tally = random.Random(args.seed), Tally()
     if _one_body(app):
         show_error = app.body_file._show_error
@@ -406,7 +407,7 @@ def main(args: HostileArgs) -> int:
         for k in range(args.rounds):
             _round(app, rng, args, tally)
             if _one_body(app):
-                app.loop.post("scene", args.scene)  # back to the setup measured before: what stays is what was retained
+                app.loop.post("scene", scene)  # back to the setup measured before: what stays is what was retained
             app.sync()
             gc.collect()  # what is still held, not garbage awaiting collection
             release_memory()

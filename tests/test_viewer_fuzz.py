@@ -45,7 +45,8 @@ async def attack(port: int, connections: int) -> None:
 @pytest.mark.slow
 def test_malformed_frames_cost_no_lasting_memory_and_one_traceback_per_kind(capfd, monkeypatch):
     from app.args import ViewArgs
-    from app.main import TRIM_SECONDS, start
+    from app.gate import TRIM_SECONDS
+    from app.main import start
 
     # as in a terminal: the server's log to stderr, not into pytest's record keeping (which keeps every record)
     logger = logging.getLogger("websockets")

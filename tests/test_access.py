@@ -94,8 +94,7 @@ def test_with_a_token_only_the_page_opened_with_it_drives_the_run():
         snap = app.sync()
         assert snap.density == 900.0 and app.refusals.count >= 2
         assert asyncio.run(drive("?" + query, 500.0)) == 1
-        wait_for(app, lambda s: s.density == 500.0, what="the page with the token to set density")
-        assert not app.drivers
+        wait_for(app, lambda s: s.density == 500.0 and not app.drivers, what="the page with the token to set density, then be forgotten")
 
 
 def fake_tunnels(monkeypatch) -> list:

@@ -16,7 +16,7 @@ import contextlib
 import http
 import ipaddress
 import threading
-from urllib.parse import urlsplit
+from urllib.parse import quote, urlsplit
 
 WILDCARDS = ("0.0.0.0", "::", "")
 _SERVE_LOCK = threading.Lock()
@@ -89,3 +89,11 @@ def _checked(inner, host: str):
         return inner(connection, request) if inner is not None else None
 
     return process_request
+
+
+def viewer_address(host: str, port: int, token: str | None = None) -> str:
+    """The viewer's address as a browser opens it (a wildcard host as localhost); with a token, the link whose page
+    may drive the run."""
+    shown = "localhost" if host in WILDCARDS else (f"[{host}]" if ":" in host else host)
+    url = f"http://{shown}:{port}"
+    return f"{url}/?token={quote(token, safe='')}" if token else url

@@ -18,7 +18,6 @@ import threading
 import time
 from dataclasses import dataclass
 from typing import Any
-from urllib.parse import quote
 
 import numpy as np
 import viser
@@ -28,6 +27,7 @@ from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
 from sim.system import Assembly, AssemblyFrame
 
+from .access import viewer_address
 from .controls import Bound, _control
 from .gate import Gate
 from .loop import SPEED, Mailbox
@@ -446,8 +446,7 @@ class BodiesApp:
         self.server, self.loop, self.token = server, loop, token
         self.gate = Gate(server, lambda text: loop.post("notice", text), token=token, share=share)
         self.port = server.get_port()
-        shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
-        self.url = f"http://{shown}:{self.port}"
+        self.host, self.url = host, viewer_address(host, self.port)
         server.gui.configure_theme(show_share_button=share)
         self.view = BodiesView(server, loop)
         self.controls, self.recorder = self.view.controls, self.view.recorder
@@ -456,7 +455,7 @@ class BodiesApp:
 
     def address(self) -> str:
         """The link the banner prints: with a token, the page it opens may drive the run."""
-        return f"{self.url}/?token={quote(self.token, safe='')}" if self.token else self.url
+        return viewer_address(self.host, self.port, self.token)
 
     def latest(self) -> BodiesSnapshot:
         return self.loop.latest()

@@ -8,7 +8,6 @@ import sys
 import threading
 import time
 from pathlib import Path
-from urllib.parse import quote
 
 import viser
 
@@ -16,7 +15,7 @@ from sim.config import ConfigError, load_scene, one_body_scenes
 from sim.hydrostatics import describe_rest
 
 from .about import About
-from .access import own_origin_only
+from .access import own_origin_only, viewer_address
 from .args import ViewArgs
 from .camera import CameraView
 from .controls import Controls, Layers
@@ -36,8 +35,7 @@ class ViewerApp:
         self.server = server
         self.loop = loop
         self.port = server.get_port()
-        shown = "localhost" if host in ("0.0.0.0", "::", "") else (f"[{host}]" if ":" in host else host)
-        self.url = f"http://{shown}:{self.port}"
+        self.host, self.url = host, viewer_address(host, self.port)
         self.token = token
         self.gate = Gate(server, lambda text: loop.post("notice", text), token=token, share=share, on_link=self._apply_link)
         """Checks every message a page sends (app/gate.py), from before the first control exists."""
@@ -71,7 +69,7 @@ class ViewerApp:
 
     def address(self) -> str:
         """The link the banner prints: with a token, the page it opens may drive the run."""
-        return f"{self.url}/?token={quote(self.token, safe='')}" if self.token else self.url
+        return viewer_address(self.host, self.port, self.token)
 
     def _connected(self, client: viser.ClientHandle) -> None:
         """A new page: the first browser restarts the run (its address, which may carry a setup, comes to _apply_link)."""

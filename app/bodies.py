@@ -30,7 +30,7 @@ from sim.system import Assembly, AssemblyFrame
 from .access import viewer_address
 from .controls import Bound, _control
 from .gate import Gate
-from .loop import SPEED, Mailbox
+from .loop import SHOWN, SPEED, Mailbox
 from .recorder import RecordPanel
 from .scene import LINE_COLOUR, LINES_HZ
 from .take import MAX_SHOTS, Take
@@ -128,8 +128,9 @@ class BodiesLoop(Mailbox):
                 for name, value in commands:
                     if name in ("pause", "step", "reset", "speed", "notice"):
                         getattr(self, f"_cmd_{name}")(value)
-                if any(name == "speed" for name, _ in commands):  # once per batch, after its last value (app/loop.py: _show_used)
-                    self._tell("speed", self._speed)
+                for name, field in SHOWN.items():  # once per batch, after its last value (app/loop.py: _show_used)
+                    if any(n == name for n, _ in commands):
+                        self._tell(field, getattr(self, f"_{field}"))
                 self._ensure_kernels()
                 now = time.monotonic()
                 if now >= next_tick:

@@ -41,6 +41,9 @@ CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
 """Scene parameters with a live control, by key (the command that changes each is its key)."""
 _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
 DERIVED = {PARAMS[q].key for q in IN_EFFECT} & CONTROLLED.keys()
+SHOWN = {"speed": "speed", "pause": "paused"}
+"""The viewer's own commands whose control shows the value the run uses after each batch, as the scene parameters' do
+(command -> the setting's field): a clamp written back at once could land after the page's next valid value."""
 """Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 
 
@@ -254,7 +257,7 @@ class SimLoop(Mailbox):
                         barriers.append(value)
                     elif name != "_wake":
                         self._apply(name, value)
-                self._show_used({name for name, _ in commands if name in CONTROLLED})
+                self._show_used({name for name, _ in commands if name in CONTROLLED or name in SHOWN})
                 self._ensure_kernels()
                 now = time.monotonic()
                 if now >= next_tick:
@@ -504,7 +507,8 @@ class SimLoop(Mailbox):
         with self._queue.mutex:
             pending = {name for name, _ in self._queue.queue}
         for key in keys - pending:
-            self._tell(key, self.settings.value(key))
+            field = SHOWN.get(key, key)
+            self._tell(field, self.settings.value(field))
 
     def _apply(self, name: str, value: Any) -> None:
         handler = getattr(self, f"_cmd_{name}", None)
@@ -552,7 +556,7 @@ class SimLoop(Mailbox):
         used, note = SPEED.clamp(value, self._speed)
         if note:
             self._raise_notice(note)
-        self._set("speed", used, tell=note is not None)
+        self._set("speed", used, tell=False)  # shown after the batch (_show_used)
         self._restart_clock()
 
     def _cmd_pause(self, value) -> None:

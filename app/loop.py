@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 import sim
+from sim.bem import no_solves
 from sim.body import printable
 from sim.compiling import Compiler, Loader, kernels_ready
 from sim.config import IN_EFFECT, PARAMS, in_effect, load_scene
@@ -35,6 +36,10 @@ NOTICE_SECONDS = 10.0
 
 SPEED = Param("viewer", "speed", 1.0, "Simulated seconds per wall-clock second asked for", "×", lo=0.01, hi=100.0, label="Speed",
               gui=(0.1, 10.0, 0.1))  # fmt: skip
+NO_SOLVE = (
+    "a minute or more, which the live viewer does not run: run the scene with it once from the command line "
+    "(python -m sim run), after which it is cached"
+)
 STEP_SECONDS = 0.25
 """Most wall time one step of an adaptive method may take here: the thread must get back to Pause and Reset."""
 CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
@@ -518,7 +523,8 @@ class SimLoop(Mailbox):
             self._raise_notice(f"Unknown command {name[:24]!r} ignored.")
             return
         try:
-            handler(value)
+            with no_solves(NO_SOLVE):
+                handler(value)
         except Exception as e:  # noqa: BLE001 - a bad command must not stop the run
             self._log(f"command {name}", e)
             self._raise_notice(f"Could not apply {name}: {type(e).__name__}: {str(e)[:200]}")

@@ -18,12 +18,14 @@ files let the presets run without it.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import math
 import os
 import sys
 import tempfile
+import threading
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,6 +43,20 @@ UNREADABLE = (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError
 
 class MissingSolver(ConfigError):
     """Capytaine is not installed."""
+
+
+_thread = threading.local()
+
+
+@contextlib.contextmanager
+def no_solves(why: str):
+    """On this thread, inside this block, a case absent from the shipped files and the cache is refused (a ConfigError
+    saying `why`) instead of solved: a live viewer's simulation thread must not stop for the minute a solve takes."""
+    _thread.no_solve = why
+    try:
+        yield
+    finally:
+        _thread.no_solve = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -312,6 +328,8 @@ def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
                 return found
             partial = partial or found
     what = "the wave excitation (diffraction)" if partial is not None else "radiation = 'bem'"
+    if getattr(_thread, "no_solve", None):
+        raise ConfigError(f"it needs a boundary-element solve of the body as it now floats, {_thread.no_solve}")
     try:
         import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:

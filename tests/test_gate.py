@@ -256,3 +256,19 @@ def test_the_hostile_campaign_gets_nothing_through(scene):
     for count in ("lockouts", "mismatched", "mismatched_on_a_new_page", "pages_refused", "tunnels", "foreign_accepted", "tracebacks"):
         assert summary[count] == "0", count
     assert int(summary["transfers_at_controls"]) > 10 and float(summary["held_for_refused_transfers_mib"]) == 0.0
+
+
+def test_a_change_that_needs_a_boundary_element_solve_is_refused_not_solved_on_the_run(tmp_path, monkeypatch):
+    """A density from a page moves the moored buoy to another draft, whose radiation is in no shipped or cached solve: the
+    viewer says so and keeps the density it had, instead of stopping the run for the ~35 s solve (it did, for everyone)."""
+    pytest.importorskip("moordyn")
+    monkeypatch.setattr("sim.bem.user_cache", lambda: tmp_path)  # nothing cached: the shipped preset's solve only
+    with viewer("moored-buoy") as app:
+        before = app.sync().density
+        asked = time.monotonic()
+        app.controls.density.value = 500.0
+        snap = wait_for(app, lambda s: "boundary-element solve" in s.notice, timeout=10.0, what="the refusal's note")
+        assert time.monotonic() - asked < 5.0 and snap.density == before and app.controls.density.value == before
+        assert "python -m sim run" in snap.notice and not list(tmp_path.iterdir())
+        t0 = snap.frame.t
+        assert wait_for(app, lambda s: s.frame.t > t0 + 0.5, what="the run going on").density == before

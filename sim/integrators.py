@@ -283,8 +283,8 @@ class Adaptive:
                 raise SimulationDiverged(f"'{self.name}' needed more than {count[0]:,} force evaluations for one {dt:g} s step at "
                                          f"t = {s.t:g} s (a stiff setting): use --integrator implicit" + ("" if self.name == "radau" else ", or radau"))  # fmt: skip
             if time.monotonic() > deadline:  # checked every evaluation: one can take 0.1 s (60 000 samples in a sea)
-                raise SimulationDiverged(f"'{self.name}' took over {self.max_seconds:g} s of wall time for one {dt:g} s step at t = {s.t:g} s "
-                                         "(the viewer's budget per step): use a shorter --dt, fewer samples, or --integrator implicit")  # fmt: skip
+                raise SimulationDiverged(f"'{self.name}' took over {self.max_seconds:g} s of wall time (its budget) for one {dt:g} s step at "
+                                         f"t = {s.t:g} s (a stiff setting, or many samples): use --integrator implicit, a shorter --dt or fewer samples")  # fmt: skip
             return derivative(model, t, y)
 
         sol = solve_ivp(fun, (s.t, t_end), s.as_vector(), method=self.method, rtol=self.rtol, atol=self.atol, **options)

@@ -3,156 +3,18 @@
 Cummins (1962): the water's reaction to a body's motion nu(t) (6 dofs) is
     -A_inf nu' - integral_0^t K(t - s) nu(s) ds,   K(t) = (2/pi) integral_0^inf B(omega) cos(omega t) d omega,
 whose transfer function is K(i omega) = B(omega) + i omega (A(omega) - A_inf) (Ogilvie's relations).
-Each entry K_ij that matters is fitted by a stable rational function of s = i omega with relative
-degree 1 and a zero at s = 0 (K vanishes at both ends of the spectrum), by frequency-domain least
-squares with Sanathanan-Koerner reweighting (Perez & Fossen, 2009, Ocean Engineering 36: 1130-1140),
-raising the order until the fit reproduces B and A within the tolerance asked. The entries become
-one block-diagonal state-space system x' = F x + G nu, mu = H x, the memory force being -mu: a few
-states per entry replace the convolution over the whole past.
+The memory is fitted passive (B_fit(omega) positive semi-definite at every frequency: memory_fit.py) as one
+block-diagonal state-space system x' = F x + G nu, mu = H x, the memory force being -mu: a few states per
+entry and pole replace the convolution over the whole past.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from .bem import Coefficients
+from .memory_fit import EntryFit, RadiationMemory, fit_memory, transfer
 
-
-@dataclass(frozen=True, eq=False)
-class EntryFit:
-    """K_ij(s) = P(s) / Q(s) for one (row i, column j), as a state-space block."""
-
-    row: int
-    col: int
-    F: np.ndarray
-    """(n, n) system matrix (companion form), eigenvalues in the left half plane."""
-    G: np.ndarray
-    """(n,) input vector (the velocity nu_j enters here)."""
-    H: np.ndarray
-    """(n,) output vector (mu_i = H x)."""
-    error: float
-    """Largest misfit of B and A over the grid, relative to the entry's largest |K(i omega)|."""
-
-    def response(self, omega: np.ndarray) -> np.ndarray:
-        """K(i omega) of the fitted block."""
-        n = len(self.G)
-        return np.array([self.H @ np.linalg.solve(1j * w * np.eye(n) - self.F, self.G) for w in omega])
-
-
-@dataclass(frozen=True, eq=False)
-class RadiationMemory:
-    """Every fitted entry stacked: x' = F x + G nu, memory force (d,) = -H x (d = 6 per body)."""
-
-    F: np.ndarray
-    G: np.ndarray
-    """(states, d)"""
-    H: np.ndarray
-    """(d, states)"""
-    entries: tuple[EntryFit, ...]
-    added_mass_inf: np.ndarray
-
-    @property
-    def states(self) -> int:
-        return self.F.shape[0]
-
-    def response(self, omega: np.ndarray) -> np.ndarray:
-        """(n, d, d) K(i omega) of the whole fitted system (d = 6 per body)."""
-        d = self.G.shape[1]
-        out = np.zeros((len(omega), d, d), complex)
-        for e in self.entries:
-            out[:, e.row, e.col] = e.response(omega)
-        return out
-
-
-def transfer(c: Coefficients) -> np.ndarray:
-    """(n, 6, 6) K(i omega) = B(omega) + i omega (A(omega) - A_inf) from BEM coefficients."""
-    return c.damping + 1j * c.omega[:, None, None] * (c.added_mass - c.added_mass_inf)
-
-
-def _fit_rational(omega: np.ndarray, K: np.ndarray, order: int, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
-    """(p, q): K(s) ~ s (p[0] + p[1] s + ... ) / (q[0] + q[1] s + ... + s^order), least squares in
-    the complex plane with Sanathanan-Koerner weights; unstable poles reflected into the left half plane."""
-    s = 1j * omega
-    scale = np.abs(K).max()
-    weight = np.ones(len(omega))
-    n_p = order - 1  # numerator s * (degree order - 2): relative degree 1, zero at s = 0
-    for _ in range(iterations):
-        # unknowns p_0..p_{n_p-1}, q_0..q_{order-1}:  s P~(s) - K Q~(s) = K s^order
-        cols = [s ** (k + 1) for k in range(n_p)] + [-K / scale * s**k for k in range(order)]
-        M = np.array(cols).T * weight[:, None]
-        rhs = K / scale * s**order * weight
-        sol, *_ = np.linalg.lstsq(np.vstack([M.real, M.imag]), np.concatenate([rhs.real, rhs.imag]), rcond=None)
-        p, q = sol[:n_p] * scale, np.append(sol[n_p:], 1.0)
-        weight = 1.0 / np.abs(np.polyval(q[::-1], s))
-    poles = np.roots(q[::-1])
-    if np.any(poles.real >= 0):  # reflect, then refit the numerator for the stable denominator
-        poles = -np.maximum(np.abs(poles.real), 1e-6 * np.abs(poles)) + 1j * poles.imag  # strictly inside
-        q = np.real(np.poly(poles))[::-1]
-        Q = np.polyval(q[::-1], s)
-        M = np.array([s ** (k + 1) / Q for k in range(n_p)]).T
-        sol, *_ = np.linalg.lstsq(np.vstack([M.real, M.imag]), np.concatenate([K.real, K.imag]), rcond=None)
-        p = sol
-    return p, q
-
-
-def _companion(p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """State-space (F, G, H) of s P~(s) / Q(s) in controllable canonical form."""
-    n = len(q) - 1
-    F = np.zeros((n, n))
-    F[:-1, 1:] = np.eye(n - 1)
-    F[-1, :] = -q[:-1]
-    G = np.zeros(n)
-    G[-1] = 1.0
-    H = np.zeros(n)
-    H[1 : len(p) + 1] = p  # numerator coefficients of s^1 .. s^(n-1)
-    return F, G, H
-
-
-def _misfit(c: Coefficients, i: int, j: int, Kfit: np.ndarray) -> float:
-    K = transfer(c)[:, i, j]
-    return float(np.abs(Kfit - K).max() / np.abs(K).max())
-
-
-def fit_memory(c: Coefficients, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -> RadiationMemory:
-    """Fit every entry whose damping matters with the lowest order meeting `tol`. A diagonal entry
-    matters when its peak |B_ii| is above 1e-3 of the largest translational one (rotations: times
-    length^2, the body's size, so a sphere's numerical-noise roll damping is left out); a coupling
-    (i, j) when both its diagonals matter and its peak is above 5 % of sqrt(B_ii B_jj). So no coupling
-    is fitted without the damping that keeps the whole passive."""
-    K = transfer(c)
-    d = K.shape[1]
-    peak = np.abs(c.damping).max(axis=0)
-    diag = np.diag(peak)
-    scale = diag.reshape(-1, 6)[:, :3].max()
-    keep = diag > 1e-3 * scale * np.tile([1.0, 1.0, 1.0, length**2, length**2, length**2], d // 6)
-    entries = []
-    for i in range(d):
-        for j in range(d):
-            if not (keep[i] and keep[j]) or (i != j and peak[i, j] <= 0.05 * np.sqrt(diag[i] * diag[j])):
-                continue
-            best = None
-            for order in range(2, max_order + 1):
-                p, q = _fit_rational(c.omega, K[:, i, j], order)
-                F, G, H = _companion(p, q)
-                trial = EntryFit(i, j, F, G, H, 0.0)
-                err = _misfit(c, i, j, trial.response(c.omega))
-                if best is None or err < best.error:
-                    best = EntryFit(i, j, F, G, H, err)
-                if err <= tol:
-                    break
-            entries.append(best)
-    n = sum(len(e.G) for e in entries)
-    F, G, H = np.zeros((n, n)), np.zeros((n, d)), np.zeros((d, n))
-    k = 0
-    for e in entries:
-        m = len(e.G)
-        F[k : k + m, k : k + m] = e.F
-        G[k : k + m, e.col] = e.G
-        H[e.row, k : k + m] = e.H
-        k += m
-    return RadiationMemory(F, G, H, tuple(entries), c.added_mass_inf)
+__all__ = ["EntryFit", "Radiation", "RadiationMemory", "fit_memory", "held_step", "make_radiation", "transfer"]
 
 
 def held_step(F: np.ndarray, G: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -177,7 +39,9 @@ class Radiation:
     (Munk moments) are left out: second order in the motion, like the linearisation itself."""
 
     def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray, diffraction=None):
-        self.added_mass_body = 0.5 * (added_mass_body + added_mass_body.T)  # symmetric in theory; the BEM's is to ~1e-4
+        T0 = self._frame(np.asarray(R0, float))  # the fit's residual mass (memory_fit.py), turned into the body frame
+        added = added_mass_body + T0.T @ memory.residual_mass @ T0 if memory.residual_mass.size else added_mass_body
+        self.added_mass_body = 0.5 * (added + added.T)  # symmetric in theory; the BEM's is to ~1e-4
         self.F, self.G, self.H = memory.F, memory.G, memory.H
         self.memory = memory
         self.R0 = np.asarray(R0, float)

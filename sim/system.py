@@ -151,8 +151,9 @@ class SystemRadiation:
     def __init__(self, added_mass_inf: np.ndarray, memory, R0: list, diffraction=None, coefficients=None):
         self.coefficients = coefficients
         """bem.Coefficients of the solve (6k x 6k): for the frequency domain (system_frequency.py)."""
-        self.added_mass_inf = 0.5 * (added_mass_inf + added_mass_inf.T)
-        self.F, self.G, self.H = memory.F, memory.G, memory.H
+        added = added_mass_inf + memory.residual_mass if memory.residual_mass.size else added_mass_inf  # (memory_fit.py)
+        self.added_mass_inf = 0.5 * (added + added.T)
+        self.F, self.G, self.H = memory.compact() if memory.blocks else (memory.F, memory.G, memory.H)  # the fewest states
         self.memory = memory
         self.R0 = R0
         self.diffraction = diffraction
@@ -688,11 +689,12 @@ class Assembly:
                 lines = tuple(self.moorings.lines())
                 pull = (*self.moorings.load[:3], float(self.moorings.fairlead_tensions().max()))
             self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
-                                            pull))  # fmt: skip
+                                            pull, float(s.E_rad)))  # fmt: skip
         return self._frame[1]
 
     def columns(self) -> list[str]:
-        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the energies."""
+        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the energies,
+        E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without damping, drag and waves)."""
         cols = ["t"]
         for m in self.system.members:
             cols += [f"{m.name}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
@@ -700,7 +702,7 @@ class Assembly:
             cols += [f"{g.name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
         if self.moorings is not None:
             cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
-        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total"]
+        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -717,6 +719,8 @@ class AssemblyFrame:
     """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
     mooring: tuple = ()
     """The lines' pull on the moored body (Fx, Fy, Fz, N) and the largest fairlead tension (N); empty without lines."""
+    E_rad: float = 0.0
+    """Energy the radiated waves have carried away so far, J (0 without radiation)."""
 
     @property
     def E_pto(self) -> float:
@@ -735,4 +739,4 @@ class AssemblyFrame:
             out += values
         out += list(self.mooring)
         e = self.energies
-        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total]
+        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad]

@@ -37,10 +37,15 @@ def test_cube_coefficients_are_physical(cube):
 
 
 def test_fitted_memory_reproduces_added_mass_and_damping(cube):
-    """Every entry that matters within 2 % of its largest |K(i omega)| (B and omega (A - A_inf) alike),
-    with stable poles and a handful of states per entry."""
+    """Every entry that matters within 2 % of its largest |K(i omega)| (B and omega (A - A_inf) alike; the model's K: the
+    memory plus i omega dA, its residual mass), with stable poles and a handful of states per entry. The fit is
+    reciprocal (K_ij = K_ji, as theory has it), so it is held against the BEM's reciprocal part: the solve's own
+    surge-pitch K_04 and K_40 differ by 4 % of their peak near its irregular frequency (9.9 rad/s)."""
     memory = fit_memory(cube, tol=0.02)
-    K, fit = transfer(cube), memory.response(cube.omega)
+    raw = transfer(cube)
+    K = 0.5 * (raw + raw.transpose(0, 2, 1))
+    assert np.abs(raw - K).max() <= 0.021 * np.abs(raw).max()  # the solve's asymmetry the reciprocal fit leaves out
+    fit = memory.response(cube.omega) + 1j * cube.omega[:, None, None] * memory.residual_mass
     rows_cols = {(e.row, e.col) for e in memory.entries}
     for i, j in [
         (0, 0),
@@ -58,21 +63,21 @@ def test_fitted_memory_reproduces_added_mass_and_damping(cube):
         err = np.abs(fit[:, i, j] - K[:, i, j]).max() / np.abs(K[:, i, j]).max()
         assert err <= 0.02, (i, j, err)
         B_fit = fit[:, i, j].real
-        A_fit = cube.added_mass_inf[i, j] + fit[:, i, j].imag / cube.omega
-        peak_B = np.abs(cube.damping[:, i, j]).max()
-        assert np.abs(B_fit - cube.damping[:, i, j]).max() <= 0.02 * np.abs(K[:, i, j]).max() + 1e-9 * peak_B
-        big = np.abs(cube.damping[:, i, j]) > 0.1 * peak_B  # where B matters, A too
-        assert np.abs(A_fit - cube.added_mass[:, i, j])[big].max() * cube.omega[big].min() <= 0.02 * np.abs(K[:, i, j]).max()
+        A_fit = memory.added_mass_inf[i, j] + memory.response(cube.omega)[:, i, j].imag / cube.omega
+        B, A = 0.5 * (cube.damping[:, i, j] + cube.damping[:, j, i]), 0.5 * (cube.added_mass[:, i, j] + cube.added_mass[:, j, i])
+        peak_B = np.abs(B).max()
+        assert np.abs(B_fit - B).max() <= 0.02 * np.abs(K[:, i, j]).max() + 1e-9 * peak_B
+        big = np.abs(B) > 0.1 * peak_B  # where B matters, A too
+        assert np.abs(A_fit - A)[big].max() * cube.omega[big].min() <= 0.02 * np.abs(K[:, i, j]).max()
     assert np.linalg.eigvals(memory.F).real.max() < 0
-    assert memory.states <= 10 * len(memory.entries)
+    assert len(memory.compact()[0]) <= 10 * len(rows_cols)  # the fewest states of these poles (one body's kernels run one per entry)
 
 
 def test_fitted_impulse_response_is_the_cosine_transform_of_damping(cube):
     """K(t) = H e^(F t) G against (2/pi) integral of B(omega) cos(omega t) d omega (heave)."""
     memory = fit_memory(cube)
-    e = next(e for e in memory.entries if (e.row, e.col) == (2, 2))
     t = np.linspace(0.0, 4.0, 41)
-    fitted = np.array([e.H @ expm(e.F * s) @ e.G for s in t])
+    fitted = np.array([memory.H[2] @ expm(memory.F * s) @ memory.G[:, 2] for s in t])
     w = np.concatenate([[0.0], cube.omega])
     B = np.concatenate([[0.0], cube.damping[:, 2, 2]])  # B vanishes at omega = 0 in three dimensions
     direct = np.array([2 / np.pi * trapezoid(B * np.cos(w * s), w) for s in t])
@@ -114,12 +119,12 @@ def test_small_heave_decay_matches_the_frequency_domain_root(cube):
     period = np.diff(tm[1:8]).mean()
     rate = -np.polyfit(tm[1:8], np.log(zm[1:8]), 1)[0]
     memory = sim.model.radiation.memory
-    e = next(e for e in memory.entries if (e.row, e.col) == (2, 2))
-    M, C, A_inf = 900.0, 1000.0 * 9.81 * 1.0, memory.added_mass_inf[2, 2]
+    heave = lambda w: memory.response(np.array([w]))[0, 2, 2]  # noqa: E731
+    M, C, A_inf = 900.0, 1000.0 * 9.81 * 1.0, memory.added_mass_inf[2, 2]  # (the model's: the BEM's and the residual mass)
     w = np.sqrt(C / (M + A_inf)) + 0.05j
     for _ in range(50):  # Newton on f(w) = -w^2 (M + A_inf) + i w K(i w) + C
-        K = e.response(np.array([w]))[0]
-        dK = (e.response(np.array([w + 1e-6]))[0] - K) / 1e-6
+        K = heave(w)
+        dK = (heave(w + 1e-6) - K) / 1e-6
         f = -w * w * (M + A_inf) + 1j * w * K + C
         w = w - f / (-2 * w * (M + A_inf) + 1j * K + 1j * w * dK * 1j)
     assert period == pytest.approx(2 * np.pi / w.real, rel=0.005)

@@ -280,7 +280,7 @@ def test_run_writes_every_body_and_joint_to_csv(tmp_path):
     assert done.returncode == 0, done.stderr
     header = out.read_text().splitlines()[0].split(",")
     data = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert header[:4] == ["t", "spar_x", "spar_y", "spar_z"] and "float_P_pto" in header and header[-1] == "E_total"
+    assert header[:4] == ["t", "spar_x", "spar_y", "spar_z"] and "float_P_pto" in header and header[-2:] == ["E_total", "E_rad"]
     col = {name: data[:, i] for i, name in enumerate(header)}
     assert len(data) == 31 and np.isfinite(data).all()
     assert np.abs(col["float_x"] - col["spar_x"]).max() < 1e-12 and np.abs(col["float_y"]).max() < 1e-12
@@ -288,6 +288,7 @@ def test_run_writes_every_body_and_joint_to_csv(tmp_path):
     np.testing.assert_allclose(rel, col["float_theta"], atol=1e-12)  # its coordinate is the slide against the spar
     np.testing.assert_allclose(col["float_P_pto"], 300.0 * col["float_rate"] ** 2, rtol=1e-9)
     assert col["float_E_pto"][-1] > 0 and "2 bodies" in done.stdout and "loads on the numpy reference" in done.stdout
+    assert not col["E_rad"].any()  # no radiation here
 
 
 def test_the_bodies_compiled_loads_match_the_reference_stage_by_stage(tmp_path):

@@ -94,6 +94,10 @@ WAVES = (
     Param("waves", "seed", 0, "JONSWAP: random seed of the phases and frequencies (the same seed, the same sea)", lo=0, hi=2**32 - 1, kind="int"),
     Param("waves", "depth", None, "Water depth h (unset: deep water)", "m", lo=0.0, lo_open=True, hi=1e5, kind="optional"),
     Param("waves", "spreading", 0.0, "JONSWAP: directional spreading exponent s of cos^(2s) (0: long-crested)", lo=0.0, hi=100.0),
+    Param("waves", "ramp", None, "Time over which the sea grows from still water at t = 0 to full height (a half-cosine, as WEC-Sim's "
+          "ramp): every wave load and the drawn surface, so a body is not kicked by waves at full height (unset: 3.5 periods of the sea, "
+          "the regular period or JONSWAP's Tp; 0: full height from the start)", "s", lo=0.0, hi=1e4, kind="optional", name="wave ramp",
+          flag_name="wave_ramp"),
     Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
           "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )
@@ -413,7 +417,14 @@ def moored(scene: SceneConfig) -> bool:
     return bool(scene.moorings.lines or scene.moorings.line_file or scene.moorings.anchors)
 
 
-IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge}
+def wave_ramp(scene: SceneConfig) -> float:
+    """The wave ramp the run uses, s (water.ramp_seconds: 3.5 periods of the sea when unset)."""
+    from .water import ramp_seconds
+
+    return ramp_seconds(scene.waves)
+
+
+IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge, "waves.ramp": wave_ramp}
 """Parameters whose value in effect is not simply the one written: decided by others when unset, or moot."""
 
 

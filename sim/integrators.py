@@ -27,11 +27,12 @@ def kick(model: Model, R: np.ndarray, u, L, F, T, h: float):
     return u + dnu[:3], L + angular_momentum(model.body, R, dnu[3:])
 
 
-def with_memory(model: Model, R: np.ndarray, F, T, memory, t: float):
-    """The loads plus the radiation memory's force and, in waves, the diffraction force at time t (when the scene has radiation)."""
+def with_memory(model: Model, R: np.ndarray, F, T, memory, t: float, x: np.ndarray):
+    """The loads plus the radiation memory's force and, in waves, the diffraction force at time t with the centre of mass at x
+    (when the scene has radiation)."""
     if model.radiation is None:
         return F, T
-    f = model.radiation.load(R, memory, t)
+    f = model.radiation.load(R, memory, t, x)
     return F + f[:3], T + f[3:]
 
 
@@ -89,7 +90,8 @@ class Euler:
         R = quat_to_matrix(q)
         memory, E_rad = drift_memory(model, s, s.R_world_body, R, s.u_world, s.L_world, dt)
         wet = model.wetted(x, R, s.t + dt)
-        F, T = with_memory(model, R, *model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world), s.t + dt), memory, s.t + dt)
+        loads = model.loads(wet, s.u_world, angular_velocity(model.body, R, s.L_world), s.t + dt)
+        F, T = with_memory(model, R, *loads, memory, s.t + dt, x)
         return State(s.t + dt, x, q, *kick(model, R, s.u_world, s.L_world, F, T, dt), memory, E_rad)
 
 
@@ -107,14 +109,14 @@ class Splitting:
         R = quat_to_matrix(q)
         wet = model.wetted(x, R, s.t)
         u, L = twist_flow(model, wet, R, u, L, h, s.t)
-        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, s.t), s.memory, s.t), h)
+        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, s.t), s.memory, s.t, x), h)
         x = x + dt * u
         q = free_rotation(model, q, L, dt)
         R0, R = R, quat_to_matrix(q)
         memory, E_rad = drift_memory(model, s, R0, R, u, L, dt)
         t = s.t + dt
         wet = model.wetted(x, R, t)
-        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, t), memory, t), h)
+        u, L = kick(model, R, u, L, *with_memory(model, R, *model.pose_loads(wet, t), memory, t, x), h)
         u, L = twist_flow(model, wet, R, u, L, h, t)
         return State(t, x, q, u, L, memory, E_rad)
 
@@ -136,10 +138,11 @@ def linear_flow(model: Model, wet, R: np.ndarray, u, L, h: float, t: float, memo
     start twist: about the start alone, a body at rest would feel no drag for a whole step however
     stiff it is. At the end twist the iteration is Newton's method for the drag balance, so the
     terminal speed is the exact fixed point and a stiff start converges instead of overshooting.
-    With radiation the memory's force (`memory`, frozen over the half step) and the diffraction force at t join the forcing."""
+    With radiation the memory's force (`memory`, frozen over the half step) and the diffraction force at t (the body where
+    the wet surface's pose puts it) join the forcing."""
     body = model.body
     twist = np.concatenate([u, angular_velocity(body, R, L)])
-    extra = np.zeros(6) if model.radiation is None else model.radiation.load(R, memory, t)
+    extra = np.zeros(6) if model.radiation is None else model.radiation.load(R, memory, t, wet.x)
     f, D = model.linearised(wet, twist, t)
     un, Ln = exact_linear_flow(model, R, u, L, f + extra, D, h)
     if model.linear_in_twist:
@@ -228,7 +231,7 @@ def derivative(model: Model, t: float, y: np.ndarray) -> np.ndarray:
         return np.concatenate([u, dq, F / model.body.mass, T])
     memory = y[13:-1]
     nu = np.concatenate([u, omega])
-    f = np.concatenate([F, T]) + rad.load(R, memory, t)
+    f = np.concatenate([F, T]) + rad.load(R, memory, t, x)
     spin = np.cross(omega, L)
     f[3:] -= spin
     dnu = np.linalg.solve(rad.mass_matrix(model.body, R), f)

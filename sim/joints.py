@@ -184,4 +184,4 @@ def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memor
     rad = model.radiation
     if rad is None:
         return float(J @ f) - joint.stiffness * theta, Dq, joint.mass(model.body, R, J)
-    return float(J @ (f + rad.load(R, memory, t))) - joint.stiffness * theta, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)
+    return float(J @ (f + rad.load(R, memory, t, x))) - joint.stiffness * theta, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)

@@ -3,7 +3,7 @@
 `[fluid] hydro = "linear"`. About each body's starting pose (x0, R0), with xi = (x - x0, phi), phi the rotation
 vector of R R0^T (world axes), a body's loads near the twist nu are
 
-    f(x, R, t) = f0 - C xi + Re sum_i X_i e^(-i omega_i t),   D = D0,
+    f(x, R, t) = f0 - C xi + r(t) Re sum_i X_i e^(i (k_i . (x - x0) - omega_i t)),   D = D0,
 
 - f0: its pose loads (gravity and the water's pressure over the wet surface, the force model's own) at rest in
   still water; C = -df/dxi there, by central differences of the same loads (the stiffness the frequency-domain
@@ -11,7 +11,8 @@ vector of R R0^T (world axes), a body's loads near the twist nu are
 - X_i: the Froude-Krylov force of wave component i (a_i, omega_i, k_i, heading beta_i, phase phi_i): the
   undisturbed wave's linear pressure rho g a_i E_i(z) e^(i (k_i (x cos beta_i + y sin beta_i) + phi_i)) integrated
   over the wet surface at rest (E_i = cosh(k_i (z + h)) / cosh(k_i h), deep water e^(k_i z)), omega_i met
-  with the current;
+  with the current; phased where the body's centre of mass is now (k_i . (x - x0) over its horizontal offset from
+  rest, as the diffraction force is), and r(t) the sea's ramp (water.ramp_factor);
 - D0: the linear damping term at rest in still water (on the body's own velocity, as WEC-Sim's linear damping).
 Radiation and diffraction come from the bodies' BEM solve as in the nonlinear mode. Per step this costs a 6 x 6
 product and a sum over the components, not a clip of the mesh at the surface: a 64-component sea on RM3 runs
@@ -32,7 +33,7 @@ import numpy as np
 from .forces import Model, hydrostatic_energy
 from .rotation import matrix_to_quat, quat_to_matrix, rotation_quat
 from .surface import wet_panels
-from .water import StillWater
+from .water import StillWater, ramp_factor
 
 STEP = 1e-4
 """Central differences' step: this times the body's radius (m), and in rad: the clipped loads are smooth there."""
@@ -79,6 +80,8 @@ class LinearLoads:
         self.C = self._stiffness(still)
         """(6, 6) -df/dxi at rest."""
         self.X, self.omega = self._froude_krylov(model)
+        self.k = np.zeros((0, 2)) if water.flat else np.column_stack([water.k * np.cos(water.direction), water.k * np.sin(water.direction)])
+        """(n, 2) each component's wave vector, rad/m."""
         self._excited: tuple = (None, None)
         self.E_hyd0 = hydrostatic_energy(still.water, wet_panels(model.body, still.water, self.x0, self.R0, 0.0))
 
@@ -108,15 +111,20 @@ class LinearLoads:
     def xi(self, x: np.ndarray, R: np.ndarray) -> np.ndarray:
         return np.concatenate([x - self.x0, rotation_vector(R @ self.R0.T)])
 
-    def excitation(self, t: float) -> np.ndarray:
-        """(6,) the Froude-Krylov force and moment at time t, world frame (the last kept: a step's last kick and the
-        next one's first ask at the same time)."""
-        if self._excited[0] != t:
-            self._excited = (t, (np.exp(-1j * self.omega * t) @ self.X).real if len(self.omega) else np.zeros(6))
+    def excitation(self, t: float, x: np.ndarray) -> np.ndarray:
+        """(6,) the Froude-Krylov force and moment at time t with the centre of mass at x, world frame (the last kept: a
+        step's last kick and the next one's first ask at the same time and place)."""
+        key = (t, x[0], x[1])
+        if self._excited[0] != key:
+            if len(self.omega):
+                psi = self.k @ (x[:2] - self.x0[:2]) - self.omega * t
+                self._excited = (key, ramp_factor(t, self.model.water.ramp) * (np.exp(1j * psi) @ self.X).real)
+            else:
+                self._excited = (key, np.zeros(6))
         return self._excited[1]
 
     def __call__(self, x: np.ndarray, R: np.ndarray, t: float, nu: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        return self.f0 - self.C @ self.xi(x, R) + self.excitation(t), self.D0
+        return self.f0 - self.C @ self.xi(x, R) + self.excitation(t, x), self.D0
 
     def use_kernels(self, on: bool, expand: bool = True) -> None:
         """Nothing to compile."""

@@ -71,10 +71,11 @@ class Radiation:
         """(6,) the memory's force and torque on the body, world frame: -mu turned from the fit's axes."""
         return -self._frame(R @ self.R0.T) @ (self.H @ x)
 
-    def load(self, R: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
-        """(6,) every load of the BEM model at time t: the memory's force, plus the diffraction force in waves."""
+    def load(self, R: np.ndarray, x: np.ndarray, t: float, position: np.ndarray) -> np.ndarray:
+        """(6,) every load of the BEM model at time t: the memory's force, plus the diffraction force in waves with the
+        centre of mass at `position` (world, m)."""
         f = self.force(R, x)
-        return f if self.diffraction is None else f + self.diffraction.force(t)
+        return f if self.diffraction is None else f + self.diffraction.force(t, position)
 
     def rate(self, R: np.ndarray, x: np.ndarray, nu: np.ndarray) -> np.ndarray:
         """x' = F x + G nu_fit."""
@@ -92,12 +93,12 @@ class Radiation:
         return self._frame(R @ self.R0.T).T @ nu
 
     def kernel_arrays(self, body, dt: float) -> tuple:
-        """(Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, omega) for the compiled kernels
+        """(Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, waves, ramp) for the compiled kernels
         (kernels/radiation.py). The memory is block diagonal, one block per fitted entry, each block
         fed by one twist component and feeding one load component: Phi and F go as bands (row i holds
         its block's columns start[i], start[i] + 1, ...), Gamma, G and H as one number per state with
-        its twist component col[i] and load component row[i]; then the diffraction force's complex amplitude per
-        wave component, real and imaginary parts, and the components' frequencies (empty without diffraction)."""
+        its twist component col[i] and load component row[i]; then the diffraction force's (diffraction.Diffraction.kernel_arrays:
+        empty without diffraction)."""
         Mb = self.added_mass_body + np.diag([body.mass] * 3 + list(body.inertia))
         lam, V = np.linalg.eigh(Mb)
         self.advance(np.zeros(self.states), np.zeros(6), dt)  # fills the exact step for dt
@@ -114,16 +115,17 @@ class Radiation:
         band = lambda M: np.where(inside, M[states[:, None], cols], 0.0)  # noqa: E731
         dense = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, band(Phi), band(self.F))
         per_state = (Gamma[states, col], self.G[states, col], self.H[row, states])
-        d = self.diffraction
-        waves = (d.amplitude.real, d.amplitude.imag, d.omega) if d is not None else (np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0))
+        from .diffraction import NO_DIFFRACTION
+
+        waves = NO_DIFFRACTION if self.diffraction is None else self.diffraction.kernel_arrays()
         return (*(np.ascontiguousarray(a, dtype=float) for a in dense), start, col, row, *(np.ascontiguousarray(a, dtype=float) for a in per_state),
-                np.ascontiguousarray(self.R0), *(np.ascontiguousarray(a, dtype=float) for a in waves))  # fmt: skip
+                np.ascontiguousarray(self.R0), *waves)  # fmt: skip
 
 
-def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=None, rest_xy=(0.0, 0.0)) -> Radiation:
+def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
     """The body's radiation model about its rest pose at orientation R0 (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame. With `water` (waves),
-    also the diffraction force in that sea, referenced to the rest position `rest_xy`."""
+    also the diffraction force in that sea (phased where the body is at each instant)."""
     from .bem import default_frequencies, radiation_coefficients
     from .diffraction import Diffraction
     from .equilibrium import rest_height
@@ -142,4 +144,4 @@ def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=Non
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:
         raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")
-    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water, rest_xy))
+    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water))

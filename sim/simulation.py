@@ -135,10 +135,10 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
         )
     p_diff = 0.0
     if model.radiation is not None:
-        f = model.radiation.load(R, state.memory, state.t)
+        f = model.radiation.load(R, state.memory, state.t, state.x_world)
         F, T = F + f[:3], T + f[3:]
         if model.radiation.diffraction is not None:
-            p_diff = float(model.radiation.diffraction.force(state.t) @ np.concatenate([state.u_world, omega]))
+            p_diff = float(model.radiation.diffraction.force(state.t, state.x_world) @ np.concatenate([state.u_world, omega]))
     exact = e_hyd if model.fluid.forces == "panels" else physical_hydrostatic_energy(model, state.x_world, R, state.t, kernels)
     return Frame(**common, force_world=F, torque_world=T, E_hyd=exact, submerged_area=a_sub, submerged_volume=v_sub, wet_index=wet_index,
                  E_hyd_model=None if model.fluid.forces == "panels" else e_hyd, P_diff=p_diff)  # fmt: skip
@@ -270,9 +270,7 @@ class Simulation:
             from .radiation import make_radiation
 
             start = initial_state(body, self.scene)
-            radiation = make_radiation(
-                body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None, rest_xy=start.x_world[:2]
-            )
+            radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None)
             depth = self.scene.waves.depth
             if depth is not None:
                 note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "

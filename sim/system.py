@@ -170,9 +170,9 @@ class SystemRadiation:
         omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period)
         c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
         memory = fit_memory(c, length=max(m.body.radius for m in models))
-        return cls(
-            c.added_mass_inf, memory, [s.R_world_body for s in starts], None if water is None else Diffraction(c, water, (0.0, 0.0)), c
-        )
+        # the solve has each body where it starts
+        diffraction = None if water is None else Diffraction(c, water, [s.x_world[:2] for s in starts])
+        return cls(c.added_mass_inf, memory, [s.R_world_body for s in starts], diffraction, c)
 
     @property
     def states(self) -> int:
@@ -187,10 +187,11 @@ class SystemRadiation:
             T[6 * b : 6 * b + 3, 6 * b : 6 * b + 3] = T[6 * b + 3 : 6 * b + 6, 6 * b + 3 : 6 * b + 6] = R @ R0.T
         return T
 
-    def load(self, T: np.ndarray, x: np.ndarray, t: float) -> np.ndarray:
-        """(6k,) the memory's loads (-mu, turned with the bodies) and the diffraction force, world frame."""
+    def load(self, T: np.ndarray, x: np.ndarray, t: float, positions: list) -> np.ndarray:
+        """(6k,) the memory's loads (-mu, turned with the bodies) and the diffraction force on each body where its centre of
+        mass is (`positions`), world frame."""
         f = -T @ (self.H @ x)
-        return f if self.diffraction is None else f + self.diffraction.force(t)
+        return f if self.diffraction is None else f + self.diffraction.force(t, positions)
 
     def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
         """The memory after dt with a constant twist (in the fit's axes), exactly."""
@@ -413,7 +414,7 @@ class System:
             D[i, i] += g.damping
         M = self.inertia(pose)
         if self.radiation is not None:  # the memory's and the diffraction force
-            Q += pose.stacked.T @ self.radiation.load(self.radiation.frames(pose), s.memory, s.t)
+            Q += pose.stacked.T @ self.radiation.load(self.radiation.frames(pose), s.memory, s.t, pose.x)
         if self.needs_bias:  # b(v) ~ B0 v - b(v0) (b is quadratic: B0 v0 = 2 b(v0)); B0's columns exactly from b's
             b0, B = self.bias(s, v)
             Q, D = Q + b0, D + B

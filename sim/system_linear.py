@@ -14,10 +14,20 @@ solution over a step is exact: z(t + h) = z_p(t + h) + e^(A h) (z(t) - z_p(t)), 
 dt only sets how often the state is written. The take-offs' absorbed energy and the radiated energy are the
 integrals of c v^2 and v . J^T H x over each step by Simpson's rule (fourth order). Cost: two products of the
 state with fixed matrices a step, whatever the sea (a 64-component sea on rm3: see `python -m sim bench`).
+
+The sea's ramp r(t) = (1 - cos(pi t / T_r)) / 2 over its first T_r seconds is itself a sum of sinusoids: r(t) e^(-i omega t)
+= e^(-i omega t) / 2 - e^(-i (omega - pi / T_r) t) / 4 - e^(-i (omega + pi / T_r) t) / 4, so up to T_r the particular
+solution is the same construction over those three frequencies per component (its steps cost up to three times
+the steady ones'), and after it the steady one; a step across T_r is split there. The ramp is stepped exactly too.
+
+The wave loads are phased at each body's centre of mass where it is (linear_hydro.py, diffraction.py): fixed here
+only while no body can move horizontally. A slide with a horizontal component in waves is not stepped exactly
+(`exact_linear` gives None: Stormer-Verlet, which phases the loads where the bodies are).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -37,8 +47,16 @@ def exact_linear(system, s0):
         return None
     if any(g.kind not in ("fixed", "prismatic") for g in system.groups) or not system.n_dofs:
         return None
+    if not system.water.flat and moves_horizontally(system, s0):
+        return None
     stepper = ExactLinear(system, s0)
     return stepper if stepper.ok else None
+
+
+def moves_horizontally(system, s0) -> bool:
+    """Whether some body's centre of mass can move horizontally (a slide with a horizontal component): the waves' phase
+    at it then changes with the motion, which the fixed-phase particular solution cannot follow."""
+    return bool(np.abs(system.pose(s0).stacked.reshape(-1, 6, system.n_dofs)[:, :2]).max(initial=0.0) > 1e-12)
 
 
 class ExactLinear:
@@ -70,41 +88,58 @@ class ExactLinear:
             A[d : 2 * d, 2 * d : 2 * d + s] = -Minv @ J.T @ rad.H
             A[2 * d : 2 * d + s, d : 2 * d] = rad.G @ J
             A[2 * d : 2 * d + s, 2 * d : 2 * d + s] = rad.F
-        self.A, self.c = A, c
+        self.A, self.c, self.Minv = A, c, Minv
         self.W = None if rad is None else J.T @ rad.H  # the radiated power is v . W x
         omega, Y = [], []
         for b, loads in enumerate(system.loads):  # each body's Froude-Krylov components, zero on the others
             for w, X in zip(loads.omega, loads.X):
                 omega.append(w)
                 Y.append(J.T @ _placed(X, b, len(system.loads)))
-        if rad is not None and rad.diffraction is not None:
-            for w, X in zip(rad.diffraction.omega, rad.diffraction.amplitude):
+        if rad is not None and rad.diffraction is not None:  # at the bodies' centres (no slide moves them horizontally)
+            for w, X in zip(rad.diffraction.omega, rad.diffraction.amplitudes(pose.x)):
                 omega.append(w)
                 Y.append(J.T @ X)
-        self.omega, index = np.unique(np.array(omega, float), return_inverse=True)  # components of one frequency add up
-        forcing = np.zeros((len(self.omega), d), complex)
-        np.add.at(forcing, index, np.array(Y).reshape(-1, d))
-        Z, self.ok = np.zeros((n, len(self.omega)), complex), True
-        for i, (w, y) in enumerate(zip(self.omega, forcing)):
-            B = np.zeros(n, complex)
-            B[d : 2 * d] = Minv @ y
-            system_matrix = A + 1j * w * np.eye(n)
-            if np.linalg.cond(system_matrix) > SINGULAR:
-                self.ok = False
-                return
-            Z[:, i] = -np.linalg.solve(system_matrix, B)
-        self.Zc, self.Zs = Z.real.copy(), Z.imag.copy()  # Re(Z e^(-i w t)) = Zc cos(w t) + Zs sin(w t)
         self._probe = np.zeros((2 * d, n))  # the rows of z the rates need: v, and W x
         self._probe[:d, d : 2 * d] = np.eye(d)
         if s:
             self._probe[d:, 2 * d : 2 * d + s] = self.W
         self._maps: dict = {}
+        self.ramp = float(system.water.ramp) if omega else 0.0
+        """The sea's ramp, s: up to it the forcing is r(t) times the steady one (0: none)."""
+        self.steady = self._particular(np.array(omega, float), np.array(Y, complex).reshape(-1, d))
+        self.ok = self.steady is not None
+        if self.ok and self.ramp > 0:  # r e^(-i w t) = e^(-i w t) / 2 - e^(-i (w -+ pi / T_r) t) / 4
+            side = np.pi / self.ramp
+            w3 = np.concatenate([omega, np.subtract(omega, side), np.add(omega, side)])
+            Y3 = np.concatenate([0.5 * np.array(Y), -0.25 * np.array(Y), -0.25 * np.array(Y)]).reshape(-1, d)
+            self.ramped = self._particular(w3, Y3)
+            self.ok = self.ramped is not None
 
-    def _exp(self, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """e^(A h), and at the half step only the rows the rates need: probe e^(A h / 2) and probe Zc, probe Zs."""
+    def _particular(self, omega: np.ndarray, Y: np.ndarray):
+        """(omega, Zc, Zs, probe Zc, probe Zs) of the forcing Re sum_i Y_i e^(-i omega_i t): its steady response
+        Re(Z e^(-i w t)) = Zc cos(w t) + Zs sin(w t), components of one frequency added up; None past SINGULAR."""
+        d, n = self.d, self.A.shape[0]
+        freq, index = np.unique(omega, return_inverse=True)
+        forcing = np.zeros((len(freq), d), complex)
+        np.add.at(forcing, index, Y)
+        Z = np.zeros((n, len(freq)), complex)
+        for i, (w, y) in enumerate(zip(freq, forcing)):
+            B = np.zeros(n, complex)
+            B[d : 2 * d] = self.Minv @ y
+            system_matrix = self.A + 1j * w * np.eye(n)
+            if np.linalg.cond(system_matrix) > SINGULAR:
+                return None
+            Z[:, i] = -np.linalg.solve(system_matrix, B)
+        Zc, Zs = Z.real.copy(), Z.imag.copy()
+        return freq, Zc, Zs, self._probe @ Zc, self._probe @ Zs
+
+    def _exp(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """e^(A h), and at the half step only the rows the rates need: probe e^(A h / 2) (a few step lengths kept: a step
+        across the ramp's end is split there)."""
         if h not in self._maps:
-            P = self._probe
-            self._maps = {h: (expm(self.A * h), P @ expm(self.A * (0.5 * h)), P @ self.Zc, P @ self.Zs)}
+            if len(self._maps) > 4:
+                self._maps.clear()
+            self._maps[h] = (expm(self.A * h), self._probe @ expm(self.A * (0.5 * h)))
         return self._maps[h]
 
     def state_vector(self, st) -> np.ndarray:
@@ -115,18 +150,31 @@ class ExactLinear:
 
     def advance(self, st, h: float, n: int = 1):
         """The state n steps of h after st, exactly: the steady response at every step's end from one product, the
-        transient carried by e^(A h); the rates at the ends and midpoints for Simpson's rule likewise in bulk."""
-        out = st
-        for start in range(0, n, BATCH):
-            out = self._batch(out, h, min(BATCH, n - start))
+        transient carried by e^(A h); the rates at the ends and midpoints for Simpson's rule likewise in bulk. Steps up
+        to the ramp's end take the ramped particular solution; one across it is split there."""
+        out, left = st, n
+        while left:
+            if self.ramp - out.t <= 1e-9 * h:  # past the ramp's end (to round-off)
+                k, part = left, self.steady
+            else:
+                k, part = min(left, math.floor((self.ramp - out.t) / h + 1e-9)), self.ramped
+            if k == 0:  # the step across the ramp's end: to it, then on
+                t_end = out.t + h
+                out = self._batch(self._batch(out, self.ramp - out.t, 1, self.ramped), t_end - self.ramp, 1, self.steady)
+                out, left = replace(out, t=t_end), left - 1
+                continue
+            for start in range(0, k, BATCH):
+                out = self._batch(out, h, min(BATCH, k - start), part)
+            left -= k
         return out
 
-    def _batch(self, st, h: float, n: int):
-        full, half, Pc, Ps = self._exp(h)
+    def _batch(self, st, h: float, n: int, particular):
+        full, half = self._exp(h)
+        omega, Zc, Zs, Pc, Ps = particular
         d, s = self.d, self.s
         times = st.t + h * np.arange(n + 1)
-        wt, wm = np.multiply.outer(self.omega, times), np.multiply.outer(self.omega, times[:-1] + 0.5 * h)
-        steady = self.Zc @ np.cos(wt) + self.Zs @ np.sin(wt)  # (states, n + 1)
+        wt, wm = np.multiply.outer(omega, times), np.multiply.outer(omega, times[:-1] + 0.5 * h)
+        steady = Zc @ np.cos(wt) + Zs @ np.sin(wt)  # (states, n + 1)
         transient = np.empty_like(steady)
         transient[:, 0] = self.state_vector(st) - steady[:, 0]
         for k in range(n):

@@ -88,6 +88,8 @@ class Waves:
     """Water depth h, m (inf: deep water)."""
     current: tuple[float, float] = (0.0, 0.0)
     """Uniform current (u, v), m/s: the waves above are those seen moving with it."""
+    ramp: float = 0.0
+    """Seconds over which the sea grows from still water at t = 0 to full height (0: full height from the start)."""
 
     kind = "waves"
     flat = False
@@ -97,6 +99,11 @@ class Waves:
     def omega_met(self) -> np.ndarray:
         """(n,) each component's frequency as met at a fixed point: omega_i + k_i . U (carried by the current U)."""
         return self.omega + self.k * (np.cos(self.direction) * self.current[0] + np.sin(self.direction) * self.current[1])
+
+    def ramped(self, t: float) -> float:
+        """The ramp's factor on every wave quantity at time t: (1 - cos(pi t / ramp)) / 2 until t = ramp, then 1
+        (value and slope continuous at both ends: the sea starts without a jolt; WEC-Sim's ramp)."""
+        return ramp_factor(t, self.ramp)
 
     def _psi(self, xy: np.ndarray, t: float) -> np.ndarray:
         """(..., n) phases k_i . x - (omega_i + k_i . U) t + phi_i: the waves carried by the current U."""
@@ -112,7 +119,7 @@ class Waves:
         return (self.rho * self.g * self.amplitude) * self._decay(points[:, 2], "cosh") * np.exp(1j * phase)
 
     def elevation(self, xy: np.ndarray, t: float) -> np.ndarray:
-        return np.cos(self._psi(np.asarray(xy, float), t)) @ self.amplitude
+        return np.cos(self._psi(np.asarray(xy, float), t)) @ (self.ramped(t) * self.amplitude)
 
     def elevation_on_grid(self, xs: np.ndarray, ys: np.ndarray, t: float, spacing_x=None, spacing_y=None) -> np.ndarray:
         """(nx, ny) eta at every (xs[i], ys[j]): the components factor over x and y, so a grid costs one small
@@ -120,7 +127,7 @@ class Waves:
         components shorter than four spacings are left out and faded in up to eight, so that a coarse grid
         does not alias them into noise."""
         kx, ky = self.k * np.cos(self.direction), self.k * np.sin(self.direction)
-        start = self.amplitude * np.exp(1j * (self.phase - self.omega_met * t))
+        start = self.ramped(t) * self.amplitude * np.exp(1j * (self.phase - self.omega_met * t))
         X = np.exp(1j * np.multiply.outer(np.asarray(xs, float), kx)) * start
         Y = np.exp(1j * np.multiply.outer(np.asarray(ys, float), ky))
         if spacing_x is not None:
@@ -136,7 +143,7 @@ class Waves:
     def _stretched(self, points: np.ndarray, t: float):
         """(psi, z*) with Wheeler's stretching of the depth coordinate."""
         psi = self._psi(points, t)
-        eta = np.cos(psi) @ self.amplitude
+        eta = np.cos(psi) @ (self.ramped(t) * self.amplitude)
         z = points[..., 2]
         zs = z - eta if math.isinf(self.depth) else (z - eta) * self.depth / (self.depth + eta)
         return psi, zs
@@ -156,7 +163,7 @@ class Waves:
 
     def pressure(self, points: np.ndarray, t: float) -> np.ndarray:
         psi, zs = self._stretched(points, t)
-        return self.rho * self.g * ((self._decay(zs, "cosh") * np.cos(psi)) @ self.amplitude - points[..., 2])
+        return self.rho * self.g * ((self._decay(zs, "cosh") * np.cos(psi)) @ (self.ramped(t) * self.amplitude) - points[..., 2])
 
     def velocity(self, points: np.ndarray, t: float) -> np.ndarray:
         return self.field(points, t)[1]
@@ -168,8 +175,9 @@ class Waves:
         """(pressure, velocity) at the same points, sharing the phases and depth factors."""
         psi, zs = self._stretched(points, t)
         cos, sin = np.cos(psi), np.sin(psi)
-        pressure = self.rho * self.g * ((self._decay(zs, "cosh") * cos) @ self.amplitude - points[..., 2])
-        aw = self.amplitude * self.omega
+        a = self.ramped(t) * self.amplitude
+        pressure = self.rho * self.g * ((self._decay(zs, "cosh") * cos) @ a - points[..., 2])
+        aw = a * self.omega
         horizontal = self._decay(zs, "cosh/sinh") * cos * aw
         velocity = np.empty(np.shape(points))
         velocity[..., 0] = horizontal @ np.cos(self.direction)
@@ -178,6 +186,27 @@ class Waves:
         velocity[..., 0] += self.current[0]
         velocity[..., 1] += self.current[1]
         return pressure, velocity
+
+
+def ramp_factor(t: float, ramp: float) -> float:
+    """(1 - cos(pi t / ramp)) / 2 for 0 <= t < ramp, 0 before, 1 after (ramp 0: 1 from t = 0)."""
+    if ramp <= 0.0 or t >= ramp:
+        return 1.0
+    return 0.0 if t <= 0.0 else 0.5 - 0.5 * math.cos(math.pi * t / ramp)
+
+
+RAMP_PERIODS = 3.5
+"""The default ramp, in periods of the sea (regular: its period; JONSWAP: the peak period). A half-cosine over
+N + 1/2 periods switches a sinusoid on with no net impulse at its own frequency (docs/physics.md, the wave ramp)."""
+
+
+def ramp_seconds(waves) -> float:
+    """The ramp a scene's [waves] table asks for, s: its `ramp`, or RAMP_PERIODS periods of the sea when unset (0 in still water)."""
+    if waves.kind == "still":
+        return 0.0
+    if waves.ramp is not None:
+        return float(waves.ramp)
+    return RAMP_PERIODS * float(waves.period if waves.kind == "regular" else waves.tp)
 
 
 def wavenumber(omega: np.ndarray, g: float, depth: float) -> np.ndarray:
@@ -243,8 +272,9 @@ def make_water(waves, rho: float, g: float, current=(0.0, 0.0)):
     depth = math.inf if waves.depth is None else float(waves.depth)
     current = (float(current[0]), float(current[1]))
     if waves.kind == "regular":
-        return dataclasses.replace(regular_waves(rho, g, waves.height, waves.period, waves.direction, depth), current=current)
+        sea = regular_waves(rho, g, waves.height, waves.period, waves.direction, depth)
+        return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves))
     if waves.kind == "jonswap":
         sea = jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
-        return dataclasses.replace(sea, current=current)
+        return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves))
     return StillWater(rho, g, current)

@@ -518,8 +518,8 @@ def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
 
 def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     """Still water: the flat grid, and no surface is streamed. Waves (chosen live in the Waves folder):
-    the grid gives way to a mesh whose heights are the running Water's elevation, sent at most
-    WAVE_HZ times a second; switching the water layer off stops the stream."""
+    the grid gives way to a mesh whose heights are the running Water's elevation (as high as the sea's ramp has
+    grown by then), sent at most WAVE_HZ times a second; switching the water layer off stops the stream."""
     from app.water import FAR, WAVE_HZ
 
     app = make_app("damped")
@@ -539,13 +539,85 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     vertices = np.concatenate(shades)
     near = np.abs(vertices[:, :2] - snap.frame.x_world[:2]).max(axis=1) < 0.45 * water.size  # the fine patch: every component
     np.testing.assert_allclose(vertices[near, 2], snap.water.elevation(vertices[near, :2], water.sent_time), atol=1e-6)
-    assert np.ptp(vertices[:, 2]) > 0.05 and np.abs(vertices[:, 2]).max() <= 0.3 + 1e-6  # a 0.3 m amplitude, 100 m long wave
+    a = 0.3 * snap.water.ramped(water.sent_time)  # a 0.3 m amplitude, 100 m long wave, on its ramp (28 s)
+    assert 0.0 < a < 0.3 and np.ptp(vertices[:, 2]) > 0.1 * a and np.abs(vertices[:, 2]).max() <= a + 1e-6
     assert np.abs(vertices[:, :2]).max() > FAR * 0.5 * water.size  # the ring of the same surface out to the horizon
     app.layers.water.value = False
     time.sleep(0.3)
     frozen = water.updates
     time.sleep(0.5)
     assert water.updates == frozen and not water.surface.visible
+
+
+def test_the_sea_rises_over_its_ramp_and_a_reset_ramps_it_again(make_app):
+    """The waves preset (0.25 m amplitude, 6 s): the surface the page gets is the running sea at its time, r(t) of its
+    full height while it rises over its ramp (3.5 periods, 21 s); Reset restarts time and the sea with it: the next
+    surfaces are as flat as the ramp's start."""
+    app = make_app("waves")
+    water, sea = app.scene.water, app.loop.sim.model.water
+    assert sea.ramp == pytest.approx(21.0)
+
+    def surface() -> np.ndarray:
+        return np.concatenate([np.asarray(band.vertices, float) for band in water.bands if band.visible])
+
+    wait_for(app, lambda s: s.frame.t > 1.2 and water.sent_time > 1.0, what="the sea to rise")
+    risen, when = surface(), water.sent_time
+    a = 0.25 * sea.ramped(when)
+    assert a > 1e-3 and np.abs(risen[:, 2]).max() == pytest.approx(a, rel=0.1)  # (the patch and ring span most of a wave)
+    app.controls.reset.value = True
+    snap = wait_for(app, lambda s: 0.0 < water.sent_time < 0.5 * when and s.frame.t < 0.5 * when, what="a surface after the reset")
+    after = surface()
+    assert np.abs(after[:, 2]).max() <= 0.25 * sea.ramped(water.sent_time) + 1e-6 < 0.5 * a
+    assert snap.frame.eta == pytest.approx(float(sea.elevation(snap.frame.x_world[:2], snap.frame.t)), abs=1e-12)
+
+
+def _replayed_seas(html: str) -> list[tuple[float, np.ndarray]]:
+    """(take time, (v, 3) vertices) of every sea surface a replay page's recording sends (viser's serialised scene:
+    msgpack messages, then their binary buffers, each 8-byte aligned)."""
+    import base64
+    import re
+
+    import msgspec
+    import zstandard
+
+    raw = base64.b64decode(re.search(r'window.__VISER_EMBED_DATA__="([^"]+)"', html).group(1))
+    inner = zstandard.ZstdDecompressor().decompress(raw[8:], max_output_size=int.from_bytes(raw[:8], "little"))
+    n = int.from_bytes(inner[:8], "little")
+    doc = msgspec.msgpack.decode(inner[8 : 8 + n])
+    spans, at = [], 8 + n
+    for length in doc["binaryBufferLengths"]:
+        at += (8 - at % 8) % 8
+        spans.append((at, length))
+        at += length
+    seas = []
+    for t, m in doc["messages"]:
+        if "/waves/" in m.get("name", "") and "vertices" in m.get("updates", {}):
+            ref = m["updates"]["vertices"]
+            start, length = spans[ref["__binary_index"]]
+            seas.append((t, np.frombuffer(inner[start : start + length], dtype=ref["dtype"]).reshape(-1, 3)))
+    return seas
+
+
+@pytest.mark.slow  # a run and its replay page: 5 s
+def test_a_recording_replays_the_sea_rising_over_its_ramp(tmp_path):
+    """`run --record` of the waves preset with a 2 s ramp: every sea surface the replay page sends is the run's sea at
+    that time (float32), flat at the start, r(t) of its height on the ramp and full after it."""
+    from sim import load_scene, with_overrides
+    from sim.water import make_water
+
+    page = tmp_path / "run.html"
+    done = subprocess.run([sys.executable, "-m", "app.record", "run", "--scene", "waves", "--wave-ramp", "2", "--t-end", "3", "--record",
+                           str(page)], cwd=ROOT, capture_output=True, text=True, timeout=300, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    scene = with_overrides(load_scene("waves"), waves__ramp=2.0)
+    sea = make_water(scene.waves, scene.fluid.rho, scene.fluid.g)
+    seas = _replayed_seas(page.read_text())
+    assert len(seas) >= 10 and seas[0][0] == 0.0 and seas[-1][0] > 2.5
+    for t, vertices in seas:
+        np.testing.assert_allclose(vertices[:, 2], sea.elevation(vertices[:, :2].astype(float), t), rtol=0, atol=1e-6)
+    assert np.abs(seas[0][1][:, 2]).max() == 0.0 and np.abs(seas[-1][1][:, 2]).max() > 0.9 * 0.25  # flat, then full height
+    rising = [np.abs(v[:, 2]).max() for t, v in seas if t < 1.9]
+    assert np.all(np.diff(rising) > 0)
 
 
 def test_plots_draw_round_off_as_zero_and_leave_room_for_their_labels(make_app):

@@ -1,5 +1,7 @@
 """The compiled kernels against the plain-numpy reference: the same trajectories to round-off."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import trimesh
@@ -250,8 +252,8 @@ def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(
 )
 def test_compiled_path_matches_numpy_in_waves(scene, changes, forces):
     """Trajectories in a regular swell (direct sum), the storm (local expansion, with drag) and a
-    short-crested finite-depth sea (direct sum): kernel and reference agree to round-off."""
-    config = with_overrides(load_scene(scene), fluid__forces=forces, **changes)
+    short-crested finite-depth sea (direct sum), across the end of a short ramp: kernel and reference agree to round-off."""
+    config = with_overrides(load_scene(scene), fluid__forces=forces, waves__ramp=0.15, **changes)
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
     assert compiled.compiled
     for _ in range(3):
@@ -261,11 +263,13 @@ def test_compiled_path_matches_numpy_in_waves(scene, changes, forces):
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-10 * (1 + np.abs(a).max()))
 
 
-def test_local_expansion_of_the_sea_matches_the_direct_sum():
+@pytest.mark.parametrize("ramp", [0.0, 10.0])
+def test_local_expansion_of_the_sea_matches_the_direct_sum(ramp):
     """Elevation, pressure and flow from the expansion about the body against every component summed,
-    at points spread over the body's reach (its radius, and stretched depths down to its draft)."""
+    at points spread over the body's reach (its radius, and stretched depths down to its draft); without a ramp
+    and a third of the way up one (the sea at 0.25 of its height)."""
     body = BODIES["cube"]()
-    water = jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1, direction_deg=20.0)
+    water = replace(jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=64, seed=1, direction_deg=20.0), ramp=ramp)
     x = np.array([3.0, -2.0, -0.4])
     pts = x + np.random.default_rng(5).uniform(-1, 1, (400, 3)) * body.radius / np.sqrt(3)
     results = []
@@ -280,10 +284,14 @@ def test_local_expansion_of_the_sea_matches_the_direct_sum():
         results.append((eta, out))
     (eta, out), (eta_d, out_d) = results
     np.testing.assert_allclose(eta_d, water.elevation(pts[:, :2], T_WAVES), rtol=0, atol=1e-12)  # the direct sum is the reference's
-    amplitude = water.amplitude.sum()
+    pressure, flow = water.field(pts, T_WAVES)
+    np.testing.assert_allclose(out_d[:, 0], pressure, rtol=0, atol=1e-12 * 1000 * 9.81)
+    np.testing.assert_allclose(out_d[:, 1:], flow, rtol=0, atol=1e-12)
+    amplitude = water.amplitude.sum() * water.ramped(T_WAVES)
     assert np.abs(eta - eta_d).max() < 1e-12 * amplitude
     assert np.abs(out[:, 0] - out_d[:, 0]).max() < 1e-12 * 1000 * 9.81 * amplitude
-    assert np.abs(out[:, 1:] - out_d[:, 1:]).max() < 1e-12 * (water.amplitude * water.omega).sum()
+    assert np.abs(out[:, 1:] - out_d[:, 1:]).max() < 1e-12 * (water.amplitude * water.omega).sum() * water.ramped(T_WAVES)
+    assert water.ramped(T_WAVES) == (1.0 if not ramp else pytest.approx(0.5 - 0.5 * np.cos(np.pi * T_WAVES / ramp), rel=1e-15))
 
 
 def test_a_body_large_against_the_waves_falls_back_to_the_direct_sum():
@@ -299,7 +307,9 @@ def test_a_body_large_against_the_waves_falls_back_to_the_direct_sum():
 
 
 RADIATION_CHANGES = [{"initial__omega": (0.3, -0.2, 0.1)}, {"fluid__drag_coefficient": 0.8, "fluid__damping": 30.0},
-                     {"waves__kind": "regular", "waves__height": 0.3, "fluid__damping": 20.0}]  # fmt: skip
+                     {"waves__kind": "regular", "waves__height": 0.3, "fluid__damping": 20.0, "waves__ramp": 0.2,
+                      "initial__position": (1.3, -0.4, -0.3)}]  # fmt: skip
+"""In waves: across the end of a short ramp, away from the origin (the diffraction force is phased where the body is)."""
 RADIATION_CASES = [(integrator, ("points", "panels")[(i + j) % 2], changes) for i, integrator in enumerate(["euler", "splitting", "implicit", "rk4"])
                    for j, changes in enumerate(RADIATION_CHANGES)]  # fmt: skip
 """Every scheme with every change, and each of them, scheme or change, with both force models: every pair of
@@ -312,7 +322,7 @@ def test_compiled_radiation_matches_numpy(integrator, forces, changes):
     """Added mass in the kicks and the exact linear flow, the memory and E_rad, alone, with damping and
     drag (relinearised) and in waves (with the diffraction force): kernel and reference to round-off, memory states included."""
     config = with_overrides(load_scene("rest"), fluid__forces=forces, step__integrator=integrator, fluid__radiation="bem",
-                            initial__position=(0.0, 0.0, -0.3), **changes)  # fmt: skip
+                            **{"initial__position": (0.0, 0.0, -0.3), **changes})  # fmt: skip
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
     assert compiled.compiled and len(compiled.state.memory) > 20
     assert (compiled.model.radiation.diffraction is not None) == ("waves__kind" in changes)  # in waves: the diffraction force too

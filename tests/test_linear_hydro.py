@@ -74,7 +74,7 @@ def test_a_linear_run_is_linear_theory_at_any_wave_height(amplitude):
     c = system.radiation.coefficients
     i = int(np.argmin(abs(c.omega - 2 * np.pi / 8.0)))
     w = float(c.omega[i])
-    system, rest = build(rm3(waves__height=2 * amplitude, waves__period=2 * np.pi / w))
+    system, rest = build(rm3(waves__height=2 * amplitude, waves__period=2 * np.pi / w, waves__ramp=0.0))  # (started on the steady state)
     froude_krylov = np.concatenate([loads.X[0] for loads in system.loads]) / amplitude
     xi = response(system, rest, i, froude_krylov=froude_krylov)
     relative, power = time_domain(system, steady_start(system, rest, xi, w, amplitude), w, periods=6)
@@ -116,16 +116,19 @@ def test_run_rm3_with_linear_hydro_in_a_sea(tmp_path):
 
 
 def test_a_linear_system_on_slides_is_stepped_exactly():
-    """rm3 with linear hydro from rest in its regular waves for 40 s: the exact stepper gives the same joint coordinates at
-    dt = 0.4 s as at 0.0125 s (to 1e-12 m), and Stormer-Verlet (the general scheme) converges to it at second order, the
-    take-off's absorbed energy too."""
+    """rm3 with linear hydro from rest in its regular waves for 40 s, the first 28 s of them the waves' ramp: the exact
+    stepper gives the same joint coordinates at dt = 0.4 s as at 0.0125 s and at 0.32 s (a step across the ramp's end,
+    split there), to 1e-12 m, and Stormer-Verlet (the general scheme) converges to it at second order, the take-off's
+    absorbed energy too."""
     from sim.system_linear import exact_linear
 
     system, s0 = build(rm3())
     exact = exact_linear(system, s0)
-    assert exact is not None
-    coarse, fine = exact.advance(s0, 0.4, 100), exact.advance(s0, 0.0125, 3200)
+    assert exact is not None and exact.ramp == pytest.approx(28.0)
+    coarse, fine, across = exact.advance(s0, 0.4, 100), exact.advance(s0, 0.0125, 3200), exact.advance(s0, 0.32, 125)
     assert abs(fine.t - 40.0) < 1e-9 and np.abs(coarse.theta - fine.theta).max() < 1e-12
+    assert abs(across.t - 40.0) < 1e-9 and np.abs(across.theta - fine.theta).max() < 1e-12
+    assert abs(across.absorbed.sum() / fine.absorbed.sum() - 1) < 1e-6  # Simpson's rule over the split step too
     assert np.ptp([coarse.theta[1], 0.0]) > 0.1  # the float moves
     gaps, energy = [], []
     for dt in (0.05, 0.025):
@@ -147,7 +150,7 @@ def test_the_exact_stepper_keeps_the_frequency_domains_steady_state(period):
     c = system.radiation.coefficients
     i = int(np.argmin(abs(c.omega - 2 * np.pi / period)))
     w, a = float(c.omega[i]), 0.5
-    system, rest = build(rm3(waves__height=2 * a, waves__period=2 * np.pi / w))
+    system, rest = build(rm3(waves__height=2 * a, waves__period=2 * np.pi / w, waves__ramp=0.0))  # (started on the steady state)
     from sim.system_linear import exact_linear
 
     exact = exact_linear(system, rest)
@@ -190,3 +193,35 @@ def test_a_linear_system_that_turns_is_stepped_by_the_general_scheme():
     assert run.exact is None and not any("stepped exactly" in note for note in run.notes)
     run.step(20)
     assert run.state.is_finite() and abs(run.state.t - 20 * run.dt) < 1e-9
+
+
+def test_the_linear_froude_krylov_force_acts_where_the_body_is():
+    """A body's linear Froude-Krylov force moved by dx along the waves (at 30 degrees) is the one at rest turned by the
+    phase k . dx: exactly, at every time; and it grows with the waves' ramp (half of it at the ramp's middle)."""
+    system, _ = build(rm3(waves__direction=30.0))
+    loads = system.loads[1]
+    k = loads.k[0]
+    assert k @ k == pytest.approx(loads.model.water.k[0] ** 2)
+    ramp = loads.model.water.ramp
+    for t in (0.3 * ramp, ramp + 1.7, ramp + 5.2):
+        for dx in (np.array([7.0, -3.0, 0.4]), np.array([-11.0, 2.5, 0.0])):
+            turned = (np.exp(1j * (k @ dx[:2] - loads.omega * t)) @ loads.X).real * loads.model.water.ramped(t)
+            np.testing.assert_allclose(loads.excitation(t, loads.x0 + dx), turned, rtol=1e-12, atol=1e-9 * np.abs(loads.X).max())
+    at = lambda t: loads.excitation(t, loads.x0)  # noqa: E731
+    middle = 0.5 * ramp
+    np.testing.assert_allclose(at(middle), 0.5 * (np.exp(-1j * loads.omega * middle) @ loads.X).real, rtol=1e-12, atol=1e-9)
+
+
+def test_a_horizontal_slide_in_waves_is_stepped_by_the_general_scheme():
+    """rm3 with its spar on a surge slide: the waves' phase at the spar changes as it slides, which the exact stepper's
+    fixed-phase forcing cannot follow: Stormer-Verlet steps it (in still water the exact stepper still applies)."""
+    from sim.system import Assembly
+
+    base = rm3()
+    spar = dataclasses.replace(base.bodies[0], constraint=dataclasses.replace(base.bodies[0].constraint, axis=(1.0, 0.0, 0.0)))
+    surging = dataclasses.replace(base, bodies=(spar, *base.bodies[1:]))
+    run = Assembly(surging)
+    assert run.exact is None and not any("stepped exactly" in note for note in run.notes)
+    run.step(5)
+    assert run.state.is_finite()
+    assert Assembly(with_overrides(surging, waves__kind="still")).exact is not None

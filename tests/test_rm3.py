@@ -30,8 +30,8 @@ def rm3_in(period: float, amplitude: float, joint: str = "prismatic"):
     system, _ = build(base)  # the coefficients come from the shipped file: no solve here
     c = system.radiation.coefficients
     i = int(np.argmin(abs(c.omega - 2 * np.pi / period)))
-    scene = with_overrides(base, waves__height=2 * amplitude, waves__period=2 * np.pi / float(c.omega[i]))
-    system, rest = build(scene)
+    scene = with_overrides(base, waves__height=2 * amplitude, waves__period=2 * np.pi / float(c.omega[i]), waves__ramp=0.0)  # (no ramp: the
+    system, rest = build(scene)  # runs start on the steady state)
     return system, rest, i
 
 

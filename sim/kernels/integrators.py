@@ -218,7 +218,7 @@ def derivative(y, t, model, s, sea, rad):
     out[0:3] = u
     out[3:7] = 0.5 * quat_multiply(np.array([0.0, w[0], w[1], w[2]]), normalized(q))
     if rad is not None:
-        du, dL, dx, de = derivative_extra(rad, R, u, L, F, T, y[13:-1], t, inertia)
+        du, dL, dx, de = derivative_extra(rad, R, u, L, F, T, y[13:-1], t, inertia, x)
         out[7:10], out[10:13], out[13:-1], out[-1] = du, dL, dx, de
         return out
     out[7:10] = F / mass
@@ -227,9 +227,9 @@ def derivative(y, t, model, s, sea, rad):
 
 
 @njit(inline="always", **JIT)
-def with_memory(rad, R, F, T, x, t):
-    """The loads plus the radiation memory's force and the diffraction force at t (integrators.with_memory)."""
+def with_memory(rad, R, F, T, x, t, p):
+    """The loads plus the radiation memory's force and the diffraction force at t, the centre of mass at p (integrators.with_memory)."""
     if rad is None:
         return F, T
-    Fm, Tm = memory_load(rad, R, x, t)
+    Fm, Tm = memory_load(rad, R, x, t, p)
     return F + Fm, T + Tm

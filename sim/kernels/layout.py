@@ -12,7 +12,8 @@ a c r^T row-major (9), with c = r x n.
 
 Sea `sea_pack(water, body)`: (components (n, 8): a, omega, k_x, k_y, k, phase, cos and sin of the
 direction; depth (inf: deep); long-crested (one direction for all); the body's radius about its
-centre of mass, m; the uniform current (3,) (u, v, 0), m/s). Still water has no components.
+centre of mass, m; the uniform current (3,) (u, v, 0), m/s; the ramp's duration, s (water.Waves.ramp)).
+Still water has no components.
 
 Coefficients `coef`, (COEF_BASE + number of term parameters + 6,) float64: rho, g, then every force
 term's parameters in `forces.TERMS` order, then the held load (forces.Model.held: zero without). Terms mask `terms`: bit i set when `forces.TERMS[i]` is
@@ -69,7 +70,7 @@ def pack(model) -> tuple[int, np.ndarray]:
     return mask, coefficients(model.fluid, model.held)
 
 
-def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float, np.ndarray]:
+def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool, float, np.ndarray, float]:
     """The water as the kernels take it (kernels/water.py), for this body. expand=False keeps the
     kernels on the direct sum over components (for benchmarks and checks of the expansion)."""
     reach = float(max(body.radius, np.linalg.norm(body.mesh_vertices, axis=1).max()))
@@ -77,15 +78,15 @@ def sea_pack(water, body, expand: bool = True) -> tuple[np.ndarray, float, bool,
 
 
 @lru_cache(maxsize=256)  # asked at every frame, by every body of an ensemble; the water is immutable
-def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, float, np.ndarray]:
+def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, float, np.ndarray, float]:
     current = np.array([*water.current, 0.0])
     if water.flat:
-        return np.zeros((0, 8)), float("inf"), True, radius, current
+        return np.zeros((0, 8)), float("inf"), True, radius, current, 0.0
     beta = water.direction
     comps = np.column_stack(
         [water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)]
     )
-    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius, current
+    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius, current, float(water.ramp)
 
 
 NO_RADIATION = None

@@ -1,14 +1,15 @@
 """Compiled twin of the radiation terms the integrators use (radiation.Radiation, integrators.kick,
 with_memory, drift_memory and exact_linear_flow's generalised mass).
 
-`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, omega): the
+`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, waves, ramp): the
 inverse, the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6); the
 memory's exact step over dt and its system as bands (n, w), row i holding columns start[i] + j (the
 memory is block diagonal, one small block per fitted entry); and per state i the twist component
 col[i] feeding it (through gamma[i] over a step, g[i] in the system) and the load component row[i]
 it feeds (through h[i]), all in the axes the memory was fitted in: the rest pose's world axes, R0
-from the body frame; then the diffraction force's complex amplitude per wave component (real and
-imaginary parts, (n, 6), world axes) and each component's frequency (none without diffraction).
+from the body frame; then the diffraction force's complex amplitude per wave component referred to the world's
+origin (real and imaginary parts, (n, 6), world axes), each component's (omega, k_x, k_y) (n, 3) (none without
+diffraction) and the sea's ramp, s (diffraction.Diffraction.kernel_arrays).
 Without radiation `rad` is None: numba compiles that case apart and prunes every radiation branch
 (`rad is None` tests on an argument are resolved at compile time), so still scenes pay nothing. Vectors in the body frame are R^T times the world ones.
 """
@@ -21,6 +22,7 @@ import numpy as np
 
 from .jit import JIT, njit
 from .rotation import mtv, mv
+from .water import ramp_factor
 
 
 @njit(**JIT)
@@ -108,14 +110,16 @@ def kick(rad, R, u, L, F, T, h, inertia):
 
 
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
-def memory_load(rad, R, x, t):
+def memory_load(rad, R, x, t, p):
     """The memory's force and torque on the body, world frame: -R (H x); plus, in waves, the diffraction
-    force at time t (radiation.Radiation.load)."""
+    force at time t with the centre of mass at p (radiation.Radiation.load)."""
     Fm, Tm = fit_to_world(R, rad[11], memory_output(rad, x))
     Fm, Tm = -Fm, -Tm
-    re, im, omega = rad[12], rad[13], rad[14]
-    for i in range(omega.shape[0]):  # Re{(re + i im) e^(-i omega t)} = re cos + im sin
-        c, s = math.cos(omega[i] * t), math.sin(omega[i] * t)
+    re, im, waves = rad[12], rad[13], rad[14]
+    r = ramp_factor(t, rad[15]) if waves.shape[0] else 0.0
+    for i in range(waves.shape[0]):  # r Re{(re + i im) e^(-i psi)} = r (re cos + im sin), psi = omega t - k . p
+        psi = waves[i, 0] * t - waves[i, 1] * p[0] - waves[i, 2] * p[1]
+        c, s = r * math.cos(psi), r * math.sin(psi)
         for j in range(3):
             Fm[j] += re[i, j] * c + im[i, j] * s
             Tm[j] += re[i, 3 + j] * c + im[i, 3 + j] * s
@@ -185,12 +189,12 @@ def from_scaled(WS, R, y, inertia):
 
 
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
-def derivative_extra(rad, R, u, L, F, T, x, t, inertia):
-    """For rk4: (du/dt, dL/dt, dx/dt, dE_rad/dt) with the generalised mass and the memory
+def derivative_extra(rad, R, u, L, F, T, x, t, inertia, p):
+    """For rk4: (du/dt, dL/dt, dx/dt, dE_rad/dt) with the generalised mass and the memory, the centre of mass at p
     (integrators.derivative): (M_RB + A_inf) nu' = f - mu - (0, omega x L), L' = I nu'_omega + omega x L."""
     w = mv(R, mtv(R, L) / inertia)
     spin = np.array([w[1] * L[2] - w[2] * L[1], w[2] * L[0] - w[0] * L[2], w[0] * L[1] - w[1] * L[0]])
-    Fm, Tm = memory_load(rad, R, x, t)
+    Fm, Tm = memory_load(rad, R, x, t, p)
     fb = np.empty(6)
     fb[:3] = mtv(R, F + Fm)
     fb[3:] = mtv(R, T + Tm - spin)

@@ -77,7 +77,7 @@ def euler_step(y, t, dt, carry, model, s, sea, rad):
         memn, e_radn = drift_memory(rad, R, Rn, u, L, mem, e_rad, dt, inertia)
     Fc, Tc, Dn, wetn = pose_loads(xn, Rn, t + dt, model, s, sea)
     twist_loads(xn, Rn, u, angular_velocity(Rn, L, inertia), model, Dn, wetn, s, Fc, Tc)  # euler carries no loads over
-    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt)
+    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt, xn)
     un, Ln = kick(rad, Rn, u, L, Fk, Tk, dt, mass, inertia)
     return _state(y, xn, qn, un, Ln, memn, e_radn, rad), (Rn, Fc, Tc, Dn, wetn, K, lam, V, WS)
 
@@ -113,7 +113,7 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
             un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
         un, Ln = kick(rad, R, un, Ln, F, T, h, mass, inertia)
     else:
-        Fk, Tk = with_memory(rad, R, F, T, mem, t)
+        Fk, Tk = with_memory(rad, R, F, T, mem, t, x)
         if wet and not GENERAL_TWIST:
             un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
         else:
@@ -129,7 +129,7 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
             K = modes(Dn, Rn, mass, inertia, rad, WS)
             un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
     else:
-        Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt)
+        Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt, xn)
         if wetn and not GENERAL_TWIST:
             K = modes(Dn, Rn, mass, inertia, rad, WS)
             un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
@@ -150,14 +150,14 @@ def implicit_step(y, t, dt, carry, model, s, sea, rad):
     mem, e_rad = (y[13:-1], y[-1]) if rad is not None else (y[:0], 0.0)
     h = 0.5 * dt
     affine = s.ws[4]
-    Fk, Tk = with_memory(rad, R, F, T, mem, t)
+    Fk, Tk = with_memory(rad, R, F, T, mem, t, x)
     if HAS_NONLINEAR:
         un, Ln = relinearised_flow(x, R, u, L, h, model, Fk, Tk, D, wet, s, rad)
     else:
         Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if MOVING else (Fk, Tk)
         un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
     xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn = _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS)
-    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt)
+    Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt, xn)
     if HAS_NONLINEAR:
         un, Ln = relinearised_flow(xn, Rn, un, Ln, h, model, Fk, Tk, Dn, wetn, s, rad)
     else:
@@ -240,11 +240,12 @@ def warm_up() -> None:
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     coef = np.ones(COEF_SIZE)
     comps = np.zeros((1 if WAVES else 0, 8))
-    sea = (comps, math.inf, True, 1.0, np.zeros(3))
+    sea = (comps, math.inf, True, 1.0, np.zeros(3), 0.0)
     rad = None
     if RADIATING:  # the types only
         eye, one, index, zero = np.eye(6), np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1)
-        rad = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3), np.zeros((0, 6)), np.zeros((0, 6)), np.zeros(0))
+        no_waves = (np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 3)), 0.0)
+        rad = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3), *no_waves)
         y = np.concatenate([y, np.zeros(2)])
     model = Model(body.packed, body.mass, body.inertia, coef)
     if SPEC.system:  # one of several bodies: the system's kick asks its loads only

@@ -1,7 +1,8 @@
 """Compiled twin of water.Waves: the surface elevation, pressure and flow at points, for the kernels.
 
-The sea is `layout.sea_pack`'s tuple (components, depth, long_crested, radius, current). At each pose the
-kernels call `prepare` once, then ask `elevations` and `fields` at batches of nodes. Two ways to answer:
+The sea is `layout.sea_pack`'s tuple (components, depth, long_crested, radius, current, ramp). At each pose the
+kernels call `prepare` once, then ask `elevations` and `fields` at batches of nodes (every component's amplitude
+times the ramp's factor at that time, water.ramp_factor). Two ways to answer:
 
 - the direct sum over components, the same arithmetic as the reference (a sine, a cosine and an
   exponential per node and component);
@@ -55,23 +56,32 @@ def _moments(comps, weight, P, k_scale):
 
 
 @njit(**JIT)
+def ramp_factor(t, ramp):
+    """water.ramp_factor: (1 - cos(pi t / ramp)) / 2 for 0 <= t < ramp, 0 before, 1 after (ramp 0: 1)."""
+    if ramp <= 0.0 or t >= ramp:
+        return 1.0
+    return 0.0 if t <= 0.0 else 0.5 - 0.5 * math.cos(math.pi * t / ramp)
+
+
+@njit(**JIT)
 def prepare(sea, t, x):
     """What `elevations` and `fields` need at time t for a body centred at x: each component's phase
-    offset phi_j - (omega_j + k_j . U) t (U the current, which carries the waves), and (when the
+    offset phi_j - (omega_j + k_j . U) t (U the current, which carries the waves), the ramp's factor, and (when the
     expansion serves) its centre, scale and moments."""
-    comps, depth, long_crested, radius, current = sea
+    comps, depth, long_crested, radius, current, ramp = sea
     n = comps.shape[0]
     offset = np.empty(n)
     for j in range(n):
         offset[j] = comps[j, PHASE] - (comps[j, OMEGA] + comps[j, KX] * current[0] + comps[j, KY] * current[1]) * t
+    r = ramp_factor(t, ramp)
     empty = np.zeros(0, dtype=np.complex128)
-    none = (-1, offset, 0.0, 0.0, 0.0, 1.0, empty, empty, empty)
+    none = (-1, offset, 0.0, 0.0, 0.0, 1.0, empty, empty, empty, r)
     if not long_crested or n < 4 or not math.isinf(depth):
         return none
     E = np.empty(n, dtype=np.complex128)
     eta_c = slope = k_max = 0.0
     for j in range(n):
-        a = comps[j, A]
+        a = r * comps[j, A]
         psi = comps[j, KX] * x[0] + comps[j, KY] * x[1] + offset[j]
         E[j] = a * complex(math.cos(psi), math.sin(psi))
         eta_c += E[j].real
@@ -93,7 +103,7 @@ def prepare(sea, t, x):
     for j in range(n):
         E[j] *= comps[j, OMEGA]
     Mv = _moments(comps, E, P, k_max)
-    return (P, offset, x[0], x[1], z0, k_max, Me, Mp, Mv)
+    return (P, offset, x[0], x[1], z0, k_max, Me, Mp, Mv, r)
 
 
 @njit(inline="always", **JIT)
@@ -108,7 +118,7 @@ def _horner(M, w):
 def elevations(sea, ex, points, m, out):
     """out[i] = eta at the horizontal position of points[i], i < m."""
     comps = sea[0]
-    P, offset, cx, cy, k_scale, Me = ex[0], ex[1], ex[2], ex[3], ex[5], ex[6]
+    P, offset, cx, cy, k_scale, Me, r = ex[0], ex[1], ex[2], ex[3], ex[5], ex[6], ex[9]
     c, s = comps[0, COS], comps[0, SIN]
     for i in range(m):
         X, Y = points[i, 0], points[i, 1]
@@ -118,7 +128,7 @@ def elevations(sea, ex, points, m, out):
         eta = 0.0
         for j in range(comps.shape[0]):
             eta += comps[j, A] * math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
-        out[i] = eta
+        out[i] = r * eta
 
 
 @njit(**JIT)
@@ -127,7 +137,7 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
     stretching, the current added to the flow. known: eta[i] holds the elevation there; else it is computed
     here and stored (on the direct sum sharing each component's cosine between elevation and pressure)."""
     comps, depth, U = sea[0], sea[1], sea[4]
-    P, offset, cx, cy, z0, k_scale, Me, Mp, Mv = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[6], ex[7], ex[8]
+    P, offset, cx, cy, z0, k_scale, Me, Mp, Mv, r = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[6], ex[7], ex[8], ex[9]
     deep = math.isinf(depth)
     cb, sb = comps[0, COS], comps[0, SIN]
     n = comps.shape[0]
@@ -143,7 +153,7 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
                 for j in range(n):
                     cosines[j] = math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
                     e += comps[j, A] * cosines[j]
-                eta[i] = e
+                eta[i] = r * e
         zs = Z - eta[i] if deep else (Z - eta[i]) * depth / (depth + eta[i])
         zc = min(zs, 0.0)
         p = ux = uy = uz = 0.0
@@ -171,4 +181,5 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
                     ux += dh * c * aw * comps[j, COS]
                     uy += dh * c * aw * comps[j, SIN]
                     uz += dv * math.sin(psi) * aw
+            p, ux, uy, uz = r * p, r * ux, r * uy, r * uz  # (the expansion's moments carry the ramp already)
         out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rho * g * (p - Z), ux + U[0], uy + U[1], uz

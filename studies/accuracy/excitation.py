@@ -7,7 +7,7 @@ the response amplitude operators (motion per unit wave amplitude) of:
 - the linear frequency-domain solution with the same coefficients,
   [-omega^2 (M + A) - i omega B + C] xi = X_FK (+ X_d), C the exact mesh's hydrostatic stiffness at rest.
 
-Each run starts on the linear steady state (its radiation memory's included), so a few periods suffice;
+Each run starts on the linear steady state (its radiation memory's included; the waves at full height, no ramp), so a few periods suffice;
 the first harmonic of the last `fit` periods is fitted, a drift removed, referred to the wave at the
 body's mean position. The slow tests of tests/test_diffraction.py use the same functions.
 """
@@ -131,7 +131,7 @@ def time_domain_rao(base, rest_z: float, w: float, a: float, start: np.ndarray, 
     T = 2 * np.pi / w
     x0, v0 = (a * start).real, (-1j * w * a * start).real
     scene = with_overrides(base, waves__kind="regular", waves__height=2 * a, waves__period=T, initial__position=(x0[0], x0[1], rest_z + x0[2]),
-                           initial__velocity=tuple(v0[:3]), initial__omega=tuple(v0[3:]), fluid__damping=0.0)  # fmt: skip
+                           initial__velocity=tuple(v0[:3]), initial__omega=tuple(v0[3:]), fluid__damping=0.0, waves__ramp=0.0)  # fmt: skip
     sim = Simulation(scene)
     rad = sim.model.radiation  # its memory in steady state too (x' = F x + G nu at nu = -i omega xi), or the surge, which has no
     nu = -1j * w * a * start  # restoring force, keeps the offset of the memory's start-up and the body wanders from the waves' reference

@@ -18,6 +18,15 @@ def start_viewer(scene: str, **kwargs):
     return start(ViewArgs(scene=scene, port=0), publish_hz=20.0, **kwargs)
 
 
+def storm_at_full_height(tmp_path) -> str:
+    """The storm preset with its sea at full height from the start (its ramp would take 31.5 s): a scene file."""
+    from sim.config import SCENES_DIR
+
+    path = tmp_path / "storm.toml"
+    path.write_text((SCENES_DIR / "storm.toml").read_text().replace("[waves]\n", "[waves]\nramp = 0.0\n"))
+    return str(path)
+
+
 def open_page(app, page):
     page.goto(app.url + "/?fixedDpr=0.5")
     page.wait_for_selector("canvas")
@@ -36,11 +45,12 @@ def water_spread(render: np.ndarray) -> tuple[float, float]:
 
 
 @pytest.mark.slow
-def test_a_storm_is_shaded_where_still_water_is_one_calm_sheet(browser_page):
-    """The grey levels over the water of a storm spread several times as widely as over still water."""
+def test_a_storm_is_shaded_where_still_water_is_one_calm_sheet(browser_page, tmp_path):
+    """The grey levels over the water of a storm (at full height from the start) spread several times as widely as
+    over still water."""
     spreads = {}
     for scene in ("damped", "storm"):
-        app = start_viewer(scene, kernels=False)
+        app = start_viewer(scene if scene == "damped" else storm_at_full_height(tmp_path), kernels=False)
         try:
             client = open_page(app, browser_page)
             time.sleep(4.0)  # the environment map fades in; a few wave surfaces go out
@@ -87,14 +97,14 @@ def projected(camera, x: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.slow
-def test_follow_keeps_the_body_in_the_middle_half_of_the_frame_through_a_storm_and_reset_view_goes_back(browser_page):
-    """60 s of `storm` (Follow on by default there), the view zoomed in to 3.5 m by the mouse wheel: at every sample
+def test_follow_keeps_the_body_in_the_middle_half_of_the_frame_through_a_storm_and_reset_view_goes_back(browser_page, tmp_path):
+    """60 s of `storm` (at full height from the start; Follow on by default there), the view zoomed in to 3.5 m by the mouse wheel: at every sample
     the body's centre, where the page draws it and projected with the camera the browser reports, lies in the
     middle half of the frame, where the world left as it was at the first sample would have lost it. The zoom
     stays the user's; an orbit too; Reset view brings back the starting camera."""
     from PIL import Image
 
-    app = start_viewer("storm")
+    app = start_viewer(storm_at_full_height(tmp_path))
     try:
         assert app.camera.follow_box.value
         client = open_page(app, browser_page)

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -518,23 +519,75 @@ def _misfit(block: _Block, poles: np.ndarray, residues: np.ndarray, mass: np.nda
 # ---- the whole memory ---------------------------------------------------------------------------------------------
 
 _FITS: dict = {}
-"""Fits already made in this process, by the coefficients' bytes and the arguments (a fit takes up to seconds)."""
+"""Fits already made or read in this process, by their key (`fit_key`)."""
+STORED = Path(__file__).resolve().parent.parent / "assets" / "coefficients" / "memory"
+"""The shipped solves' fits (`python -m sim.memory_fit` writes them): a fit of rm3's 12 dofs takes 7-30 s."""
+
+
+def fit_key(c, tol: float, max_order: int, length: float) -> str:
+    """The fit's identity: the coefficients' bytes, the arguments and this module's source (so a changed fit is made
+    anew, never read stale from a file)."""
+    h = hashlib.sha256(Path(__file__).read_bytes())
+    for a in (c.omega, c.damping, c.added_mass, c.added_mass_inf):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(repr((float(tol), int(max_order), round(float(length), 12))).encode())
+    return h.hexdigest()[:20]
 
 
 def fit_memory(c, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -> RadiationMemory:
     """The passive memory of the coefficients `c` (the module's docstring): each block of coupled radiating dofs with
-    the lowest number of pole pairs (up to max_order) meeting `tol` in B and A (each against its peak), made passive."""
-    key = hashlib.sha256(b"".join(np.ascontiguousarray(a).tobytes() for a in (c.omega, c.damping, c.added_mass, c.added_mass_inf)))
-    key = (key.hexdigest(), tol, max_order, length)
+    the lowest number of pole pairs (up to max_order) meeting `tol` in B and A (each against its peak), made passive.
+    Read from the shipped fits or the user's cache when they hold it, else made (and cached)."""
+    from .bem import user_cache
+
+    key = fit_key(c, tol, max_order, length)
     if key not in _FITS:
-        _FITS[key] = _fit(c, tol, max_order, length)
+        cached = user_cache() / "memory" / f"{key}.npz"
+        memory = next((m for m in (_read(STORED / f"{key}.npz"), _read(cached)) if m is not None), None)
+        if memory is None:
+            memory = _fit(c, tol, max_order, length)
+            _keep(memory, cached)
+        _FITS[key] = memory
     return _FITS[key]
+
+
+def _read(path: Path) -> RadiationMemory | None:
+    """A stored fit, or None when absent or unreadable (then it is made again)."""
+    from .bem import UNREADABLE
+
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as f:
+            blocks = tuple(
+                BlockFit(tuple(int(i) for i in f[f"dofs{k}"]), f[f"poles{k}"], f[f"error_B{k}"], f[f"error_A{k}"],
+                         int(f[f"planes{k}"]), f[f"residues{k}"])  # fmt: skip
+                for k in range(int(f["blocks"]))
+            )
+            return _assemble(blocks, f["added_mass_inf"], f["residual_mass"])
+    except UNREADABLE:
+        return None
+
+
+def _keep(memory: RadiationMemory, path: Path) -> None:
+    """Store a fresh fit (atomically); a cache that cannot be written only means the next run fits again."""
+    from .bem import _replace
+
+    arrays = {"blocks": len(memory.blocks), "residual_mass": memory.residual_mass,
+              "added_mass_inf": memory.added_mass_inf - memory.residual_mass}  # fmt: skip
+    for k, b in enumerate(memory.blocks):
+        arrays |= {f"dofs{k}": np.array(b.dofs), f"poles{k}": b.poles, f"error_B{k}": b.error_B, f"error_A{k}": b.error_A,
+                   f"planes{k}": b.planes, f"residues{k}": b.residues}  # fmt: skip
+    try:
+        _replace(path, ".npz", lambda f: np.savez(f, **arrays))
+    except OSError:
+        pass
 
 
 def _fit(c, tol: float, max_order: int, length: float) -> RadiationMemory:
     B, A, A_inf = _symmetric(c.damping), _symmetric(c.added_mass), _symmetric(c.added_mass_inf)
     d, w = B.shape[1], c.omega
-    entries, blocks, dA, fitted = [], [], np.zeros((d, d)), []
+    blocks, dA, fitted = [], np.zeros((d, d)), []
     for dofs in coupled_blocks(B, A - A_inf, radiating(c, length)):
         ix = np.ix_(dofs, dofs)
         Bb, Ab = B[:, dofs][:, :, dofs], A[:, dofs][:, :, dofs]
@@ -557,13 +610,20 @@ def _fit(c, tol: float, max_order: int, length: float) -> RadiationMemory:
         error_B = eB / np.where(own_B > COUPLING, own_B, 1.0)
         error_A = eA / np.where(own_A > COUPLING, own_A, 1.0)
         blocks.append(BlockFit(tuple(dofs), poles, error_B, error_A, planes, residues / SS[:, :, None]))
-        lam, _ = _elements(poles)
-        for a, i in enumerate(dofs):
-            for b, j in enumerate(dofs):
-                error = float(max(error_B[a, b], error_A[a, b]))
+    return _assemble(tuple(blocks), A_inf, dA)
+
+
+def _assemble(blocks: tuple[BlockFit, ...], A_inf: np.ndarray, dA: np.ndarray) -> RadiationMemory:
+    """The state-space memory of fitted blocks: per entry (i, j) and pole a block of one or two states."""
+    d = len(A_inf)
+    entries = []
+    for b in blocks:
+        for a, i in enumerate(b.dofs):
+            for k2, j in enumerate(b.dofs):
+                error = float(max(b.error_B[a, k2], b.error_A[a, k2]))
                 k = 0
-                for p in poles:
-                    r = residues[a, b, k] / SS[a, b]
+                for p in b.poles:
+                    r = b.residues[a, k2, k]
                     k += 1 if p.imag == 0 else 2
                     if r == 0:
                         continue
@@ -582,3 +642,38 @@ def _fit(c, tol: float, max_order: int, length: float) -> RadiationMemory:
         H[e.row, k : k + m] = e.H
         k += m
     return RadiationMemory(F, G, H, tuple(entries), A_inf + dA, dA, tuple(blocks))
+
+
+def main() -> None:
+    """`python -m sim.memory_fit`: (re)write the fits every preset makes into STORED, by building each preset with
+    radiation once against an empty cache and keeping what it fitted."""
+    import os
+    import shutil
+    import tempfile
+
+    from .bem import CACHE_ENV
+    from .config import available_scenes, load_scene
+
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ[CACHE_ENV] = tmp
+        for old in STORED.glob("*.npz"):
+            old.unlink()
+        _FITS.clear()
+        for name in available_scenes():
+            scene = load_scene(name)
+            if scene.bodies:
+                from .system import build
+
+                build(scene)
+            elif scene.fluid.radiation == "bem":
+                from .simulation import Simulation
+
+                Simulation(scene)
+        STORED.mkdir(parents=True, exist_ok=True)
+        for path in sorted(Path(tmp, "memory").glob("*.npz")):
+            shutil.copy(path, STORED / path.name)
+            print(f"{STORED / path.name}")
+
+
+if __name__ == "__main__":
+    main()

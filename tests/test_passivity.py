@@ -39,9 +39,9 @@ SOLVES = sorted(SHIPPED.glob("*.npz"))
 
 @pytest.mark.parametrize(
     "path",
-    [pytest.param(p, marks=[pytest.mark.slow] if np.load(p)["damping"].shape[1] > 6 else []) for p in SOLVES],
+    SOLVES,
     ids=lambda p: Path(p).stem,
-)  # rm3's fit: 10-20 s
+)
 def test_every_shipped_solve_fits_a_passive_memory(path):
     """Each shipped solve's fit: min eig B_fit >= 0 to 10x the grid's top frequency (round-off: 1e-12 of the peak damping),
     B and A within 2 % of each entry's peak on the grid (that matters: 1.4 % and 0.7 % for rm3's), every pole stable."""
@@ -53,6 +53,44 @@ def test_every_shipped_solve_fits_a_passive_memory(path):
     error_B, error_A = memory.error
     assert error_B <= 0.02 and error_A <= 0.02, (error_B, error_A)
     assert np.linalg.eigvalsh(memory.residual_mass).min() >= -1e-9 * np.abs(c.added_mass_inf).max()  # dA >= 0
+
+
+def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path):
+    """Each preset with radiation builds without fitting (a fit of rm3 takes 7-30 s): its fit is in
+    assets/coefficients/memory under a key that covers memory_fit.py's source, so a changed fit cannot be read stale
+    (after a change: `python -m sim.memory_fit`)."""
+    from sim import Simulation, memory_fit
+    from sim.config import available_scenes
+
+    def refuse(*args):
+        raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.memory_fit` and commit the files")
+
+    monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
+    monkeypatch.setattr(memory_fit, "_FITS", {})
+    monkeypatch.setattr(memory_fit, "_fit", refuse)
+    built = 0
+    for name in available_scenes():
+        scene = load_scene(name)
+        if scene.fluid.radiation == "bem":
+            build(scene) if scene.bodies else Simulation(scene)
+            built += 1
+    assert built >= 4 and len(memory_fit._FITS) == len(list(memory_fit.STORED.glob("*.npz")))
+
+
+def test_a_stored_fit_is_the_fit_it_stands_for(tmp_path):
+    """The sphere's shipped fit read back is what fitting its solve now gives (the same K(i omega) to round-off), and a
+    damaged cache file is fitted again, not trusted."""
+    from sim import memory_fit
+
+    c = Coefficients.load(next(p for p in SHIPPED.glob("*.npz") if p.stem.startswith("93e1185")))
+    stored = memory_fit._read(memory_fit.STORED / f"{memory_fit.fit_key(c, 0.02, 10, 1.0)}.npz")
+    fresh = memory_fit._fit(c, 0.02, 10, 1.0)
+    w = np.geomspace(0.01, 100.0, 500)
+    np.testing.assert_allclose(stored.response(w), fresh.response(w), rtol=0, atol=1e-12 * np.abs(fresh.response(w)).max())
+    np.testing.assert_array_equal(stored.added_mass_inf, fresh.added_mass_inf)
+    assert stored.error == fresh.error and stored.states == fresh.states
+    (tmp_path / "bad.npz").write_bytes(b"not a fit")
+    assert memory_fit._read(tmp_path / "bad.npz") is None and memory_fit._read(tmp_path / "absent.npz") is None
 
 
 def test_the_fit_reproduces_damping_and_added_mass_where_they_were_solved():

@@ -255,7 +255,10 @@ def test_a_slide_along_a_free_motion_changes_nothing():
     free.step(300)
     slide.step(300)
     np.testing.assert_allclose(slide.state.x_world, free.state.x_world, atol=1e-9)
-    np.testing.assert_allclose(slide.state.memory, free.state.memory, rtol=1e-7, atol=1e-8)  # (the free one: round-off in other dofs)
+    # the heave memory alike; the free cube's others only what its faceted faces' tiny yaw moment stirs (L_z ~ 1e-4 kg m2/s)
+    heave = np.concatenate([np.full(len(e.G), e.col == 2) for e in free.model.radiation.memory.entries])
+    np.testing.assert_allclose(slide.state.memory[heave], free.state.memory[heave], rtol=1e-7, atol=1e-8)
+    assert np.abs(free.state.memory[~heave]).max() < 1e-5 * np.abs(free.state.memory[heave]).max()
     assert slide.state.E_rad == pytest.approx(free.state.E_rad, rel=1e-7) and free.state.E_rad > 1.0
 
 

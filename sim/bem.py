@@ -226,17 +226,29 @@ def passive(A: np.ndarray, B: np.ndarray, length: float) -> tuple[np.ndarray, np
     return 0.5 * (A + A.transpose(0, 2, 1)), fixed, change
 
 
-def default_frequencies(length: float, g: float = 9.81, n: int = 60, min_period: float | None = None) -> np.ndarray:
+def default_frequencies(length: float, g: float = 9.81, n: int = 60, min_period: float | None = None, lowest: float | None = None) -> np.ndarray:
     """A grid for the radiation kernel of a body of size `length`, uniform in omega: from where its
     waves are 100 times longer than it to where they are half as long (the default panels, length/8,
     still resolve them four times; the damping of heave and of the rotations has died out there), or
-    up to the period `min_period`."""
+    up to the period `min_period`; from `lowest` where that is lower (a moored body's slow natural frequency)."""
     lo, hi = math.sqrt(2 * math.pi * g / (100 * length)), math.sqrt(2 * math.pi * g / (0.5 * length))
+    if lowest is not None and 0.0 < lowest < lo:
+        lo = lowest
     return np.linspace(lo, hi if min_period is None else 2 * math.pi / min_period, n)
 
 
 HEADINGS = np.radians(np.arange(0.0, 360.0, 15.0))
 """Wave headings the excitation is solved for (15 degrees apart, interpolated between)."""
+
+
+LID_DEPTH = 0.01
+"""The lid's depth under the water line, as a share of the body's draft (just below it, as Capytaine's examples place it)."""
+
+
+def panel_size(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The wet mesh's typical panel: its median edge length."""
+    T = np.asarray(vertices, float)[np.asarray(faces)]
+    return float(np.median(np.linalg.norm(T - np.roll(T, 1, axis=1), axis=2)))
 
 
 def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.ndarray, np.ndarray]:
@@ -253,11 +265,15 @@ def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.
     return T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3)
 
 
+SOLVER_VERSION = b"lid from the exact section, damping passive for one body too (issue 38)"
+"""Part of every solve's key: solves made before these changed are solved again, never read."""
+
+
 def cache_key(
     vertices: np.ndarray, faces: np.ndarray, rho: float, g: float, depth: float, omega: np.ndarray, center=(0.0, 0.0, 0.0)
 ) -> str:
-    """The solve's inputs hashed (a centre at the origin adds nothing: the keys of files solved before it was a choice stand)."""
-    h = hashlib.sha256()
+    """The solve's inputs hashed, with SOLVER_VERSION (a centre at the origin adds nothing)."""
+    h = hashlib.sha256(SOLVER_VERSION)
     center = np.round(np.asarray(center, float), 9) + 0.0  # + 0.0: -0.0 becomes 0.0 (a vertex on the water line may come out either)
     for a in (np.round(np.asarray(vertices, float), 9) + 0.0, np.asarray(faces, np.int64), np.array([rho, g, depth]), np.asarray(omega, float),
               *([center] if center.any() else [])):  # fmt: skip
@@ -411,12 +427,15 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
 
     from capytaine.bem.airy_waves import froude_krylov_force
 
+    from .lid import make_lid
+
     logging.getLogger("capytaine").setLevel(logging.ERROR)  # its resolution warnings concern the top of the grid, where B has died out
     bodies, centers, panels = [], [], 0
     for k, (vertices, faces, center) in enumerate(parts):
         center = tuple(float(c) for c in center)
         mesh = cpt.Mesh(vertices, faces)
-        lid = mesh.generate_lid(z=-0.01 * float(np.ptp(vertices[:, 2])))  # just below the water line, as Capytaine advises
+        lv, lf = make_lid(vertices, faces, panel_size(vertices, faces), -LID_DEPTH * float(np.ptp(vertices[:, 2])))
+        lid = cpt.Mesh(lv, lf) if len(lf) else None
         bodies.append(cpt.FloatingBody(mesh=mesh, lid_mesh=lid, dofs=cpt.rigid_body_dofs(rotation_center=center), center_of_mass=center,
                                        name=f"b{k}"))  # fmt: skip
         centers.append(center)
@@ -449,9 +468,8 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
             B[i, k, j] = r.radiation_dampings[name]
     excitation = {} if headings is None else {"headings": np.asarray(betas), "diffraction": Xd, "froude_krylov": Xfk}
     center = np.asarray(centers[0] if len(centers) == 1 else centers, float)
-    if len(parts) > 1:
-        A, B, change = passive(A, B, max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts))
-        if change > 0.01:
-            note(f"note: the bodies' radiation damping made symmetric and passive (their coupling breaks both a little in the solve): "
-                 f"entries changed by up to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
+    A, B, change = passive(A, B, max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts))
+    if change > 0.01:
+        note(f"note: the radiation damping made symmetric and passive (the solve breaks both a little, most in couplings such as "
+             f"an axisymmetric body's rank-one surge-pitch block): entries changed by up to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
     return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), panels, center, **excitation)

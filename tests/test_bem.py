@@ -85,3 +85,24 @@ def test_missing_capytaine_is_one_clear_line(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     with pytest.raises(ConfigError, match=r"pip install -e \"\.\[bem\]\""):
         hemisphere(1, 0.8)
+
+
+@pytest.mark.bem
+def test_a_cylinders_irregular_frequency_is_removed_and_its_solve_cached(monkeypatch, tmp_path):
+    """A cylinder of radius 0.5 m floating at draft 0.5 m has its first irregular frequency in heave at 7.356 rad/s (the
+    interior's sloshing mode, issue 38: B33 = -373 kg/s there with Capytaine's generate_lid as it was called). With the
+    lid over its whole section: B33 >= 0 across it and A33 smooth (no spike: second differences under a third of the
+    first ones); the solve passes floatsim's own check, so it is cached and a second run reads it and does not solve."""
+    monkeypatch.setattr(bem, "SHIPPED", tmp_path / "none")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    cylinder = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=32)
+    omega = np.linspace(6.6, 8.2, 9)  # 7.356 in the middle
+    c = radiation_coefficients(cylinder.vertices, cylinder.faces, omega=omega, panel=0.15, progress=False)
+    A, B = c.added_mass[:, 2, 2], c.damping[:, 2, 2]
+    print("omega", omega, "\nA33", A, "\nB33", B)
+    assert (B >= 0).all()
+    assert np.abs(np.diff(A, 2)).max() < np.abs(np.diff(A)).max() / 3
+    assert len(list((tmp_path / "floatsim" / "bem").glob("*.npz"))) == 1
+    monkeypatch.setattr(bem, "solve", lambda *a, **k: pytest.fail("solved again"))
+    again = radiation_coefficients(cylinder.vertices, cylinder.faces, omega=omega, panel=0.15, progress=False)
+    np.testing.assert_array_equal(again.damping, c.damping)

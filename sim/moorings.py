@@ -452,3 +452,36 @@ class Moorings:
             self.close()
         except Exception:  # noqa: BLE001 - at interpreter shutdown MoorDyn's module may be gone already
             pass
+
+
+def rest_pull(scene, x: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """(3,) the scene's lines' summed pull on the body held still at x (its centre of mass) with orientation R (input
+    frame to world), N, world frame: each line of a spread or of anchors given as an elastic catenary on the seabed
+    (sim.catenary, MoorDyn's rest shape to its discretisation); a MoorDyn file's lines from MoorDyn's own start-up."""
+    from .catenary import catenary
+
+    spread = lines_of(scene.moorings)
+    if spread is not None and not scene.moorings.line_file:
+        rho, g = scene.fluid.rho, scene.fluid.g
+        w, total = spread.weight_in_water(rho, g), np.zeros(3)
+        for anchor, fair in spread.ends(np.asarray(x, float), R):
+            gap = (anchor - fair)[:2]
+            span = float(np.hypot(*gap))
+            H, V = catenary(span, float(fair[2] - anchor[2]), spread.line_length, w, spread.line_stiffness)
+            total += [H * gap[0] / span, H * gap[1] / span, -V]
+        return total
+    lines = Moorings.of_scene(scene, np.asarray(x, float), R, np.zeros(3), np.zeros(3))
+    if lines is None:
+        return np.zeros(3)
+    with lines:
+        return lines.load[:3].copy()
+
+
+def horizontal_stiffness(scene, x: np.ndarray, R: np.ndarray, step: float = 1e-3) -> float:
+    """The lines' smaller restoring stiffness in surge and sway about x, N/m (central differences of `rest_pull`)."""
+    out = []
+    for axis in (0, 1):
+        dx = np.zeros(3)
+        dx[axis] = step
+        out.append(-(rest_pull(scene, x + dx, R)[axis] - rest_pull(scene, x - dx, R)[axis]) / (2 * step))
+    return min(out)

@@ -122,22 +122,40 @@ class Radiation:
                 np.ascontiguousarray(self.R0), *waves)  # fmt: skip
 
 
-def make_radiation(body, fluid, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
-    """The body's radiation model about its rest pose at orientation R0 (BEM coefficients from the
-    shipped files, the cache or Capytaine; then the memory fit), in the body frame. With `water` (waves),
+def lowest_frequency(body, scene, R0: np.ndarray, z: float) -> float | None:
+    """Below half the slowest natural frequency the mooring lines give the body, rad/s: sqrt(k / M) / 2, k their
+    smaller horizontal stiffness at rest (the added mass lowers the true one by less than half while A_11 < 3 M);
+    None when the lines do not hold it horizontally."""
+    from .moorings import horizontal_stiffness
+    from .rotation import quat_to_matrix
+
+    R_input = R0 @ quat_to_matrix(body.q_input_body).T
+    x, y = (float(v) for v in scene.initial.position[:2])
+    k = horizontal_stiffness(scene, np.array([x, y, z]), R_input)
+    if not k > 0.0:
+        return None
+    half = 0.5 * float(np.sqrt(k / body.mass))
+    return float(2.0 ** (np.floor(4 * np.log2(half)) / 4))  # down to a quarter octave: lines changed a little keep the grid
+
+
+def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
+    """The body's radiation model about its rest pose at orientation R0 in the scene (BEM coefficients from the
+    shipped files, the cache or Capytaine; then the memory fit), in the body frame. The rest pose holds the mooring
+    lines' pull too, and the frequency grid reaches down past their slowest natural frequency. With `water` (waves),
     also the diffraction force in that sea (phased where the body is at each instant)."""
     from .bem import default_frequencies, radiation_coefficients
+    from .config import moored
     from .diffraction import Diffraction
-    from .equilibrium import rest_height
+    from .equilibrium import scene_rest_height
     from .errors import ConfigError
 
-    z = round(rest_height(body, fluid, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
+    fluid = scene.fluid
+    z = round(scene_rest_height(body, scene, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
-    omega = (
-        None
-        if fluid.bem_min_period is None
-        else default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period)
-    )
+    omega = None
+    if fluid.bem_min_period is not None or moored(scene):
+        omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period,
+                                    lowest=lowest_frequency(body, scene, R0, z) if moored(scene) else None)  # fmt: skip
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None)  # fmt: skip
     memory = fit_memory(c)

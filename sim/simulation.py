@@ -270,7 +270,7 @@ class Simulation:
             from .radiation import make_radiation
 
             start = initial_state(body, self.scene)
-            radiation = make_radiation(body, fluid, start.R_world_body, water=water if diffracting(self.scene) else None)
+            radiation = make_radiation(body, self.scene, start.R_world_body, water=water if diffracting(self.scene) else None)
             depth = self.scene.waves.depth
             if depth is not None:
                 note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "

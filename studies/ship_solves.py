@@ -1,0 +1,59 @@
+"""`python -m studies.ship_solves`: solve again every BEM case floatsim ships in assets/coefficients (needs the
+.[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.memory_fit`).
+
+The cases: each preset with radiation as it builds (its rest pose, moorings included, its grid, the excitation when
+it has waves, a sphere in waves too), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
+change to how solves are made (sim.bem.SOLVER_VERSION, the lid, the wet mesh) or to a preset's body: the old files'
+keys no longer match, so the presets would otherwise solve on every machine.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+
+def main() -> None:
+    import trimesh
+
+    import sim.bem as bem
+    from sim import Simulation
+    from sim.config import available_scenes, load_scene, with_overrides
+    from sim.memory_fit import main as fit_all
+    from sim.system import build
+
+    shipped = bem.SHIPPED
+    with tempfile.TemporaryDirectory() as tmp:
+        os.environ[bem.CACHE_ENV] = tmp
+        bem.SHIPPED = Path(tmp) / "none"
+        for name in available_scenes():
+            scene = load_scene(name)
+            if scene.fluid.radiation != "bem":
+                continue
+            print(f"{name}:", flush=True)
+            if scene.bodies:
+                build(scene)
+                continue
+            if scene.waves.kind == "still":  # its solve with the excitation, for the same body in waves
+                scene = with_overrides(scene, waves__kind="regular", waves__height=0.02, waves__period=2.0)
+            Simulation(scene, backend="numpy")
+        print("the test hemisphere:", flush=True)
+        s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+        ka = np.array([0.05, 0.3, 0.5, 1.0, 2.0, 5.0])
+        bem.radiation_coefficients(s.vertices, s.faces, omega=np.sqrt(ka * 9.81), panel=0.12)
+        for old in shipped.glob("*.npz"):
+            old.unlink()
+        for path in sorted(Path(tmp).glob("*.npz")):
+            shutil.copy(path, shipped / path.name)
+            (shipped / path.name).chmod(0o644)
+            print(shipped / path.name)
+        bem.SHIPPED = shipped
+    fit_all()
+
+
+if __name__ == "__main__":
+    main()

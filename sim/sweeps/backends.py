@@ -178,7 +178,9 @@ def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
                     f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})"
                 ) from None
         else:
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+            # no dashboard; the scheduler's HTTP server (health checks) on a free port: on 8787, taken by another cluster, it warned
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},
+                                   silence_logs=logging.ERROR)  # fmt: skip
             client = Client(cluster)
         with client:
             client.run(_warm, sweep, first)  # from the disk cache this process filled, on this machine

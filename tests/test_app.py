@@ -810,8 +810,8 @@ def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):
 
 
 @pytest.mark.slow  # over 4 s (the marker's rule)
-def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_the_start():
-    """Over viser's protocol, in waves (Follow on by default there): the frame every node hangs from is moved by
+def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_the_start(tmp_path):
+    """Over viser's protocol, in waves (at full height from the start: its ramp would take 21 s; Follow on by default there): the frame every node hangs from is moved by
     minus the body's smoothed position (the page sees the body near the origin it looks at), and the page's
     camera is never moved (its user's orbit and zoom are its own); switched off, the world goes back to its
     own coordinates and stays; Reset view sends the starting camera; still water starts with Follow off."""
@@ -820,7 +820,11 @@ def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_
     from app.page import Page
     from app.scene import ROOT
 
-    app = start(ViewArgs(scene="waves", port=0), kernels=False, publish_hz=20.0)
+    from sim.config import SCENES_DIR
+
+    waves = tmp_path / "waves.toml"
+    waves.write_text((SCENES_DIR / "waves.toml").read_text().replace("[waves]\n", "[waves]\nramp = 0.0\n"))
+    app = start(ViewArgs(scene=str(waves), port=0), kernels=False, publish_hz=20.0)
     try:
         assert app.camera.follow_box.value
 

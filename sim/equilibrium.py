@@ -30,23 +30,42 @@ def rest_height(body, fluid, R: np.ndarray, pull: float = 0.0) -> float:
     return float(brentq(excess, -reach, reach, xtol=1e-10))
 
 
-def scene_rest_height(body, scene, R: np.ndarray) -> float:
-    """The centre of mass's rest height in the scene, m, body orientation R (body to world): `rest_height` with the
-    mooring lines' vertical pull at rest (at the scene's starting horizontal position), found by fixed-point
-    iteration (the pull changes little with the draft: two or three rounds); without lines, the free rest."""
+def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
+    """(3,) the centre of mass at rest in the scene, m, body orientation R (body to world): without lines, the free
+    rest (`rest_height`) under the starting position; with a spread or anchors of lines, where their pull balances
+    (horizontally by Newton steps on their stiffness, vertically by `rest_height` with their vertical pull: each a few
+    rounds, the lines' elastic catenaries being cheap); with a MoorDyn file, the lines' vertical pull under the
+    starting position (the file's fairleads are where the body starts)."""
     from .config import moored
 
+    x, y = (float(v) for v in scene.initial.position[:2])
     z = rest_height(body, scene.fluid, R)
     if not moored(scene):
-        return z
+        return np.array([x, y, z])
     from .moorings import rest_pull
     from .rotation import quat_to_matrix
 
     R_input = R @ quat_to_matrix(body.q_input_body).T  # the frame the lines' fairleads are given in, to world
-    x, y = (float(v) for v in scene.initial.position[:2])
+    level = not scene.moorings.line_file
     for _ in range(30):
-        step = rest_height(body, scene.fluid, R, pull=float(rest_pull(scene, np.array([x, y, z]), R_input)[2])) - z
+        at = np.array([x, y, z])
+        pull = rest_pull(scene, at, R_input)
+        if level:
+            x, y = np.array([x, y]) + np.linalg.solve(pull_stiffness(scene, at, R_input), pull[:2])
+        step = rest_height(body, scene.fluid, R, pull=float(pull[2])) - z
         z += step
-        if abs(step) < 1e-10 * body.radius:
+        if abs(step) + (abs(x - at[0]) + abs(y - at[1]) if level else 0.0) < 1e-10 * body.radius:
             break
-    return z
+    return np.array([x, y, z])
+
+
+def pull_stiffness(scene, at: np.ndarray, R_input: np.ndarray, step: float = 1e-4) -> np.ndarray:
+    """(2, 2) -d(pull_xy)/d(x, y) of the scene's lines on a body held at `at`, N/m (central differences)."""
+    from .moorings import rest_pull
+
+    K = np.zeros((2, 2))
+    for axis in (0, 1):
+        dx = np.zeros(3)
+        dx[axis] = step
+        K[:, axis] = -(rest_pull(scene, at + dx, R_input)[:2] - rest_pull(scene, at - dx, R_input)[:2]) / (2 * step)
+    return K

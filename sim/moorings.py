@@ -475,13 +475,3 @@ def rest_pull(scene, x: np.ndarray, R: np.ndarray) -> np.ndarray:
         return np.zeros(3)
     with lines:
         return lines.load[:3].copy()
-
-
-def horizontal_stiffness(scene, x: np.ndarray, R: np.ndarray, step: float = 1e-3) -> float:
-    """The lines' smaller restoring stiffness in surge and sway about x, N/m (central differences of `rest_pull`)."""
-    out = []
-    for axis in (0, 1):
-        dx = np.zeros(3)
-        dx[axis] = step
-        out.append(-(rest_pull(scene, x + dx, R)[axis] - rest_pull(scene, x - dx, R)[axis]) / (2 * step))
-    return min(out)

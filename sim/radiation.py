@@ -38,7 +38,7 @@ class Radiation:
     twists and loads are turned into those axes and back. The gyroscopic terms of the added mass
     (Munk moments) are left out: second order in the motion, like the linearisation itself."""
 
-    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray, diffraction=None):
+    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray, diffraction=None, coefficients=None):
         T0 = self._frame(np.asarray(R0, float))  # the fit's residual mass (memory_fit.py), turned into the body frame
         added = added_mass_body + T0.T @ memory.residual_mass @ T0 if memory.residual_mass.size else added_mass_body
         self.added_mass_body = 0.5 * (added + added.T)  # symmetric in theory; the BEM's is to ~1e-4
@@ -47,6 +47,8 @@ class Radiation:
         self.R0 = np.asarray(R0, float)
         self.diffraction = diffraction
         """diffraction.Diffraction (the scattered waves' force in the scene's sea), or None."""
+        self.coefficients = coefficients
+        """bem.Coefficients the memory was fitted to (world axes at rest), or None."""
         self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     @property
@@ -122,20 +124,18 @@ class Radiation:
                 np.ascontiguousarray(self.R0), *waves)  # fmt: skip
 
 
-def lowest_frequency(body, scene, R0: np.ndarray, z: float) -> float | None:
-    """Below half the slowest natural frequency the mooring lines give the body, rad/s: sqrt(k / M) / 2, k their
-    smaller horizontal stiffness at rest (the added mass lowers the true one by less than half while A_11 < 3 M);
-    None when the lines do not hold it horizontally."""
-    from .moorings import horizontal_stiffness
+def lowest_frequency(body, scene, R0: np.ndarray, rest: np.ndarray) -> float | None:
+    """Below half the slowest natural frequency the mooring lines give the body at rest, rad/s: sqrt(k / M) / 2, k
+    their smaller horizontal stiffness (the added mass lowers the true one by less than half while A_11 < 3 M), down
+    to a quarter octave (lines changed a little keep the grid); None when the lines do not hold it horizontally."""
+    from .equilibrium import pull_stiffness
     from .rotation import quat_to_matrix
 
-    R_input = R0 @ quat_to_matrix(body.q_input_body).T
-    x, y = (float(v) for v in scene.initial.position[:2])
-    k = horizontal_stiffness(scene, np.array([x, y, z]), R_input)
+    K = pull_stiffness(scene, rest, R0 @ quat_to_matrix(body.q_input_body).T)
+    k = float(np.linalg.eigvalsh(0.5 * (K + K.T)).min())
     if not k > 0.0:
         return None
-    half = 0.5 * float(np.sqrt(k / body.mass))
-    return float(2.0 ** (np.floor(4 * np.log2(half)) / 4))  # down to a quarter octave: lines changed a little keep the grid
+    return float(2.0 ** (np.floor(4 * np.log2(0.5 * np.sqrt(k / body.mass))) / 4))
 
 
 def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
@@ -146,20 +146,21 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
     from .bem import default_frequencies, radiation_coefficients
     from .config import moored
     from .diffraction import Diffraction
-    from .equilibrium import scene_rest_height
+    from .equilibrium import scene_rest
     from .errors import ConfigError
 
     fluid = scene.fluid
-    z = round(scene_rest_height(body, scene, R0), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
+    rest = scene_rest(body, scene, R0)
+    z = round(float(rest[2]), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
     omega = None
     if fluid.bem_min_period is not None or moored(scene):
         omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period,
-                                    lowest=lowest_frequency(body, scene, R0, z) if moored(scene) else None)  # fmt: skip
+                                    lowest=lowest_frequency(body, scene, R0, rest) if moored(scene) else None)  # fmt: skip
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None)  # fmt: skip
     memory = fit_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:
         raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")
-    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water))
+    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water), c)

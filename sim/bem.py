@@ -226,7 +226,9 @@ def passive(A: np.ndarray, B: np.ndarray, length: float) -> tuple[np.ndarray, np
     return 0.5 * (A + A.transpose(0, 2, 1)), fixed, change
 
 
-def default_frequencies(length: float, g: float = 9.81, n: int = 60, min_period: float | None = None, lowest: float | None = None) -> np.ndarray:
+def default_frequencies(
+    length: float, g: float = 9.81, n: int = 60, min_period: float | None = None, lowest: float | None = None
+) -> np.ndarray:
     """A grid for the radiation kernel of a body of size `length`, uniform in omega: from where its
     waves are 100 times longer than it to where they are half as long (the default panels, length/8,
     still resolve them four times; the damping of heave and of the rotations has died out there), or

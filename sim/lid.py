@@ -30,7 +30,7 @@ def section_loops(P: np.ndarray, z: float, tol: float) -> list[np.ndarray]:
     seg = waterline(P, P[:, :, 2] - z)[:, :, :2]
     seg = seg[np.linalg.norm(seg[:, 0] - seg[:, 1], axis=1) > tol]
     keys = np.round(seg.reshape(-1, 2) / tol).astype(np.int64)
-    _, ids, = np.unique(keys, axis=0, return_inverse=True)[:2]
+    ids = np.unique(keys, axis=0, return_inverse=True)[1]
     ids = ids.reshape(-1, 2)
     points = np.zeros((ids.max() + 1 if len(ids) else 0, 2))
     points[ids.ravel()] = seg.reshape(-1, 2)
@@ -88,6 +88,7 @@ def region_area(loops: list[np.ndarray]) -> float:
 def _thin(loop: np.ndarray, gap: float) -> np.ndarray:
     """The outline without the points a hair (under `gap`) from the last one kept where it runs straight on (the
     hull's fine triangles cut it in places a hair apart: slivers in the lid); corners stay."""
+
     def turn(a, b, c) -> float:
         u, v = b - a, c - b
         return abs(np.arctan2(u[0] * v[1] - u[1] * v[0], u @ v))

@@ -559,14 +559,16 @@ def _read(path: Path) -> RadiationMemory | None:
         return None
     try:
         with np.load(path) as f:
-            blocks = tuple(
-                BlockFit(tuple(int(i) for i in f[f"dofs{k}"]), f[f"poles{k}"], f[f"error_B{k}"], f[f"error_A{k}"],
-                         int(f[f"planes{k}"]), f[f"residues{k}"])  # fmt: skip
-                for k in range(int(f["blocks"]))
-            )
+            blocks = tuple(_block(f, k) for k in range(int(f["blocks"])))
             return _assemble(blocks, f["added_mass_inf"], f["residual_mass"])
     except UNREADABLE:
         return None
+
+
+def _block(f, k: int) -> BlockFit:
+    """Block k of a stored fit."""
+    dofs = tuple(int(i) for i in f[f"dofs{k}"])
+    return BlockFit(dofs, f[f"poles{k}"], f[f"error_B{k}"], f[f"error_A{k}"], int(f[f"planes{k}"]), f[f"residues{k}"])
 
 
 def _keep(memory: RadiationMemory, path: Path) -> None:

@@ -819,7 +819,6 @@ def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_
 
     from app.page import Page
     from app.scene import ROOT
-
     from sim.config import SCENES_DIR
 
     waves = tmp_path / "waves.toml"

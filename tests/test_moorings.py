@@ -14,7 +14,6 @@ import pytest
 
 from sim import ConfigError, Simulation, load_scene, with_overrides
 from sim.catenary import catenary, surge_stiffness
-from sim.equilibrium import rest_height
 from sim.moorings import lines_of
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -29,9 +29,9 @@ def section_loops(P: np.ndarray, z: float, tol: float) -> list[np.ndarray]:
     endpoints closer than `tol` are one point."""
     seg = waterline(P, P[:, :, 2] - z)[:, :, :2]
     seg = seg[np.linalg.norm(seg[:, 0] - seg[:, 1], axis=1) > tol]
-    keys = np.round(seg.reshape(-1, 2) / tol).astype(np.int64)
-    ids = np.unique(keys, axis=0, return_inverse=True)[1]
-    ids = ids.reshape(-1, 2)
+    if not len(seg):
+        return []
+    ids = _clusters(seg.reshape(-1, 2), tol).reshape(-1, 2)
     points = np.zeros((ids.max() + 1 if len(ids) else 0, 2))
     points[ids.ravel()] = seg.reshape(-1, 2)
     links: dict[int, list[int]] = {}
@@ -56,6 +56,18 @@ def section_loops(P: np.ndarray, z: float, tol: float) -> list[np.ndarray]:
             prev, here = here, nxt
         loops.append(points[loop])
     return loops
+
+
+def _clusters(points: np.ndarray, tol: float) -> np.ndarray:
+    """(n,) labels 0..k-1: points closer than `tol` (through chains of such) share one. The wet mesh drops its
+    slivers, so two triangles' cuts of one edge can lie a sliver's width (~1e-8 of the body) apart."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(points).query_pairs(tol, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points), len(points)))
+    return connected_components(graph, directed=False)[1]
 
 
 def signed_area(loop: np.ndarray) -> float:
@@ -160,7 +172,7 @@ def make_lid(vertices: np.ndarray, faces: np.ndarray, panel: float, z: float) ->
     its triangles facing down; empty when the plane does not cut the hull. ValueError if the lid does not cover
     the section (to 1e-3 of its area: the merged outline points move it by less)."""
     size = float(np.ptp(vertices, axis=0).max())
-    loops = section_loops(np.asarray(vertices, float)[np.asarray(faces)], z, 1e-9 * size)
+    loops = section_loops(np.asarray(vertices, float)[np.asarray(faces)], z, 1e-6 * size)
     if not loops:
         return np.zeros((0, 3)), np.zeros((0, 3), int)
     points, tri = triangulate(loops, panel)

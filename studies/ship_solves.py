@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
@@ -26,32 +24,38 @@ def main() -> None:
     from sim.memory_fit import main as fit_all
     from sim.system import build
 
-    shipped = bem.SHIPPED
-    with tempfile.TemporaryDirectory() as tmp:
-        os.environ[bem.CACHE_ENV] = tmp
-        bem.SHIPPED = Path(tmp) / "none"
-        for name in available_scenes():
-            scene = load_scene(name)
-            if scene.fluid.radiation != "bem":
-                continue
-            print(f"{name}:", flush=True)
-            if scene.bodies:
-                build(scene)
-                continue
-            if scene.waves.kind == "still":  # its solve with the excitation, for the same body in waves
-                scene = with_overrides(scene, waves__kind="regular", waves__height=0.02, waves__period=2.0)
-            Simulation(scene, backend="numpy")
-        print("the test hemisphere:", flush=True)
-        s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
-        ka = np.array([0.05, 0.3, 0.5, 1.0, 2.0, 5.0])
-        bem.radiation_coefficients(s.vertices, s.faces, omega=np.sqrt(ka * 9.81), panel=0.12)
-        for old in shipped.glob("*.npz"):
-            old.unlink()
-        for path in sorted(Path(tmp).glob("*.npz")):
-            shutil.copy(path, shipped / path.name)
-            (shipped / path.name).chmod(0o644)
-            print(shipped / path.name)
-        bem.SHIPPED = shipped
+    shipped, work = bem.SHIPPED, bem.user_cache().parent / "ship-solves"  # kept: a run stopped half way resumes
+    os.environ[bem.CACHE_ENV] = str(work)
+    bem.SHIPPED = work / "none"
+    used, stored_or_solved = [], bem._stored_or_solved
+
+    def recorded(key, *args):
+        used.append(key)
+        return stored_or_solved(key, *args)
+
+    bem._stored_or_solved = recorded
+    for name in available_scenes():
+        scene = load_scene(name)
+        if scene.fluid.radiation != "bem":
+            continue
+        print(f"{name}:", flush=True)
+        if scene.bodies:
+            build(scene)
+            continue
+        if scene.waves.kind == "still":  # its solve with the excitation, for the same body in waves
+            scene = with_overrides(scene, waves__kind="regular", waves__height=0.02, waves__period=2.0)
+        Simulation(scene, backend="numpy")
+    print("the test hemisphere:", flush=True)
+    s = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    ka = np.array([0.05, 0.3, 0.5, 1.0, 2.0, 5.0])
+    bem.radiation_coefficients(s.vertices, s.faces, omega=np.sqrt(ka * 9.81), panel=0.12)
+    bem._stored_or_solved, bem.SHIPPED = stored_or_solved, shipped
+    for old in shipped.glob("*.npz"):
+        old.unlink()
+    for key in sorted(set(used)):
+        shutil.copy(work / f"{key}.npz", shipped / f"{key}.npz")
+        (shipped / f"{key}.npz").chmod(0o644)
+        print(shipped / f"{key}.npz")
     fit_all()
 
 

@@ -1,5 +1,8 @@
 """Small scene builders shared by the physics tests."""
 
+import functools
+from pathlib import Path
+
 from sim.config import BodyConfig, FluidConfig, InitialConfig, SceneConfig, StepConfig
 
 
@@ -12,3 +15,16 @@ def box_scene(integrator="splitting", dt=0.01, *, damping=50.0, g=9.81, rho=1000
         initial=InitialConfig(position=(0.0, 0.0, z), omega=omega, velocity=(0.2, 0.0, 0.1)),
         step=StepConfig(integrator=integrator, dt=dt, rtol=1e-12, atol=1e-12, **step),
     )
+
+
+@functools.cache
+def shipped_solve(scene: str) -> Path:
+    """The shipped BEM file a one-body preset reads, found by its coefficients (no key typed in a test goes stale when
+    the solves are redone: `python -m studies.ship_solves`)."""
+    import numpy as np
+
+    from sim import Simulation, load_scene
+    from sim.bem import SHIPPED
+
+    c = Simulation(load_scene(scene), backend="numpy").model.radiation.coefficients
+    return next(p for p in sorted(SHIPPED.glob("*.npz")) if np.array_equal(np.load(p)["damping"], c.damping))

@@ -18,12 +18,13 @@ import numpy as np
 import pytest
 
 from sim.bem import SHIPPED, Coefficients, check, verify_digest
+from tests.scenes import shipped_solve
 
 ROOT = Path(__file__).resolve().parent.parent
 RUN = ["run", "--scene", "sphere", "--density", "400", "--t-end", "0.1"]
 """The sphere preset made lighter: a rest pose whose coefficients are not shipped, so the cache is asked."""
 FAKE_SOLVE = ("import sys, sim.bem as bem\n"
-              "bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '93e1185fc4180b9518dc.npz')\n"
+              f"bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '{shipped_solve('sphere').name}')\n"
               "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
 
 
@@ -52,7 +53,7 @@ def key_name(no_solver, tmp_path_factory) -> str:
 
 
 def sphere(**changes) -> Coefficients:
-    c = Coefficients.load(SHIPPED / "93e1185fc4180b9518dc.npz")
+    c = Coefficients.load(shipped_solve("sphere"))
     fields = {k: getattr(c, k) for k in ("omega", "added_mass", "damping", "added_mass_inf", "rho", "depth", "panels")}
     return Coefficients(**{**fields, **changes})
 

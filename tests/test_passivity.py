@@ -13,6 +13,7 @@ from sim.config import load_scene, with_overrides
 from sim.memory_fit import fit_memory, transfer
 from sim.system import build
 from sim.system_linear import exact_linear
+from tests.scenes import shipped_solve
 
 
 def lowest_damping(memory, omega_top: float) -> tuple[float, float]:
@@ -82,7 +83,7 @@ def test_a_stored_fit_is_the_fit_it_stands_for(tmp_path):
     damaged cache file is fitted again, not trusted."""
     from sim import memory_fit
 
-    c = Coefficients.load(next(p for p in SHIPPED.glob("*.npz") if p.stem.startswith("93e1185")))
+    c = Coefficients.load(shipped_solve("sphere"))
     stored = memory_fit._read(memory_fit.STORED / f"{memory_fit.fit_key(c, 0.02, 10, 1.0)}.npz")
     fresh = memory_fit._fit(c, 0.02, 10, 1.0)
     w = np.geomspace(0.01, 100.0, 500)
@@ -96,7 +97,7 @@ def test_a_stored_fit_is_the_fit_it_stands_for(tmp_path):
 def test_the_fit_reproduces_damping_and_added_mass_where_they_were_solved():
     """The sphere preset's solve: B_fit and the model's A (A_inf + dA + Im K_fit / omega) against the solve's, each entry
     that matters within 1 % of its own peak at every solved frequency (the misfit the fit reports is this one)."""
-    c = Coefficients.load(next(p for p in SHIPPED.glob("*.npz") if p.stem.startswith("93e1185")))
+    c = Coefficients.load(shipped_solve("sphere"))
     memory = fit_memory(c)
     K = memory.response(c.omega)
     B = 0.5 * (c.damping + c.damping.transpose(0, 2, 1))
@@ -123,7 +124,7 @@ def test_the_presets_memories_are_passive(scene):
         np.testing.assert_allclose(K, memory.response(w), atol=1e-12 * np.abs(K).max())
     else:
         memory = Simulation(load_scene(scene)).model.radiation.memory
-        c = Coefficients.load(next(p for p in SHIPPED.glob("*.npz") if p.stem.startswith("93e1185")))
+        c = Coefficients.load(shipped_solve("sphere"))
     low, where = lowest_damping(memory, c.omega.max())
     assert low >= -1e-12 * np.abs(c.damping).max(), (low, where)
 

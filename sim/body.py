@@ -155,7 +155,8 @@ def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool
     else:
         inertia = np.einsum("k,k->", m, np.einsum("ki,ki->k", r, r)) * np.eye(3) - (r * m[:, None]).T @ r
     off = np.abs(inertia - np.diag(np.diag(inertia))).max()
-    if off <= 1e-12 * np.abs(inertia).max():
+    lam = np.linalg.eigvalsh(inertia)
+    if off <= 1e-12 * np.abs(inertia).max() or np.ptp(lam) <= 1e-6 * lam.max():  # any axes are principal: keep the given ones
         moments, axes = np.diag(inertia).copy(), np.eye(3)
     else:
         moments, axes = np.linalg.eigh(inertia)

@@ -47,15 +47,22 @@ def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
 
     R_input = R @ quat_to_matrix(body.q_input_body).T  # the frame the lines' fairleads are given in, to world
     level = not scene.moorings.line_file
-    for _ in range(30):
-        at = np.array([x, y, z])
-        pull = rest_pull(scene, at, R_input)
-        if level:
-            x, y = np.array([x, y]) + np.linalg.solve(pull_stiffness(scene, at, R_input), pull[:2])
-        step = rest_height(body, scene.fluid, R, pull=float(pull[2])) - z
-        z += step
-        if abs(step) + (abs(x - at[0]) + abs(y - at[1]) if level else 0.0) < 1e-10 * body.radius:
-            break
+    start = np.array([x, y, z])
+    try:
+        for _ in range(30):
+            at = np.array([x, y, z])
+            pull = rest_pull(scene, at, R_input)
+            if level:
+                K = pull_stiffness(scene, at, R_input)
+                level = bool(np.linalg.eigvalsh(0.5 * (K + K.T)).min() > 1e-9 * np.abs(K).max())  # one line: no such rest
+                if level:
+                    x, y = np.array([x, y]) + np.linalg.solve(K, pull[:2])
+            step = rest_height(body, scene.fluid, R, pull=float(pull[2])) - z
+            z += step
+            if abs(step) + abs(x - at[0]) + abs(y - at[1]) < 1e-10 * body.radius:
+                break
+    except ValueError:  # lines that cannot reach, or a catenary with no solution: the lines' own checks say why, later
+        return start
     return np.array([x, y, z])
 
 

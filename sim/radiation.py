@@ -124,6 +124,11 @@ class Radiation:
                 np.ascontiguousarray(self.R0), *waves)  # fmt: skip
 
 
+MOORED_QUANTUM = 1e-3
+"""A moored body's BEM solve is about its rest height rounded to this share of its size (the draft's effect on the
+coefficients is that share of them: far below the solve's own accuracy)."""
+
+
 def lowest_frequency(body, scene, R0: np.ndarray, rest: np.ndarray) -> float | None:
     """Below half the slowest natural frequency the mooring lines give the body at rest, rad/s: sqrt(k / M) / 2, k
     their smaller horizontal stiffness (the added mass lowers the true one by less than half while A_11 < 3 M), down
@@ -152,6 +157,8 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
     fluid = scene.fluid
     rest = scene_rest(body, scene, R0)
     z = round(float(rest[2]), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
+    if moored(scene):  # to a thousandth of the body's size: lines changed a little (a stiffer line, more segments) keep the solve
+        z = round(z / (MOORED_QUANTUM * body.radius)) * MOORED_QUANTUM * body.radius
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
     omega = None
     if fluid.bem_min_period is not None or moored(scene):

@@ -24,12 +24,18 @@ def heave(c: Coefficients) -> tuple[np.ndarray, np.ndarray]:
     return c.added_mass[:, 2, 2] / (1000.0 * volume), c.damping[:, 2, 2] / (1000.0 * volume * c.omega)
 
 
+LAMBDA_ATOL = 1e-3
+"""The damping's absolute tolerance, 0.3 % of its peak: at ka = 5 it is 30 times below its peak, and its last 4 % (0.0005)
+move with the lid's depth (+4 % at 1 % of the draft, -5 % at 0.1 %: the hemisphere's second irregular frequency is near)."""
+
+
 def test_hemisphere_matches_hulme_from_the_shipped_solve(monkeypatch):
-    """The shipped solve (2592 panels, `python -m pytest -m bem` redoes it) against Hulme's table, within 3 %."""
+    """The shipped solve (2592 panels, `python -m pytest -m bem` redoes it) against Hulme's table, within 3 % (the
+    damping: and 0.3 % of its peak)."""
     monkeypatch.setattr(bem, "solve", lambda *a, **k: pytest.fail("the shipped coefficients were not found"))
     mu, lam = heave(hemisphere(3, 0.12))
     np.testing.assert_allclose(mu, MU, rtol=0.03)
-    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03)
+    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03, atol=LAMBDA_ATOL)
     assert mu[-1] < 0.5 < mu[0]  # heading for 1/2 as ka grows
 
 
@@ -39,7 +45,7 @@ def test_hemisphere_matches_hulme_solved_afresh(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     mu, lam = heave(hemisphere(3, 0.12))
     np.testing.assert_allclose(mu, MU, rtol=0.03)
-    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03)
+    np.testing.assert_allclose(lam, LAMBDA, rtol=0.03, atol=LAMBDA_ATOL)
 
 
 def test_a_coarse_solve_is_physical_and_cached(monkeypatch, tmp_path):

@@ -246,15 +246,16 @@ def test_a_heaving_converter_absorbs_the_frequency_domain_power():
 
 
 def test_a_slide_along_a_free_motion_changes_nothing():
-    """The cube released 10 cm high with radiation heaves straight up and down when free (by symmetry): on a
-    vertical slide it does the same, memory and radiated energy included, to round-off."""
+    """The cube released 10 cm high with radiation heaves straight up and down when free (by symmetry, to its solve's
+    accuracy): on a vertical slide it does the same, memory and radiated energy included."""
     base = with_overrides(load_scene("rest"), fluid__radiation="bem", fluid__forces="panels", fluid__damping=0.0, initial__position=(0.0, 0.0, -0.3),
                           step__dt=0.01)  # fmt: skip
     free = Simulation(base, backend="numpy")
     slide = Simulation(with_overrides(base, constraint__joint="prismatic"), backend="numpy")
     free.step(300)
     slide.step(300)
-    np.testing.assert_allclose(slide.state.x_world, free.state.x_world, atol=1e-9)
+    # the free cube's sideways drift: its solve's numerical heave-surge coupling (1.6e-7 m in 3 s)
+    np.testing.assert_allclose(slide.state.x_world, free.state.x_world, atol=1e-6)
     # the heave memory alike; the free cube's others only what its faceted faces' tiny yaw moment stirs (L_z ~ 1e-4 kg m2/s)
     heave = np.concatenate([np.full(len(e.G), e.col == 2) for e in free.model.radiation.memory.entries])
     np.testing.assert_allclose(slide.state.memory[heave], free.state.memory[heave], rtol=1e-7, atol=1e-8)

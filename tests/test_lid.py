@@ -3,8 +3,6 @@ the water line, whatever its outline (issue 38: Capytaine's generate_lid as call
 110 of the rm3 float's 233 m2 and nothing of the spar). Read from the bodies the solve is handed, the solve stopped
 before it starts."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 import trimesh

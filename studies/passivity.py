@@ -14,7 +14,6 @@ It uses only what the parent commit has too (fit_memory, response, exact_linear)
 
 from __future__ import annotations
 
-import dataclasses
 import statistics
 import sys
 import time
@@ -27,32 +26,7 @@ from sim.config import load_scene, with_overrides
 from sim.radiation import fit_memory
 from sim.system import build
 from sim.system_linear import exact_linear
-
-
-def lowest_damping(memory, top: float) -> tuple[float, float]:
-    """(smallest eigenvalue of the Hermitian part of K_fit(i omega), where) on 40,000 frequencies from 0 to 10 top."""
-    w = np.unique(np.concatenate([np.linspace(1e-4, 10 * top, 20000), np.geomspace(1e-4 * top, 10 * top, 20000)]))
-    K = memory.response(w)
-    low = np.linalg.eigvalsh(0.5 * (K + np.conj(K.transpose(0, 2, 1))))[:, 0]
-    return float(low.min()), float(w[low.argmin()])
-
-
-def misfits(memory, c) -> str:
-    """The largest B and A misfits on the grid over the fitted entries that matter (peak over 5 % of the diagonals'
-    geometric mean), each against the entry's own peak (the symmetric part of the solve's), the model's A being its
-    A_inf plus Im K_fit / omega: the same measure for any fit."""
-    dofs = sorted({e.row for e in memory.entries})
-    K = memory.response(c.omega)
-    B, A = 0.5 * (c.damping + c.damping.transpose(0, 2, 1)), 0.5 * (c.added_mass + c.added_mass.transpose(0, 2, 1))
-    A_fit = memory.added_mass_inf + K.imag / c.omega[:, None, None]
-    peak = np.abs(B).max(axis=0)
-    worst = [0.0, 0.0]
-    for i in dofs:
-        for j in dofs:
-            if peak[i, j] > 0.05 * np.sqrt(peak[i, i] * peak[j, j]):
-                worst[0] = max(worst[0], np.abs(K[:, i, j].real - B[:, i, j]).max() / peak[i, j])
-                worst[1] = max(worst[1], np.abs(A_fit[:, i, j] - A[:, i, j]).max() / np.abs(A[:, i, j]).max())
-    return f"{worst[0]:.4f}, {worst[1]:.4f}"
+from studies.accuracy.passivity import lowest_damping, misfits, scene_length, still_rm3
 
 
 def residual_share(memory, c) -> str:
@@ -63,22 +37,6 @@ def residual_share(memory, c) -> str:
     return f"{100 * share.max():.3g} % (dof {int(share.argmax())})"
 
 
-def rm3_length() -> float:
-    from sim.body import make_body
-
-    scene = load_scene("rm3")
-    return max(make_body(e.body, scene.base_dir, True).radius for e in scene.bodies)
-
-
-def still_rm3(hydro: str, stiffness: float = 0.0):
-    """rm3 in still water, no damper on the take-off (a spring or nothing), the float kicked upwards at 0.5 m/s."""
-    scene = with_overrides(load_scene("rm3"), waves__kind="still", fluid__hydro=hydro)
-    f = scene.bodies[1]
-    f = dataclasses.replace(f, constraint=dataclasses.replace(f.constraint, pto_damping=0.0, pto_stiffness=stiffness),
-                            initial=dataclasses.replace(f.initial, velocity=(0.0, 0.0, 0.5)))  # fmt: skip
-    return dataclasses.replace(scene, bodies=(scene.bodies[0], f))
-
-
 def solves() -> None:
     print(
         "| solve | dofs | fit, s | states (one per entry; fewest) | misfit B, A | min eig B_fit / peak B | at omega, rad/s | dA / A_inf |"
@@ -86,13 +44,13 @@ def solves() -> None:
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for path in sorted(SHIPPED.glob("*.npz")):
         c = Coefficients.load(path)
-        length = 1.0 if c.damping.shape[1] == 6 else rm3_length()
+        length = scene_length(c)
         started = time.perf_counter()
         memory = fit_memory(c, length=length)
         seconds = time.perf_counter() - started
         low, where = lowest_damping(memory, c.omega.max())
         fewest = len(memory.compact()[0]) if hasattr(memory, "compact") else memory.states
-        misfit = misfits(memory, c)
+        misfit = ", ".join(f"{m:.4f}" for m in misfits(memory, c))
         print(
             f"| {path.stem} | {c.damping.shape[1]} | {seconds:.2f} | {memory.states}; {fewest} | {misfit} | {low / np.abs(c.damping).max():.3g} | {where:.4g} "
             f"| {residual_share(memory, c)} |"

@@ -7,7 +7,6 @@ term) with the frequency-domain excitation, and check the excitation against the
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +18,7 @@ import sim.bem as bem
 from sim import Simulation, State, load_scene, with_overrides
 from sim.body import make_box
 from sim.diffraction import transfer_at
+from studies.accuracy.drifting import heave_rao, sphere_in_waves, wavelength
 from studies.accuracy.excitation import frequency_domain_rao, time_domain_rao
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -243,27 +243,6 @@ def test_time_domain_response_matches_the_frequency_domain_rao(name):
             assert abs(np.angle(got[d] / want[d])) < 0.02 or abs(want[d]) < 0.01 * np.abs(want[:3]).max(), (i, d)
 
 
-def _heave_rao(scene, moved_by: float, periods: int = 12, fit: int = 6) -> float:
-    """|first harmonic of z| / a over the last `fit` of `periods` wave periods after the ramp, the body placed `moved_by`
-    metres down-wave of where the scene starts it before the first step (the waves still flat)."""
-    sim = Simulation(scene)
-    s = sim.state
-    sim.reset(dataclasses.replace(s, x_world=s.x_world + [moved_by, 0.0, 0.0]))
-    T, a = scene.waves.period, 0.5 * scene.waves.height
-    t_end, chunk = sim.model.water.ramp + periods * T, 5
-    times, z = [], []
-    for _ in range(round(t_end / sim.dt / chunk)):
-        sim.step(chunk)
-        times.append(sim.state.t)
-        z.append(sim.state.x_world[2])
-    t, z = np.array(times), np.array(z)
-    keep = t > t[-1] - fit * T
-    w = 2 * np.pi / T
-    basis = np.column_stack([np.ones(keep.sum()), t[keep], np.cos(w * t[keep]), np.sin(w * t[keep])])
-    coef, *_ = np.linalg.lstsq(basis, z[keep], rcond=None)
-    return float(np.hypot(coef[2], coef[3])) / a
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("period", [1.2, 2.5])
 def test_the_free_sphere_a_quarter_wave_from_its_start_heaves_as_on_a_slide(period):
@@ -271,11 +250,9 @@ def test_the_free_sphere_a_quarter_wave_from_its_start_heaves_as_on_a_slide(peri
     before the waves rise, as a drift would carry it; 4 mm waves, too small for their mean force to move it on), heaves
     as on a vertical slide at its start, within 2 % (measured 0.07 % at 1.2 s, 0.00 % at 2.5 s; with the diffraction
     force phased at the start -10 % and +12 %)."""
-    base = with_overrides(load_scene("sphere"), waves__kind="regular", waves__height=0.004, waves__period=period,
-                          initial__position=(0.0, 0.0, 0.0))  # fmt: skip
-    quarter = 0.25 * 2 * np.pi * G / (2 * np.pi / period) ** 2
-    free = _heave_rao(base, quarter)
-    slide = _heave_rao(with_overrides(base, constraint__joint="prismatic"), 0.0)
+    base = sphere_in_waves(period, 0.004)
+    free = heave_rao(base, 0.25 * wavelength(period))
+    slide = heave_rao(with_overrides(base, constraint__joint="prismatic"), 0.0)
     assert free == pytest.approx(slide, rel=0.02)
     assert slide > 0.5  # (the RAO: 0.67 at 1.2 s, 1.03 at 2.5 s)
 

@@ -13,27 +13,8 @@ from sim.config import load_scene, with_overrides
 from sim.memory_fit import fit_memory, transfer
 from sim.system import build
 from sim.system_linear import exact_linear
+from studies.accuracy.passivity import lowest_damping, scene_length, still_rm3
 from tests.scenes import shipped_solve
-
-
-def lowest_damping(memory, omega_top: float) -> tuple[float, float]:
-    """(min over omega of the smallest eigenvalue of B_fit(omega), where) on a dense grid from 0 to 10 x omega_top:
-    40,000 frequencies, linear and logarithmic."""
-    w = np.unique(np.concatenate([np.linspace(1e-4, 10 * omega_top, 20000), np.geomspace(1e-4 * omega_top, 10 * omega_top, 20000)]))
-    B = memory.damping(w)
-    low = np.linalg.eigvalsh(0.5 * (B + B.transpose(0, 2, 1)))[:, 0]
-    return float(low.min()), float(w[low.argmin()])
-
-
-def scene_length(c) -> float:
-    """The body size the scenes fit with: 1 m for one body (make_radiation's), the largest body radius for several (rm3's)."""
-    if c.damping.shape[1] == 6:
-        return 1.0
-    from sim.body import make_body
-
-    scene = load_scene("rm3")
-    return max(make_body(e.body, scene.base_dir, True).radius for e in scene.bodies)
-
 
 SOLVES = sorted(SHIPPED.glob("*.npz"))
 
@@ -128,16 +109,6 @@ def test_the_presets_memories_are_passive(scene):
         c = Coefficients.load(shipped_solve("sphere"))
     low, where = lowest_damping(memory, c.omega.max())
     assert low >= -1e-12 * np.abs(c.damping).max(), (low, where)
-
-
-def still_rm3(hydro: str, stiffness: float = 0.0):
-    """rm3 in still water, its take-off without a damper (a spring of `stiffness`, N/m, or nothing), the float kicked
-    upwards at 0.5 m/s."""
-    scene = with_overrides(load_scene("rm3"), waves__kind="still", fluid__hydro=hydro)
-    f = scene.bodies[1]
-    f = dataclasses.replace(f, constraint=dataclasses.replace(f.constraint, pto_damping=0.0, pto_stiffness=stiffness),
-                            initial=dataclasses.replace(f.initial, velocity=(0.0, 0.0, 0.5)))  # fmt: skip
-    return dataclasses.replace(scene, bodies=(scene.bodies[0], f))
 
 
 @pytest.mark.parametrize("stiffness", [0.0, pytest.param(5e5, marks=pytest.mark.slow)])

@@ -127,3 +127,42 @@ def test_excitation_section_time_domain_meets_frequency_domain_with_and_without_
             assert r.error(d) < 0.02 and r.error(d, diffraction=False) < 0.02, (r.period, d)
     change = max(abs(abs(r.freq_full[2]) / abs(r.freq_fk[2]) - 1) for r in rs)
     assert change > 0.1  # heave: issue 25 measured +23 % to +38 % between T = 1.2 and 2.5 s
+
+
+def test_passivity_section_every_solve_passive_and_rm3_loses_what_it_radiates(quick):
+    """Part 8: every shipped solve's fitted damping has min eig >= -1e-12 of its peak up to 10x its top frequency,
+    the fit's misfits are small; rm3 without a damper, kicked, has only decaying modes, its mechanical energy never
+    rises above the start and E_total + E_pto + E_rad stays flat within 1e-6 of the kick."""
+    from studies.accuracy.passivity import ROUND_OFF
+
+    _, data = quick
+    section = data.markdown.split("## 8.")[1].split("## 9.")[0]
+    assert "passivity.png" in section
+    p = data.passivity
+    assert len(p.solves) >= 4
+    for s in p.solves:
+        assert s.lowest >= -ROUND_OFF, s.name
+        assert s.omega.max() >= 9.99 * s.omega_top and s.misfit_B <= 0.02 and s.misfit_A <= 0.02, s.name
+        assert f"`{s.name}`" in section
+    if p.rm3 is not None:
+        r = p.rm3
+        assert r.eig_max < 0
+        assert r.rise <= 1e-9 * r.kick and r.gap <= 1e-6 * r.kick
+        assert 0 < r.E_rad < r.kick
+
+
+def test_drifting_section_free_heaves_as_on_a_slide_and_the_ramp_removes_the_kick(quick):
+    """Part 9: the free sphere a quarter wave from its start heaves as on a slide within 2 % (and near the frequency
+    domain); started at rest, without a ramp the kick carries it off at over one amplitude per period, with the
+    default ramp under 1 % of one."""
+    _, data = quick
+    section = data.markdown.split("## 9.")[1]
+    assert "drifting.png" in section
+    d = data.drifting
+    assert d.rows
+    for r in d.rows:
+        assert r.free == pytest.approx(r.slide, rel=0.02), r
+        assert r.free == pytest.approx(r.frequency, rel=0.05), r
+    kicked, ramped = d.starts
+    assert kicked.ramp == 0 and ramped.ramp > 0
+    assert abs(kicked.drift) > d.amplitude and abs(ramped.drift) < 0.01 * d.amplitude

@@ -16,6 +16,7 @@ from sim import FluidConfig, Model, Simulation, StillWater, load_scene, with_ove
 from sim.body import make_mesh_body
 from sim.config import ConfigError
 from sim.water import jonswap_waves, ramp_factor, regular_waves, wavenumber
+from studies.accuracy.drifting import kick_drift, period_means, wavelength
 
 RHO, G = 1000.0, 9.81
 ROOT = Path(__file__).resolve().parents[1]
@@ -239,7 +240,7 @@ def test_the_ramp_starts_a_free_body_without_a_kick(tmp_path):
     without a ramp -570 %: 1.4 m in a minute), after settling once by at most a third of a while the waves rise; the part
     that does not flip grows four-fold when a doubles: second order, the mean force's drift."""
     T, dt = 2.5, 0.005
-    half = 0.5 * 2 * math.pi * G / (2 * math.pi / T) ** 2
+    half = 0.5 * wavelength(T)
     runs = {}
     procs = {}
     for height in (0.02, 0.01):
@@ -254,18 +255,14 @@ def test_the_ramp_starts_a_free_body_without_a_kick(tmp_path):
             _, err = proc.communicate(timeout=600)
             assert proc.returncode == 0, err
             rows = np.genfromtxt(out, delimiter=",", names=True)
-            per = round(T / dt)
-            x = rows["x"][1:] - key[1]  # (the first row is t = 0)
-            runs[key] = x[: len(x) // per * per].reshape(-1, per).mean(axis=1)  # each period's mean
+            runs[key] = period_means(rows["x"][1:] - key[1], round(T / dt))  # (the first row is t = 0)
     ramp = 3.5 * T
-    middle = (np.arange(len(runs[(0.02, 0.0)])) + 0.5) * T
-    after = middle > ramp + T
     even = {}
     for height in (0.02, 0.01):
         a = 0.5 * height
         odd = 0.5 * (runs[(height, 0.0)] - runs[(height, half)])
         even[height] = 0.5 * (runs[(height, 0.0)] + runs[(height, half)])
-        drift = np.polyfit(np.arange(after.sum()), odd[after], 1)[0]  # m per period
+        drift = kick_drift(odd, T, ramp)  # m per period
         assert abs(drift) < 0.01 * a, (height, drift)
         assert np.abs(odd).max() < 0.33 * a
     assert even[0.02][-1] / even[0.01][-1] == pytest.approx(4.0, rel=0.05)

@@ -1,11 +1,14 @@
 """`python -m studies report`: the accuracy report, OUT_DIR/accuracy.md with figures in OUT_DIR/accuracy/.
 
-Seven parts, every number computed from runs made by this command (nothing hand-typed): work-precision
+Nine parts, every number computed from runs made by this command (nothing hand-typed): work-precision
 diagrams with observed orders, the sampled model's error against the exact panel model as N grows, a
 stability map of the fixed-step integrators over damping and density, a verdict table (cheapest
 method per target accuracy), a table of stiff and extreme cases, and where the energy can rise with
 a map of the sampled model's steady rocking and drift over density and N (`leak`), and the response in waves
-with and without the diffraction force, time domain against frequency domain (`excitation`).
+with and without the diffraction force, time domain against frequency domain (`excitation`), the radiation memory's
+passivity: its fitted damping's smallest eigenvalue for every shipped solve and rm3 without a damper kicked in still water
+(`passivity`), and drifting bodies: a free sphere's heave a quarter wave from its start against a slide, and its start-up
+with and without the wave ramp (`drifting`).
 
 `compute` runs the simulations and returns plain data, `numbers` derives what the text quotes, `plot`
 draws and `text` writes the markdown. Wall-clock figures are medians of `repeats` runs, single-threaded.
@@ -20,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import common
-from . import numbers, plot, text
+from . import numbers, plot, plot_bodies, text
 from .compute import (
     ADAPTIVE,
     FIXED,
@@ -39,13 +42,16 @@ from .compute import (
     stiff_rows,
     work_precision,
 )
+from .drifting import FULL_DRIFT, QUICK_DRIFT, Drifting, DriftSettings, compute_drifting
 from .excitation import FULL_EXCITATION, QUICK_EXCITATION, Excitation, ExcitationSettings, compute_excitation
 from .leak import FULL_LEAK, QUICK_LEAK, Leak, LeakSettings, compute_leak
+from .passivity import FULL_PASSIVITY, QUICK_PASSIVITY, Passivity, PassivitySettings, compute_passivity
 
 
 @dataclass
 class ReportArgs:
-    """Write the accuracy report (work-precision, model error, stability map, verdict, stiff and extreme cases, energy and the sampled model's leak)."""
+    """Write the accuracy report (work-precision, model error, stability map, verdict, stiff and extreme cases, energy and the sampled model's
+    leak, excitation, the radiation memory's passivity, drifting bodies)."""
 
     out_dir: str = "reports"
     """Folder for accuracy.md; the figures go to OUT_DIR/accuracy/."""
@@ -68,14 +74,33 @@ class ReportData:
     verdict: dict[float, dict[str, WPPoint | None]]
     leak: Leak
     excitation: Excitation
+    passivity: Passivity
+    drifting: Drifting
     figures: list[str]
     seconds: float
     markdown: str = ""
 
 
-def compute_all(cfg: Settings, repeats: int, blas: str, leak_cfg: LeakSettings, excitation_cfg: ExcitationSettings) -> ReportData:
+@dataclass(frozen=True)
+class Parts:
+    """The settings of the parts after the integrators' (6 to 9)."""
+
+    leak: LeakSettings
+    excitation: ExcitationSettings
+    passivity: PassivitySettings
+    drifting: DriftSettings
+
+    def jobs(self) -> int:
+        return self.leak.jobs() + self.excitation.jobs() + self.passivity.jobs() + self.drifting.jobs()
+
+
+FULL_PARTS = Parts(FULL_LEAK, FULL_EXCITATION, FULL_PASSIVITY, FULL_DRIFT)
+QUICK_PARTS = Parts(QUICK_LEAK, QUICK_EXCITATION, QUICK_PASSIVITY, QUICK_DRIFT)
+
+
+def compute_all(cfg: Settings, repeats: int, blas: str, parts: Parts) -> ReportData:
     """Every run of the report, with a progress bar; the orders, rates and verdict filled in."""
-    bar = common.progress(cfg.jobs() + leak_cfg.jobs() + excitation_cfg.jobs(), unit="run")
+    bar = common.progress(cfg.jobs() + parts.jobs(), unit="run")
 
     def tick(n=1):
         bar.update(n)
@@ -89,14 +114,17 @@ def compute_all(cfg: Settings, repeats: int, blas: str, leak_cfg: LeakSettings, 
             st = stability_map(cfg, tick)
             stiff = stiff_rows(cfg, tick)
             extremes, messages = extreme_cases(cfg, tick)
-            leak = compute_leak(leak_cfg, tick)
-            excitation = compute_excitation(excitation_cfg, tick)
+            leak = compute_leak(parts.leak, tick)
+            excitation = compute_excitation(parts.excitation, tick)
+            passivity = compute_passivity(parts.passivity, tick)
+            drifting = compute_drifting(parts.drifting, tick)
     finally:
         bar.close()
     for res in wp:
         res.orders = numbers.observed_orders(res)
     me.rates = numbers.model_rates(me)
-    return ReportData(cfg, info, wp, me, st, stiff, extremes, messages, numbers.verdict(wp, cfg.targets), leak, excitation, [], 0.0)
+    return ReportData(cfg, info, wp, me, st, stiff, extremes, messages, numbers.verdict(wp, cfg.targets), leak, excitation, passivity, drifting,
+                      [], 0.0)  # fmt: skip
 
 
 def draw_all(data: ReportData, fig_dir: Path, repeats: int) -> None:
@@ -112,7 +140,9 @@ def draw_all(data: ReportData, fig_dir: Path, repeats: int) -> None:
     plot.creep(data.stiff, fig_dir / "stiff_creep.png")
     plot.leak(data.leak, fig_dir / "leak.png")
     plot.excitation(data.excitation, fig_dir / "excitation.png")
-    data.figures += ["model_error.png", "stability.png", "stiff_creep.png", "leak.png", "excitation.png"]
+    plot_bodies.passivity(data.passivity, fig_dir / "passivity.png")
+    plot_bodies.drifting(data.drifting, fig_dir / "drifting.png")
+    data.figures += ["model_error.png", "stability.png", "stiff_creep.png", "leak.png", "excitation.png", "passivity.png", "drifting.png"]
 
 
 def run_report(args: ReportArgs) -> ReportData:
@@ -124,7 +154,7 @@ def run_report(args: ReportArgs) -> ReportData:
     fig_dir.mkdir(parents=True, exist_ok=True)
     blas = common.single_thread_blas()
     repeats = max(1, args.repeats)
-    data = compute_all(cfg, repeats, blas, QUICK_LEAK if args.quick else FULL_LEAK, QUICK_EXCITATION if args.quick else FULL_EXCITATION)
+    data = compute_all(cfg, repeats, blas, QUICK_PARTS if args.quick else FULL_PARTS)
     draw_all(data, fig_dir, repeats)
     data.seconds = time.perf_counter() - started
     data.markdown = text.markdown(data, args)

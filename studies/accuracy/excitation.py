@@ -111,16 +111,24 @@ def frequency_domain_rao(c, body, rest_z: float, i: int, diffraction: bool = Tru
     """(6,) complex response per unit wave amplitude (heading 0) at the solve's frequency i: the linear equation
     [-omega^2 (M + A) - i omega B + C] xi = X_FK (+ X_d), C the exact mesh's hydrostatic stiffness at rest
     (`body` a sim Body; its principal waterplane axes x and y, as the cube's and the sphere's)."""
+    return linear_rao(c, body, rest_z, float(c.omega[i]), diffraction, rho, g)
+
+
+def linear_rao(c, body, rest_z: float, w: float, diffraction: bool = True, rho: float = 1000.0, g: float = 9.81) -> np.ndarray:
+    """frequency_domain_rao at any omega w in the solve's grid: A, B and X interpolated linearly between its
+    frequencies (exactly the solve's at them)."""
     from sim.hydrostatics import hydrostatics
 
     h = hydrostatics(body, np.array([0.0, 0.0, rest_z]), np.eye(3))
-    w = c.omega[i]
     C = np.zeros((6, 6))
     C[2, 2] = rho * g * h.waterplane_area
     C[3, 3], C[4, 4] = rho * g * h.volume * h.gm
     M = np.diag([body.mass] * 3 + list(body.inertia))
-    X = c.froude_krylov[i, 0] + (c.diffraction[i, 0] if diffraction else 0.0)
-    return np.linalg.solve(-(w**2) * (M + c.added_mass[i]) - 1j * w * c.damping[i] + C, X)
+    j = int(np.clip(np.searchsorted(c.omega, w, side="right") - 1, 0, len(c.omega) - 2))
+    f = (w - c.omega[j]) / (c.omega[j + 1] - c.omega[j])
+    at = lambda table: (1 - f) * table[j] + f * table[j + 1]  # noqa: E731
+    X = at(c.froude_krylov[:, 0]) + (at(c.diffraction[:, 0]) if diffraction else 0.0)
+    return np.linalg.solve(-(w**2) * (M + at(c.added_mass)) - 1j * w * at(c.damping) + C, X)
 
 
 def time_domain_rao(base, rest_z: float, w: float, a: float, start: np.ndarray, periods: int = 30, fit: int = 10) -> np.ndarray:

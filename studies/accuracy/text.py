@@ -12,7 +12,7 @@ from sim import INTEGRATORS
 
 from ..common import fmt_spec as _fmt
 from ..common import md_table
-from . import numbers
+from . import numbers, text_bodies
 from .compute import ADAPTIVE, FIXED, STAB_EXCITATION, STAB_GROWTH, ModelError, WPPoint, physics_limit, upright
 
 if TYPE_CHECKING:
@@ -32,6 +32,8 @@ def markdown(data: ReportData, args: ReportArgs) -> str:
         _stiff_and_extreme(data),
         _leak(data),
         _excitation(data),
+        text_bodies.passivity(data),
+        text_bodies.drifting(data),
     )
     return "\n".join(line for lines in sections for line in lines)
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.bem import SHIPPED, Coefficients, check, verify_digest
+from sim.bem import Coefficients, check, verify_digest
 from tests.scenes import shipped_solve
 
 ROOT = Path(__file__).resolve().parent.parent

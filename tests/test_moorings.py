@@ -34,8 +34,21 @@ def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
     """One line of the moored-buoy preset, as `run` writes its pull at t = 0 (MoorDyn's rest shape for the
     starting pose): the horizontal and vertical tension at the fairlead against the closed-form elastic
     catenary with seabed contact (sim/catenary.py), within 1 %, closer with more segments."""
-    done, rows = run_cli(tmp_path, "--scene", "moored-buoy", "--lines", "1", "--segments", str(segments), "--t-end", "0.01", "--every", "1",
-                         "--radiation", "none")  # one line rests the body at another draft: its own BEM solve, and this is about the line
+    done, rows = run_cli(
+        tmp_path,
+        "--scene",
+        "moored-buoy",
+        "--lines",
+        "1",
+        "--segments",
+        str(segments),
+        "--t-end",
+        "0.01",
+        "--every",
+        "1",
+        "--radiation",
+        "none",
+    )  # one line rests the body at another draft: its own BEM solve, and this is about the line
     assert done.returncode == 0, done.stderr
     assert "moorings: 1 line (MoorDyn), pull now" in done.stdout, done.stdout
     first = rows[0]

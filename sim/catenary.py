@@ -34,22 +34,42 @@ def _ends(H: float, V: float, L: float, w: float, EA: float) -> tuple[float, flo
             H / w * (math.sqrt(1 + (V / H) ** 2) - math.sqrt(1 + (Va / H) ** 2)) + (V * L - w * L * L / 2) / EA)  # fmt: skip
 
 
+def _guesses(X: float, Z: float, L: float, w: float) -> list[tuple[float, float]]:
+    """Starting (H, V) for the solve: the inextensible line's profile estimate of Peyrot and Goulois (1979), as MoorPy
+    starts, then a shallow sag's, then a line barely taut's."""
+    span = math.hypot(X, Z)
+    lam = 1e6 if X == 0 else 0.2 if span >= L else math.sqrt(3 * ((L * L - Z * Z) / (X * X) - 1))
+    first = (max(abs(w * X / (2 * lam)), 1e-6 * w * L), max(0.5 * w * (Z / math.tanh(lam) + L), 1e-6 * w * L))
+    H = w * max(X + Z - L, 1e-12 * L)  # barely taut: the hanging part nearly vertical, H asinh(w Z / H) = w (X + Z - L)
+    for _ in range(20):
+        H = w * max(X + Z - L, 1e-12 * L) / math.asinh(max(w * Z / H, 1e-12))
+    sag = (max(w * L * 1e-2, w * X * X / (2 * max(Z, 1e-6)) * 0.5), min(w * L, w * Z + 1e-3 * w * L))
+    return [first, sag, (H, w * Z + H)]
+
+
 def catenary(X: float, Z: float, L: float, w: float, EA: float) -> tuple[float, float]:
     """(H, V): the horizontal and vertical tension at the fairlead, N, of a line spanning X horizontally
     and Z vertically (m) from its anchor on the seabed; w its weight in water, N/m, EA its axial stiffness, N."""
-    if X + Z <= L:  # slack: it hangs straight down from the fairlead and the rest lies (folded) on the seabed
-        return 0.0, w * Z
-    guess_V = min(w * L, w * Z + 1e-3 * w * L)
-    guess_H = max(w * L * 1e-2, w * X * X / (2 * max(Z, 1e-6)) * 0.5)
+    hanging = EA * (math.sqrt(1 + 2 * w * Z / EA) - 1)  # V of a line hanging straight down, stretched: Z = V / w + V^2 / (2 EA w)
+    if X <= L - hanging / w:  # slack: it hangs straight down from the fairlead and the rest lies (folded) on the seabed
+        return 0.0, hanging
 
     def residual(p):
         H, V = np.exp(p)  # positive by construction
         x, z = _ends(H, V, L, w, EA)
         return [(x - X) / L, (z - Z) / L]
 
-    p, info, ok, msg = fsolve(residual, np.log([guess_H, guess_V]), full_output=True, xtol=1e-13)
-    if ok != 1 or max(abs(r) for r in residual(p)) > 1e-10:
-        raise ValueError(f"the catenary did not converge ({msg.strip()})")
+    msg = ""
+    for guess in _guesses(X, Z, L, w):  # a heavy, stiff chain can lead fsolve from one start to H -> 0: then the next
+        try:
+            with np.errstate(all="ignore"):
+                p, _, _, msg = fsolve(residual, np.log(guess), full_output=True, xtol=1e-13)
+                if max(abs(r) for r in residual(p)) <= 1e-10:
+                    break
+        except (ArithmeticError, ValueError):  # a step to H = 0 or past float range
+            continue
+    else:
+        raise ValueError(f"the catenary did not converge ({msg.strip() or 'no start converged'})")
     H, V = np.exp(p)
     return float(H), float(V)
 

@@ -78,6 +78,28 @@ def test_more_segments_come_closer_to_the_catenary():
     assert errors[-1] < 2e-3 and all(b < a for a, b in zip(errors, errors[1:])), errors
 
 
+def test_the_catenary_holds_a_heavy_chain_at_every_offset_and_meets_the_slack_line():
+    """rm3-moored's chain (92 kg/m in water, EA 500 MN, 260 m from 70 m down) over 41 m of fairlead travel: each (H, V)
+    puts the fairlead where it is to 1e-10 of the line's length, H grows with the span; and where the line just lifts
+    off the seabed the taut solution meets the slack one, a line hanging straight down stretched by its own weight."""
+    from sim.catenary import _ends
+
+    scene = load_scene("rm3-moored")
+    chain = lines_of(scene.moorings)
+    w, L, EA, Z = chain.weight_in_water(RHO, G), chain.line_length, chain.line_stiffness, 70.0 - 18.6743
+    hanging = EA * (math.sqrt(1 + 2 * w * Z / EA) - 1)  # Z = V / w + V^2 / (2 EA w)
+    X_slack = L - hanging / w  # 208.7 m: taut beyond
+    H_before = 0.0
+    for X in np.linspace(X_slack + 1e-3, 250.0, 501):
+        H, V = catenary(X, Z, L, w, EA)
+        np.testing.assert_allclose(_ends(H, V, L, w, EA), (X, Z), atol=1e-9 * L)
+        assert H > H_before
+        H_before = H
+    assert catenary(X_slack - 1e-3, Z, L, w, EA) == (0.0, pytest.approx(hanging, rel=1e-12))
+    H, V = catenary(X_slack + 1e-6, Z, L, w, EA)
+    assert 0.0 < H < 1e-3 * hanging and V == pytest.approx(hanging, rel=1e-6)
+
+
 def _surge_period(mass: float, coefficients, k: float) -> float:
     """2 pi sqrt((M + A_11(omega_n)) / k), A_11 read in the solve's grid at the natural frequency itself (a fixed point)."""
     T = 2 * math.pi * math.sqrt(mass / k)

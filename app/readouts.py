@@ -127,7 +127,11 @@ def describe(snap: Snapshot) -> str:
                      f"displaced {h.volume:.4g} m³")  # fmt: skip
     if snap.advice:
         lines.append(f"**⚠ {snap.advice}**")
-    if snap.behind:
+    if snap.behind and snap.engine.startswith("numpy reference ("):  # compiling or loading: the cause passes by itself
+        lines.append(f"**⚠ Slower than {s.speed:g}× real time until the fast kernels are ready**: the numpy reference steps meanwhile "
+                     "(a scene's first run on a machine compiles them once: 15-45 s on a free core, a few minutes on a busy one); "
+                     "nothing to change, the run speeds up by itself.")  # fmt: skip
+    elif snap.behind:
         lines.append(
             f"**⚠ This machine cannot keep up with {s.speed:g}× real time**: lower the speed, the points per edge, or pick a faster integrator."
         )

@@ -15,6 +15,7 @@ import numpy as np
 import tyro
 
 from ..config import PARAMS, load_scene, with_overrides
+from ..errors import ConfigError
 from ..integrators import INTEGRATORS
 from ..simulation import Simulation
 from . import FROM_SCENE, declared_flags, overrides
@@ -78,7 +79,7 @@ def timed_run(scene, repeats: int = 1) -> tuple[np.ndarray, float]:
     for _ in range(repeats):
         sim = Simulation(scene)
         start = time.perf_counter()
-        sim.step(round(scene.step.t_end / sim.dt))
+        sim.step(steps(scene.step.t_end, sim.dt))
         costs.append((time.perf_counter() - start) / scene.step.t_end)
     return pose_vector(sim), statistics.median(costs)
 
@@ -107,7 +108,7 @@ def water_line_crossings(scene, integrator: str, dt: float) -> tuple[int, str]:
         return sim.model.water.height_above_surface(s.x_world + nodes @ s.R_world_body.T, s.t) < 0.0
 
     before, count = wet(), 0
-    for _ in range(round(scene.step.t_end / dt)):
+    for _ in range(steps(scene.step.t_end, dt)):
         sim.step(1)
         after = wet()
         count += int(np.count_nonzero(after != before))
@@ -142,14 +143,25 @@ def observed_orders(rows: list[tuple[str, float, float, float]], floor: float) -
     return orders
 
 
+def steps(t_end: float, dt: float) -> int:
+    """The whole number of steps of dt that reach t_end, where the errors are measured (ConfigError if there is none)."""
+    n = round(t_end / dt)
+    if n < 1 or abs(n * dt - t_end) > 1e-9 * t_end:
+        raise ConfigError(f"compare: dt {dt:g} does not divide t_end {t_end:g} (each run's error is measured at t_end)")
+    return n
+
+
 def compare(args: CompareArgs) -> int:
     base = scene_from_args(args)
+    for dt in args.dts:
+        steps(args.t_end, dt)
+    every = args.t_end / max(1, round(args.t_end / 0.05))  # the reference's output interval (its steps are its own)
     jobs = [(name, dt) for name in args.integrators for dt in args.dts]
     print(f"compare: two DOP853 references, then {len(jobs)} runs of '{base.name}' over {args.t_end:g} s...", file=sys.stderr, flush=True)
     bar = progress_bar(len(jobs) + 3, unit="run")
     references = []
     for rtol in (REFERENCE_RTOL, 10 * REFERENCE_RTOL):
-        pose, _ = timed_run(with_overrides(base, step__integrator="dop853", step__dt=0.05, step__rtol=rtol, step__atol=rtol * 1e-2))
+        pose, _ = timed_run(with_overrides(base, step__integrator="dop853", step__dt=every, step__rtol=rtol, step__atol=rtol * 1e-2))
         references.append(pose)
         bar.update()
     reference, floor = references[0], float(np.abs(references[1] - references[0]).max())

@@ -165,7 +165,8 @@ def compare(args: CompareArgs) -> int:
         references.append(pose)
         bar.update()
     reference, floor = references[0], float(np.abs(references[1] - references[0]).max())
-    crossings, nodes = water_line_crossings(base, args.integrators[0], min(args.dts))
+    most = max(args.integrators, key=lambda name: INTEGRATORS[name].order)  # the closest to the reference
+    crossings, nodes = water_line_crossings(base, most, min(args.dts))
     bar.update()
     rows = []
     for name, dt in jobs:

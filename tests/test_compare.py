@@ -60,3 +60,12 @@ def test_where_samples_cross_the_water_line_it_says_so_and_rk4_loses_its_order()
     assert int(note.split()[2]) > 0 and "the damping force jumps at each" in note, note
     assert all(float(row["error (m)"]) > 100 * floor_of(notes) for row in rows)
     assert min(float(row["observed order"]) for row in rows[1:]) < INTEGRATORS["rk4"].order - 1, rows
+
+
+def test_a_step_that_does_not_divide_the_duration_is_refused(capsys):
+    """Its last step would end short of t_end (12 steps of 0.08 s end at 0.96 s) and its 'error' would be the motion it
+    missed: refused in one line before any run."""
+    from sim.commands import main
+
+    assert main(["compare", "--t-end", "1", "--dts", "0.04", "0.08"]) == 2
+    assert "dt 0.08 does not divide t_end 1" in capsys.readouterr().err

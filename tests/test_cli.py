@@ -210,9 +210,9 @@ def test_compare_says_what_it_does_before_it_starts_and_orders_the_errors(capsys
     dt; on the damped scene rk4's error falls as dt halves."""
     assert main(["compare", "--scene", "damped", "--t-end", "1", "--dts", "0.02", "0.01", "--integrators", "rk4", "--repeats", "1"]) == 0
     out, err = capsys.readouterr()
-    assert err.startswith("compare: a DOP853 reference, then 2 runs of 'damped'")
+    assert err.startswith("compare: two DOP853 references, then 2 runs of 'damped'")
     rows = [line.split("|") for line in out.splitlines() if line.startswith("| rk4 |")]
-    errors = [float(row[3]) for row in rows]
+    errors = [float(row[4]) for row in rows]
     assert len(rows) == 2 and errors[1] < errors[0]
 
 

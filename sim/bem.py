@@ -232,11 +232,14 @@ def default_frequencies(
     """A grid for the radiation kernel of a body of size `length`, uniform in omega: from where its
     waves are 100 times longer than it to where they are half as long (the default panels, length/8,
     still resolve them four times; the damping of heave and of the rotations has died out there), or
-    up to the period `min_period`; from `lowest` where that is lower (a moored body's slow natural frequency)."""
+    up to the period `min_period`; down past `lowest` where that is lower (a moored body's slow natural frequency), the
+    n points' spacing kept."""
     lo, hi = math.sqrt(2 * math.pi * g / (100 * length)), math.sqrt(2 * math.pi * g / (0.5 * length))
-    if lowest is not None and 0.0 < lowest < lo:
-        lo = lowest
-    return np.linspace(lo, hi if min_period is None else 2 * math.pi / min_period, n)
+    hi = hi if min_period is None else 2 * math.pi / min_period
+    if lowest is not None and 0.0 < lowest < lo:  # as many more points below, at the same spacing (the fit keeps its detail)
+        more = math.ceil((lo - lowest) / ((hi - lo) / (n - 1)))
+        lo, n = lo - more * (hi - lo) / (n - 1), n + more
+    return np.linspace(lo, hi, n)
 
 
 HEADINGS = np.radians(np.arange(0.0, 360.0, 15.0))

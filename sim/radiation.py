@@ -129,21 +129,21 @@ MOORED_QUANTUM = 1e-3
 coefficients is that share of them: far below the solve's own accuracy)."""
 
 
-def lowest_frequency(body, scene, R0: np.ndarray, rest: np.ndarray) -> float | None:
-    """Below half the slowest natural frequency the mooring lines give the body at rest, rad/s: sqrt(k / M) / 2, k
-    their smaller horizontal stiffness (the added mass lowers the true one by less than half while A_11 < 3 M), down
-    to a quarter octave (lines changed a little keep the grid); None when the lines do not hold it horizontally."""
+def lowest_frequency(scene, mass: float, rest: np.ndarray, R_input: np.ndarray) -> float | None:
+    """Below half the slowest natural frequency the mooring lines give a body of `mass` at rest (its centre of mass at
+    `rest`, its lines' frame R_input to world), rad/s: sqrt(k / M) / 2, k their smaller horizontal stiffness (the added
+    mass lowers the true one by less than half while A_11 < 3 M), down to a quarter octave (lines changed a little keep
+    the grid); None when the lines do not hold it horizontally."""
     from .equilibrium import pull_stiffness
-    from .rotation import quat_to_matrix
 
     try:
-        K = pull_stiffness(scene, rest, R0 @ quat_to_matrix(body.q_input_body).T)
+        K = pull_stiffness(scene, rest, R_input)
     except ValueError:  # lines that cannot reach: their own check says so, before the run
         return None
     k = float(np.linalg.eigvalsh(0.5 * (K + K.T)).min())
     if not k > 0.0:
         return None
-    return float(2.0 ** (np.floor(4 * np.log2(0.5 * np.sqrt(k / body.mass))) / 4))
+    return float(2.0 ** (np.floor(4 * np.log2(0.5 * np.sqrt(k / mass))) / 4))
 
 
 def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
@@ -156,6 +156,7 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
     from .diffraction import Diffraction
     from .equilibrium import scene_rest
     from .errors import ConfigError
+    from .rotation import quat_to_matrix
 
     fluid = scene.fluid
     rest = scene_rest(body, scene, R0)
@@ -165,8 +166,8 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
     omega = None
     if fluid.bem_min_period is not None or moored(scene):
-        omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period,
-                                    lowest=lowest_frequency(body, scene, R0, rest) if moored(scene) else None)  # fmt: skip
+        lowest = lowest_frequency(scene, body.mass, rest, R0 @ quat_to_matrix(body.q_input_body).T) if moored(scene) else None
+        omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None)  # fmt: skip
     memory = fit_memory(c)

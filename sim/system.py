@@ -160,14 +160,16 @@ class SystemRadiation:
         self._steps: dict = {}
 
     @classmethod
-    def of(cls, models: list, starts: list, fluid, water=None) -> SystemRadiation:
+    def of(cls, models: list, starts: list, fluid, water=None, lowest: float | None = None) -> SystemRadiation:
+        """Solved (or read) about the starting poses, the grid reaching down to `lowest` (rad/s) where that is lower
+        (moored bodies: `moored_lowest`)."""
         from .bem import bodies_coefficients, default_frequencies
         from .diffraction import Diffraction
         from .radiation import fit_memory
 
         parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
         size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
-        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period)
+        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
         c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
         memory = fit_memory(c, length=max(m.body.radius for m in models))
         # the solve has each body where it starts
@@ -540,7 +542,9 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
         dof += width
     radiation = None
     if scene.fluid.radiation == "bem":
-        radiation = SystemRadiation.of(models, starts, scene.fluid, water if diffracting(scene) else None)
+        radiation = SystemRadiation.of(
+            models, starts, scene.fluid, water if diffracting(scene) else None, moored_lowest(scene, models, starts)
+        )
     system = System(groups, order, water, scene.fluid, radiation)
     if scene.fluid.hydro == "linear":
         system.loads = [LinearLoads(m, s.x_world, s.R_world_body) for m, s in zip(models, starts)]
@@ -549,6 +553,22 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints),
                        np.zeros(0 if radiation is None else radiation.states))  # fmt: skip
     return system, replace(rest, v=_projected(system, rest, starts))
+
+
+def moored_lowest(scene, models: list, starts: list) -> float | None:
+    """Where a moored scene's solve grid starts: below half the lines' natural frequency for all the bodies' mass
+    (the slowest swing carries every body the joints hold; the whole mass errs low, the safe side); None unmoored.
+    The scene's start is its rest with the lines in place (a preset sets the moored body's mass so that it is)."""
+    from .config import moored
+    from .radiation import lowest_frequency
+    from .rotation import quat_to_matrix
+
+    if not moored(scene):
+        return None
+    k = [e.name for e in scene.bodies].index(scene.moorings.body) if scene.moorings.body else 0
+    q = np.asarray(scene.bodies[k].initial.orientation, float)
+    return lowest_frequency(replace(scene, initial=scene.bodies[k].initial), sum(m.body.mass for m in models), starts[k].x_world,
+                            quat_to_matrix(q / np.linalg.norm(q)))  # fmt: skip
 
 
 def _projected(system: System, s: SystemState, starts) -> np.ndarray:

@@ -115,3 +115,32 @@ def test_the_moored_rm3_starts_at_rest_on_its_lines():
         assert start.mooring[2] < -2e5  # the chains do hang on it (228 kN)
     finally:
         run.close()
+
+
+def test_the_moored_rm3_solve_reaches_below_its_slowest_swing():
+    """rm3-moored has its own solve (shipped) whose grid starts below the surge natural frequency the chains give the
+    two bodies swinging together, 2 pi / T with T = 2 pi sqrt((M + A_11(omega_n)) / k_11) (A_11 of both bodies' surge, k_11
+    the chains' catenary stiffness): A_11 there is read inside the grid, not extrapolated (rm3's own grid starts at
+    three times that frequency), and the fitted memory's surge added mass there meets the solve's within 1 %."""
+    from sim.equilibrium import pull_stiffness
+
+    scene = load_scene("rm3-moored")
+    system, _ = build(scene)
+    c, memory = system.radiation.coefficients, system.radiation.memory
+    spar = scene.bodies[0]
+    k = pull_stiffness(dataclasses.replace(scene, initial=spar.initial), np.asarray(spar.initial.position, float), np.eye(3))[0, 0]
+    mass = sum(m.model.body.mass for m in system.members)
+    surge = np.zeros(12)
+    surge[[0, 6]] = 1.0  # both bodies' surge
+    A11 = np.einsum("i,nij,j->n", surge, c.added_mass, surge)
+    T = 2 * np.pi * np.sqrt(mass / k)
+    for _ in range(30):
+        T = 2 * np.pi * np.sqrt((mass + np.interp(2 * np.pi / T, c.omega, A11)) / k)
+    w_n = 2 * np.pi / T
+    free, _ = build(load_scene("rm3"))
+    print(
+        f"surge on the chains: T = {T:.1f} s, omega_n = {w_n:.4f} rad/s; grid from {c.omega[0]:.4f} (rm3's: {free.radiation.coefficients.omega[0]:.4f})"
+    )
+    assert c.omega[0] < w_n < c.omega[1] * 4 and free.radiation.coefficients.omega[0] > 2 * w_n
+    fitted = surge @ (memory.added_mass_inf + memory.response(w_n)[0].imag / w_n) @ surge
+    assert fitted == pytest.approx(np.interp(w_n, c.omega, A11), rel=0.01)

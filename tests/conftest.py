@@ -7,33 +7,75 @@ import numpy as np
 import pytest
 
 
-@pytest.fixture(scope="session", autouse=True)
-def _compiled_kernels():
-    """Compile (fresh clone) or load the presets' numba kernels once, before any test times anything: in two
-    child processes at once (this machine's two cores), once for all pytest-xdist workers (a file lock).
-    Other specialisations compile where a test first needs them."""
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist starts its workers: their output is not shown
+def pytest_sessionstart(session):
+    """Compile (fresh clone) or load the presets' numba kernels once, before any test times anything, in two child
+    processes at once (this machine's two cores), saying so on the terminal line by line: a cold run is minutes of
+    compiling, and a silent one looks hung. Other specialisations compile where a test first needs them."""
+    if hasattr(session.config, "workerinput"):
+        return  # an xdist worker: the controller did it
+    _compile_presets(session.config.pluginmanager.get_plugin("terminalreporter"))
+
+
+def _compile_presets(terminal=None) -> None:
     from sim.simulation import default_backend
 
     if default_backend() != "numba":
         return
     import fcntl
+    import selectors
     import subprocess
     import sys
+    import time
 
     from sim.compiling import preset_specs, spec_argument
-    from sim.kernels import KERNEL_CACHE, cached, warm_up
+    from sim.kernels import KERNEL_CACHE, cached
 
+    say = terminal.write_line if terminal is not None else print
     specs = preset_specs()
     os.makedirs(KERNEL_CACHE, exist_ok=True)
     with open(os.path.join(KERNEL_CACHE, ".tests.lock"), "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes: one compile for concurrent runs
         todo = [spec_argument(spec) for spec in specs if not cached(spec)]
-        children = [
-            subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]]) for i in range(2) if todo[i::2]
-        ]
+        if not todo:
+            return
+        started = time.monotonic()
+        say(f"floatsim: compiling the numba kernels of {len(todo)} preset specialisations in two processes, once per machine "
+            f"(cached in {KERNEL_CACHE}; about 15-40 s each on a free core); the tests start after")  # fmt: skip
+        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]], stdout=subprocess.PIPE,
+                                     text=True) for i in range(2) if todo[i::2]]  # fmt: skip
+        watch = selectors.DefaultSelector()
+        for child in children:
+            watch.register(child.stdout, selectors.EVENT_READ)
+        done, open_pipes = 0, len(children)
+        while open_pipes:
+            for key, _ in watch.select():
+                line = key.fileobj.readline()
+                if not line:
+                    watch.unregister(key.fileobj)
+                    open_pipes -= 1
+                    continue
+                done += line.startswith("floatsim: compiled")
+                say(f"[{done}/{len(todo)}] {line.rstrip()}")
         for child in children:
             assert child.wait() == 0, "the presets' kernels did not compile"
-    for spec in specs:
+        say(f"floatsim: the presets' kernels are ready after {time.monotonic() - started:.0f} s; other specialisations compile "
+            "in the tests that first need them (such a test takes a minute more, once)")  # fmt: skip
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _compiled_kernels():
+    """Load the presets' kernels into this process (a worker) from the disk cache before any test times anything
+    (compiled first if pytest_sessionstart did not run here: pytest started without this conftest's hooks)."""
+    from sim.simulation import default_backend
+
+    if default_backend() != "numba":
+        return
+    from sim.compiling import preset_specs
+    from sim.kernels import warm_up
+
+    _compile_presets()
+    for spec in preset_specs():
         warm_up(spec)  # from the disk cache
 
 

@@ -9,6 +9,7 @@ with a notice, which these tests would see.
 
 from __future__ import annotations
 
+import io
 import math
 import signal
 import socket
@@ -21,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from viewer import wait_for
 
 pytest.importorskip("viser")
@@ -535,8 +537,7 @@ def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
     elapsed = time.monotonic() - started
     assert water.updates - before <= WAVE_HZ * elapsed + 2  # throttled
     assert water.surface.visible and not water.calm.visible
-    shades = [np.asarray(band.vertices, float) for band in water.bands if band.visible]
-    vertices = np.concatenate(shades)
+    vertices = np.asarray(water.vertices, float)
     near = np.abs(vertices[:, :2] - snap.frame.x_world[:2]).max(axis=1) < 0.45 * water.size  # the fine patch: every component
     np.testing.assert_allclose(vertices[near, 2], snap.water.elevation(vertices[near, :2], water.sent_time), atol=1e-6)
     a = 0.3 * snap.water.ramped(water.sent_time)  # a 0.3 m amplitude, 100 m long wave, on its ramp (28 s)
@@ -558,7 +559,7 @@ def test_the_sea_rises_over_its_ramp_and_a_reset_ramps_it_again(make_app):
     assert sea.ramp == pytest.approx(21.0)
 
     def surface() -> np.ndarray:
-        return np.concatenate([np.asarray(band.vertices, float) for band in water.bands if band.visible])
+        return np.asarray(water.vertices, float)
 
     wait_for(app, lambda s: s.frame.t > 1.2 and water.sent_time > 1.0, what="the sea to rise")
     risen, when = surface(), water.sent_time
@@ -745,11 +746,12 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
 
 
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
-    """A wave's triangles go to lighter shades the higher they lie (or the more they face the light); the fine
+    """A wave's vertices are lighter the higher they lie (or the more the surface there faces the light), in a
+    continuous shade (no bands), and the GLB the page gets holds that very mesh; the fine
     patch has the surface's own heights (the grid's factored sum equals the sum per point), the ring leaves out
     only what its cells cannot show; the mesh covers its square once with no T-junction (a crack the sky shows
     through): every edge inside it is shared by exactly two triangles, all facing up."""
-    from app.water import BANDS, LIGHT, SeaGrid, shade_bands
+    from app.water import LIGHT, SeaGrid, linear, sea_glb, shade, shade_colours, vertex_normals
     from sim.water import Waves
 
     rng = np.random.default_rng(3)
@@ -773,13 +775,16 @@ def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has
         _, uses = np.unique(edges, axis=0, return_counts=True)
         assert uses.max() == 2 and (uses == 1).sum() == 4 * (len(grid.ring) - 1)  # once: only the horizon's edges
     vertices = np.column_stack([xy, z])
-    shade = shade_bands(vertices.astype(np.float32), grid.faces, 1.0)
-    P = vertices[grid.faces]
-    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    looks = P[:, :, 2].mean(axis=1) * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
-    assert np.corrcoef(shade, looks)[0, 1] > 0.95
-    assert len(np.unique(shade)) >= 6 and shade.min() >= 0 and shade.max() < BANDS  # several shades of BANDS
+    value = shade(vertices.astype(np.float32), grid.faces, 1.0)
+    n = vertex_normals(vertices, grid.faces)
+    looks = z * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
+    inside = (value > 0.0) & (value < 1.0)
+    assert inside.mean() > 0.5 and np.corrcoef(value[inside], looks[inside])[0, 1] > 0.99
+    assert len(np.unique(np.round(value, 3))) > 100  # continuous: no handful of bands
+    glb = sea_glb(vertices, linear(shade_colours(value)), grid.faces)  # what the page gets: the same mesh and colours
+    mesh = trimesh.load(io.BytesIO(glb), file_type="glb", force="mesh", process=False)
+    np.testing.assert_allclose(mesh.vertices, vertices.astype(np.float32), atol=1e-6)
+    np.testing.assert_array_equal(mesh.faces, grid.faces)
 
 
 def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):

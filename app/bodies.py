@@ -32,8 +32,9 @@ from .controls import Bound, _control
 from .gate import Gate
 from .loop import SHOWN, SPEED, Mailbox
 from .recorder import RecordPanel
-from .scene import LINE_COLOUR, LINES_HZ
+from .scene import LINES_HZ
 from .take import MAX_SHOTS, Take
+from .tension import THICKNESS, TensionLegend, TensionScale, segment_colours
 from .water import WaterView
 
 JOINT_COLOUR = (250, 170, 40)
@@ -296,6 +297,9 @@ class BodiesScene:
         self._reach = 0.6 * size
         self.joints = self.lines = None
         self._lines_time = -math.inf
+        self.tension = TensionScale()
+        self.legend = None if replay else TensionLegend(server)
+        """The lines' colour bar in the panel (app/tension.py; a recording keeps no panel)."""
         server.initial_camera.position = (1.6 * size, -2.2 * size, 0.9 * size)
         server.initial_camera.look_at = (0.0, 0.0, -0.25 * size)
 
@@ -316,11 +320,19 @@ class BodiesScene:
                     self.joints.points = segments
             if frame.lines and now - self._lines_time >= 1.0 / LINES_HZ:  # the mooring lines, throttled
                 self._lines_time = now
+                self.tension.take(frame.line_tensions, frame.t)
                 segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in frame.lines]).astype(np.float32)
+                colours = segment_colours(frame.line_tensions, self.tension.low, self.tension.high)
                 if self.lines is None:
-                    self.lines = self.server.scene.add_line_segments("/moorings", segments, LINE_COLOUR, thickness=0.05)
+                    self.lines = self.server.scene.add_line_segments(
+                        "/moorings", segments, colours, thickness=THICKNESS, thickness_units="screen"
+                    )
                 else:
                     self.lines.points = segments
+                    if not np.array_equal(self.lines.colors, colours):
+                        self.lines.colors = colours
+                if self.legend is not None:
+                    self.legend.show(self.tension)
             self.water.show(snap.water, frame.t, np.mean([b["x"] for b in frame.bodies], axis=0), True, now)
 
 

@@ -19,6 +19,7 @@ from .controls import Layers
 from .hull import HULL_HZ, HullView
 from .loop import Snapshot
 from .markers import MarkersView
+from .tension import THICKNESS, TensionLegend, TensionScale, segment_colours
 from .water import REPLAY_HZ, WaterView
 
 ROOT = "/world"
@@ -28,7 +29,6 @@ REPLAY_FOLLOW_HZ = 10.0
 COLOUR_HZ = 5.0
 ARROW_HZ = 10.0
 LINES_HZ = 15.0
-LINE_COLOUR = (60, 60, 70)
 JOINT_COLOUR = (240, 120, 20)
 WET = np.array([30, 110, 230], np.uint8)
 DRY = np.array([245, 150, 40], np.uint8)
@@ -66,7 +66,10 @@ class SceneView:
         self._colour_time = self._arrow_time = self._lines_time = -np.inf
         self.colour_updates = 0
         self.lines = None
-        """The mooring lines' node (made for the first scene that has lines)."""
+        """The mooring lines' node (made for the first scene that has lines), coloured by tension (app/tension.py)."""
+        self.tension = TensionScale()
+        self.legend = None if replay else TensionLegend(server)
+        """The lines' colour bar in the panel (a recording keeps no panel)."""
         self.joint = None
         self._joint_of = None  # the [constraint] table the joint's node shows
         self.set_body(body)
@@ -131,7 +134,7 @@ class SceneView:
             self.hull.show(
                 snap, layers.markers.value, layers.mesh.value and not self.replay, now, due=sent
             )  # with the sea: the same instant
-            self._show_lines(frame.lines, now)
+            self._show_lines(frame.lines, frame.line_tensions, frame.t, now)
             self._show_joint(frame.joint_axis)
             if self.follower is not None:
                 self.follower.step(self.root, frame.x_world, now)
@@ -151,20 +154,31 @@ class SceneView:
         segment = np.array([[point - reach * direction, point + reach * direction]], np.float32)
         self.joint = self.server.scene.add_line_segments(f"{ROOT}/joint", segment, JOINT_COLOUR, thickness=0.04)
 
-    def _show_lines(self, lines: tuple, now: float) -> None:
-        """The mooring lines as segments between their nodes, at most LINES_HZ times a second (none: hidden)."""
+    def _show_lines(self, lines: tuple, tensions: tuple, t: float, now: float) -> None:
+        """The mooring lines as segments between their nodes, coloured by the tension there, at most LINES_HZ times a
+        second (none: hidden, with their legend)."""
         if not lines:
             if self.lines is not None and self.lines.visible:
                 self.lines.visible = False
+            if self.legend is not None:
+                self.legend.show(None)
             return
         if now - self._lines_time < 1.0 / LINES_HZ:
             return
+        self.tension.take(tensions, t)
         segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in lines]).astype(np.float32)
+        colours = segment_colours(tensions, self.tension.low, self.tension.high)
         if self.lines is None or len(self.lines.points) != len(segments):
-            self.lines = self.server.scene.add_line_segments(f"{ROOT}/moorings", segments, LINE_COLOUR, thickness=0.05)
+            self.lines = self.server.scene.add_line_segments(
+                f"{ROOT}/moorings", segments, colours, thickness=THICKNESS, thickness_units="screen"
+            )
         else:
             self.lines.points = segments
+            if not np.array_equal(self.lines.colors, colours):
+                self.lines.colors = colours
             self.lines.visible = True
+        if self.legend is not None:
+            self.legend.show(self.tension)
         self._lines_time = now
 
     def _send_colours(self, wet_index: np.ndarray, now: float) -> None:

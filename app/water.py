@@ -19,9 +19,9 @@ WAVE_HZ = 10.0
 CELLS = 48
 """Grid cells per side of the fine patch around the body."""
 REPLAY_CELLS, REPLAY_HZ = 20, 5.0
-"""A recording's sea: the fine patch alone, 441 vertices in one mid-shade mesh whose triangles are sent once,
-5 times a simulated second (re-sorting the shades would send every triangle each time: a minute of storm
-would no longer fit in 1.5 MB)."""
+"""A recording's sea: the fine patch alone, 441 vertices in one mid-shade, smooth-lit mesh whose triangles are sent
+once, 5 times a simulated second (sending colours and triangles each time: a minute of storm would no longer fit
+in 1.5 MB)."""
 RING_CELLS = 4
 """Cells of the coarse ring along each side of the fine patch (CELLS and REPLAY_CELLS are multiples of it);
 outside it they grow geometrically to the horizon."""
@@ -32,13 +32,12 @@ WATER_COLOUR, WATER_OPACITY = (25, 95, 175), 0.6
 WAVE_OPACITY = 0.85
 TROUGH, CREST = np.array([4, 30, 80]), np.array([125, 185, 230])
 """The sea's darkest and lightest shades (deep troughs facing away from the light, crests facing it)."""
-BANDS = 16
 SKY = (222, 232, 242)
 """The background and the fog the far water fades into."""
 LIGHT = np.array([0.45, -0.55, 0.70]) / np.linalg.norm([0.45, -0.55, 0.70])
 """Where the shading's light comes from: behind the default camera, above."""
 SLOPE_GAIN = 4.0
-"""Shade per unit of slope facing the light (a slope of 0.1 toward it: six bands lighter)."""
+"""Shade per unit of slope facing the light (a slope of 0.1 toward it: 0.4 of the way from trough to crest)."""
 WAVE_PATCH = 3.0
 """The fine patch spans this many times the scene's base size."""
 
@@ -94,7 +93,8 @@ class SeaGrid:
             ):
                 mid = per // 2
                 fans += [(o0 if e < mid else o1, inner[e], inner[e + 1]) for e in range(per)] + [(o0, inner[mid], o1)]
-        faces = np.concatenate([grid_faces(cells), _cell_faces(n, n, ~along) + nf, np.array(fans, np.int64)])
+        faces = np.concatenate([_cell_faces(n, n, ~along) + nf, np.array(fans, np.int64), grid_faces(cells)])
+        # (the ring first: the page draws a translucent mesh's triangles in order, the patch near the camera last)
         same = np.arange(nf + (n + 1) ** 2)  # the ring's vertices on the patch's edge are the patch's own (its corners')
         for a in range(RING_CELLS + 1):
             for b in range(RING_CELLS + 1):
@@ -114,7 +114,7 @@ class SeaGrid:
 
 
 def _upward(faces: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """The triangles turned counter-clockwise seen from above (their normals up: shade_bands reads them)."""
+    """The triangles turned counter-clockwise seen from above (their normals up: vertex_normals reads them)."""
     a, b, c = (xy[faces[:, k]] for k in range(3))
     turn = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     faces = faces.copy()
@@ -122,30 +122,83 @@ def _upward(faces: np.ndarray, xy: np.ndarray) -> np.ndarray:
     return faces
 
 
-def shade_bands(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.ndarray:
-    """Each triangle's shade (0 .. BANDS - 1): lighter the higher it lies (height over `scale`, about twice the
-    sea's standard deviation) and the more squarely it faces LIGHT."""
-    P = vertices[faces]
-    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    height = P[:, :, 2].mean(axis=1) / scale
-    value = 0.5 + 0.35 * np.clip(height, -1.0, 1.0) + SLOPE_GAIN * (n @ LIGHT - LIGHT[2])
-    return np.clip((value * BANDS).astype(int), 0, BANDS - 1)
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(v, 3) unit normals at the vertices: the area-weighted mean of their triangles' (all facing up)."""
+    P = vertices[faces].astype(float)
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])  # twice the area, along the normal
+    out = np.column_stack([np.bincount(faces.ravel(), np.repeat(n[:, k], 3), len(vertices)) for k in range(3)])
+    return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-30)
 
 
-def split_by_shade(faces: np.ndarray, shade: np.ndarray, n_vertices: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Per shade: (the vertices its triangles use, its triangles numbered in them), in one sort for all shades."""
-    keys = shade[:, None].astype(np.int64) * n_vertices + faces
-    unique, inverse = np.unique(keys, return_inverse=True)
-    first = np.searchsorted(unique // n_vertices, np.arange(BANDS + 1))  # each shade's run in `unique`
-    local = (inverse.reshape(-1, 3) - first[shade][:, None]).astype(np.uint32)
-    order = np.argsort(shade, kind="stable")
-    bounds = np.searchsorted(shade[order], np.arange(BANDS + 1))
-    return [(unique[first[k] : first[k + 1]] % n_vertices, local[order[bounds[k] : bounds[k + 1]]]) for k in range(BANDS)]
+def shade(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.ndarray:
+    """(v,) each vertex's shade, 0 (TROUGH) .. 1 (CREST): lighter the higher it lies (height over `scale`, about
+    twice the sea's standard deviation) and the more squarely the surface there faces LIGHT. Continuous: the page
+    interpolates it across each triangle."""
+    n = vertex_normals(vertices, faces)
+    height = vertices[:, 2] / scale
+    return np.clip(0.5 + 0.35 * np.clip(height, -1.0, 1.0) + SLOPE_GAIN * (n @ LIGHT - LIGHT[2]), 0.0, 1.0)
 
 
-def band_colours() -> list[tuple[int, int, int]]:
-    return [tuple(int(c) for c in TROUGH + (CREST - TROUGH) * (k + 0.5) / BANDS) for k in range(BANDS)]
+def shade_colours(value: np.ndarray) -> np.ndarray:
+    """(v, 3) sRGB colours 0..255 of the shades (0 .. 1)."""
+    return TROUGH + (CREST - TROUGH) * value[:, None]
+
+
+def linear(srgb: np.ndarray) -> np.ndarray:
+    """sRGB 0..255 to linear 0..1 (glTF's vertex colours are linear: the page converts them back)."""
+    c = np.asarray(srgb, float) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def sea_glb(vertices: np.ndarray, colours: np.ndarray, faces: np.ndarray, opacity: float = WAVE_OPACITY) -> bytes:
+    """A GLB of one mesh: float32 positions, float32 linear RGB vertex colours (no 8-bit steps in the dark troughs),
+    16-bit triangles when they fit; an unlit, double-sided, blended material (KHR_materials_unlit: the page shows the
+    colours as they are, fogged)."""
+    import json
+    import struct
+
+    index = np.uint16 if len(vertices) < 65536 else np.uint32
+    blobs = [np.ascontiguousarray(vertices, np.float32).tobytes(), np.ascontiguousarray(colours, np.float32).tobytes(),
+             np.ascontiguousarray(faces, index).tobytes()]  # fmt: skip
+    views, binary = [], b""
+    for blob, target in zip(blobs, (34962, 34962, 34963)):
+        views.append({"buffer": 0, "byteOffset": len(binary), "byteLength": len(blob), "target": target})
+        binary += blob + b"\0" * (-len(blob) % 4)
+    v = np.asarray(vertices, np.float32)
+    doc = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_materials_unlit"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 1}, "indices": 2, "material": 0, "mode": 4}]}],
+        "materials": [
+            {
+                "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, opacity], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "alphaMode": "BLEND",
+                "doubleSided": True,
+                "extensions": {"KHR_materials_unlit": {}},
+            }
+        ],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": views,
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": len(v),
+                "type": "VEC3",
+                "min": v.min(axis=0).tolist(),
+                "max": v.max(axis=0).tolist(),
+            },
+            {"bufferView": 1, "componentType": 5126, "count": len(v), "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123 if index is np.uint16 else 5125, "count": faces.size, "type": "SCALAR"},
+        ],
+    }
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(binary), 0x004E4942) + binary
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
 
 
 def sea_scale(water) -> float:
@@ -173,26 +226,26 @@ class WaterView:
         self.lighter = lighter
         self.grid = SeaGrid(half, self.cells)
         self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
-        """The sea's node: its children are the shades (hidden with it)."""
-        dot = np.zeros((3, 3), np.float32)
-        self.bands = [
-            server.scene.add_mesh_simple(
-                f"{root}/waves/shade{k}",
-                dot,
-                np.array([[0, 1, 2]], np.uint32),
-                color=colour,
-                opacity=WAVE_OPACITY,
-                flat_shading=True,
-                material="toon5",
-                side="double",
-                cast_shadow=False,
-                receive_shadow=False,
-                visible=False,
+        """The sea's node: its children are the surfaces (hidden with it)."""
+        flat = np.column_stack([self.grid.xy(np.zeros(2)), np.zeros(len(self.grid.xy(np.zeros(2))))])
+        if lighter:  # one mesh of fixed triangles in one mid shade, smooth-lit, only its vertices sent
+            patch = flat[: (self.cells + 1) ** 2].astype(np.float32)
+            self.replay_mesh = server.scene.add_mesh_simple(
+                f"{root}/waves/sea", patch, grid_faces(self.cells), color=tuple(int(c) for c in shade_colours(np.array([0.5]))[0]),
+                opacity=WAVE_OPACITY, side="double", cast_shadow=False, receive_shadow=False, visible=False,
             )  # fmt: skip
-            for k, colour in enumerate(band_colours())
-        ]
-        if lighter:  # one mesh of fixed triangles, only its vertices sent
-            self.bands[BANDS // 2].faces = grid_faces(self.cells)
+            self.seas = []
+        else:  # two nodes: the next surface goes into the hidden one, shown at the next publish (sea_glb)
+            blank = sea_glb(flat, np.tile(linear(shade_colours(np.array([0.5]))), (len(flat), 1)), self.grid.faces)
+            self.seas = [
+                server.scene.add_glb(f"{root}/waves/sea{k}", blank, cast_shadow=False, receive_shadow=False, visible=False)
+                for k in range(2)
+            ]
+        self._front, self._pending = 1, False
+        self.vertices = flat.astype(np.float32)
+        """(v, 3) the surface last sent (the fine patch's (cells + 1)^2 first, x major, then the ring's), m."""
+        self.colours = np.zeros((len(flat), 3))
+        """(v, 3) its vertices' sRGB colours, 0..255 (a recording's: none)."""
         if not lighter:  # the far water fades into the sky at the horizon (a recording's sea is the patch alone)
             server.scene.configure_fog(3.0 * half, 0.9 * reach, color=SKY)
             server.scene.set_background_image(np.full((2, 2, 3), SKY, np.uint8), format="png")
@@ -210,31 +263,27 @@ class WaterView:
             self.calm.visible = visible and still
         if self.surface.visible != (visible and not still):
             self.surface.visible = visible and not still
+        if self._pending:  # the surface sent at the last update has been parsed by now: show it, hide the other
+            back, front = self.seas[self._front ^ 1], self.seas[self._front]
+            back.visible, self._front, self._pending = True, self._front ^ 1, False
+            if front.visible:
+                front.visible = False
         now = time.monotonic() if now is None else now
         if still or not visible or now - self._sent < 1.0 / self.hz:
             return False
         cell = self.size / self.cells
         origin = np.round(np.asarray(centre[:2]) / cell) * cell  # follow the body in whole cells
         vertices = np.column_stack([self.grid.xy(origin), self.grid.heights(water, t, origin)]).astype(np.float32)
+        self.vertices = vertices
         if self.lighter:
-            node = self.bands[BANDS // 2]
+            node = self.replay_mesh
             node.vertices = vertices[: (self.cells + 1) ** 2]
             if not node.visible:
                 node.visible = True
-            self._sent, self.sent_time = now, t
-            self.updates += 1
-            return True
-        faces = self.grid.faces
-        shade = shade_bands(vertices, faces, sea_scale(water))
-        for node, (points, triangles) in zip(self.bands, split_by_shade(faces, shade, len(vertices))):
-            if not len(triangles):
-                if node.visible:
-                    node.visible = False
-                continue
-            node.vertices = vertices[points]
-            node.faces = triangles
-            if not node.visible:
-                node.visible = True
+        else:
+            self.colours = shade_colours(shade(vertices, self.grid.faces, sea_scale(water)))
+            self.seas[self._front ^ 1].glb_data = sea_glb(vertices, linear(self.colours), self.grid.faces)
+            self._pending = True
         self._sent, self.sent_time = now, t
         self.updates += 1
         return True

@@ -428,6 +428,12 @@ class Moorings:
         md = self._md
         return [np.array([md.GetLineNodePos(ln, i) for i in range(md.GetLineN(ln) + 1)], float) for ln in self._lines]
 
+    def line_tensions(self) -> list[np.ndarray]:
+        """Each line's tension at its nodes, (segments + 1,), N, anchor end first (MoorDyn's node tension: the
+        viewer colours the lines by it)."""
+        md = self._md
+        return [np.linalg.norm([md.GetLineNodeTen(ln, i) for i in range(md.GetLineN(ln) + 1)], axis=1) for ln in self._lines]
+
     def fairlead_tensions(self) -> np.ndarray:
         """(k,) the magnitude of each fairlead's pull, N."""
         return np.linalg.norm(self._forces, axis=1)

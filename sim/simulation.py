@@ -72,6 +72,8 @@ class Frame:
     """(k,) each fairlead's tension, N."""
     lines: tuple = ()
     """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
+    line_tensions: tuple = ()
+    """Each mooring line's tension at those nodes, (segments + 1,), N."""
     P_pto: float = 0.0
     """The power the joint's take-off absorbs, c theta_dot^2, W (0 without a joint)."""
     E_pto: float = 0.0
@@ -342,7 +344,7 @@ class Simulation:
             frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
             if self.moorings is not None:
                 frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions(),
-                                            lines=tuple(self.moorings.lines()))  # fmt: skip
+                                            lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))  # fmt: skip
             if self.joint is not None:
                 rate = self.joint.rate(self.body, self.state)
                 j = self.joint

@@ -705,12 +705,12 @@ class Assembly:
             s = self.state
             joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
                        float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
-            lines, pull = (), ()
+            lines, pull, tensions = (), (), ()
             if self.moorings is not None:
-                lines = tuple(self.moorings.lines())
+                lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
                 pull = (*self.moorings.load[:3], float(self.moorings.fairlead_tensions().max()))
             self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
-                                            pull, float(s.E_rad)))  # fmt: skip
+                                            pull, float(s.E_rad), tensions))  # fmt: skip
         return self._frame[1]
 
     def columns(self) -> list[str]:
@@ -742,6 +742,8 @@ class AssemblyFrame:
     """The lines' pull on the moored body (Fx, Fy, Fz, N) and the largest fairlead tension (N); empty without lines."""
     E_rad: float = 0.0
     """Energy the radiated waves have carried away so far, J (0 without radiation)."""
+    line_tensions: tuple = ()
+    """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
 
     @property
     def E_pto(self) -> float:

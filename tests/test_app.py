@@ -10,6 +10,7 @@ with a notice, which these tests would see.
 from __future__ import annotations
 
 import dataclasses
+import io
 import math
 import signal
 import socket
@@ -22,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from viewer import wait_for
 
 pytest.importorskip("viser")
@@ -748,11 +750,12 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
 
 
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
-    """A wave's triangles go to lighter shades the higher they lie (or the more they face the light); the fine
+    """A wave's vertices are lighter the higher they lie (or the more the surface there faces the light), in a
+    continuous shade (no bands), and the GLB the page gets holds that very mesh; the fine
     patch has the surface's own heights (the grid's factored sum equals the sum per point), the ring leaves out
     only what its cells cannot show; the mesh covers its square once with no T-junction (a crack the sky shows
     through): every edge inside it is shared by exactly two triangles, all facing up."""
-    from app.water import BANDS, LIGHT, SeaGrid, shade_bands
+    from app.water import LIGHT, SeaGrid, linear, sea_glb, shade, shade_colours, vertex_normals
     from sim.water import Waves
 
     rng = np.random.default_rng(3)
@@ -776,13 +779,16 @@ def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has
         _, uses = np.unique(edges, axis=0, return_counts=True)
         assert uses.max() == 2 and (uses == 1).sum() == 4 * (len(grid.ring) - 1)  # once: only the horizon's edges
     vertices = np.column_stack([xy, z])
-    shade = shade_bands(vertices.astype(np.float32), grid.faces, 1.0)
-    P = vertices[grid.faces]
-    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    looks = P[:, :, 2].mean(axis=1) * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
-    assert np.corrcoef(shade, looks)[0, 1] > 0.95
-    assert len(np.unique(shade)) >= 6 and shade.min() >= 0 and shade.max() < BANDS  # several shades of BANDS
+    value = shade(vertices.astype(np.float32), grid.faces, 1.0)
+    n = vertex_normals(vertices, grid.faces)
+    looks = z * 0.35 + 4.0 * (n @ LIGHT)  # what the shade is made of (height over the scale 1 m)
+    inside = (value > 0.0) & (value < 1.0)
+    assert inside.mean() > 0.5 and np.corrcoef(value[inside], looks[inside])[0, 1] > 0.99
+    assert len(np.unique(np.round(value, 3))) > 100  # continuous: no handful of bands
+    glb = sea_glb(vertices, linear(shade_colours(value)), grid.faces)  # what the page gets: the same mesh and colours
+    mesh = trimesh.load(io.BytesIO(glb), file_type="glb", force="mesh", process=False)
+    np.testing.assert_allclose(mesh.vertices, vertices.astype(np.float32), atol=1e-6)
+    np.testing.assert_array_equal(mesh.faces, grid.faces)
 
 
 def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):

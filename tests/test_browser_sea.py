@@ -146,3 +146,77 @@ def test_follow_keeps_the_body_in_the_middle_half_of_the_frame_through_a_storm_a
         wait_until(lambda: start() < 1e-3, "Reset view")
     finally:
         app.stop()
+
+
+def steps(render: np.ndarray) -> float:
+    """The share of neighbouring water pixels (across and down) whose grey levels differ by 2 or more, over the near
+    water: the frame's lower 60 % (not the fogged horizon), the body's box in the middle left out. A sea of flat
+    bands steps at every band's edge; a smoothly shaded one changes by a level or less between pixels."""
+    rgb = render.astype(float)
+    h, w = rgb.shape[:2]
+    water = rgb[..., 2] > rgb[..., 0] + 25
+    water[: int(0.4 * h)] = False
+    water[int(0.3 * h) : int(0.65 * h), int(0.35 * w) : int(0.65 * w)] = False
+    grey = rgb.mean(axis=2)
+    across, down = water[:, 1:] & water[:, :-1], water[1:, :] & water[:-1, :]
+    jumps = np.concatenate([np.abs(np.diff(grey, axis=1))[across], np.abs(np.diff(grey, axis=0))[down]])
+    assert len(jumps) > 0.2 * h * w  # the near water fills much of the frame
+    return float((jumps >= 2.0).mean())
+
+
+@pytest.mark.slow
+def test_the_storm_sea_is_smooth_shaded_with_no_steps_between_neighbouring_pixels(browser_page, tmp_path):
+    """The storm at full height as the page draws it (360 x 480): under 1 % of neighbouring near-water pixels step by 2
+    grey levels or more (0.29 % measured; the 16 flat-shaded bands before: 3.1 %, their edges' sawtooth)."""
+    from PIL import Image
+
+    app = start_viewer(storm_at_full_height(tmp_path), kernels=False)
+    try:
+        client = open_page(app, browser_page)
+        time.sleep(6.0)  # the environment map fades in; a few wave surfaces go out
+        render = client.get_render(360, 480, timeout=60.0)
+        Image.fromarray(render).save("/tmp/floatsim-sea.png")  # (to look at when this fails)
+        assert steps(render) < 0.01
+    finally:
+        app.stop()
+
+
+@pytest.mark.slow
+def test_the_mooring_lines_are_drawn_in_colours_of_their_tension_with_a_legend(browser_page):
+    """moored-buoy: each line's node colours follow MoorDyn's tension there (from pale yellow slack to red taut, on the
+    legend's range, shown at the panel's top); the page draws them: hiding the lines changes the pixels along them,
+    which are warmer (red over blue) with the lines than without."""
+    from PIL import Image
+
+    from app.tension import STOPS
+
+    app = start_viewer("moored-buoy", kernels=False)
+    try:
+        for box in (app.layers.points, app.layers.forces, app.layers.markers):
+            box.value = False
+        client = open_page(app, browser_page)
+        wait_for(app, lambda s: s.frame.t > 3.0 and app.scene.lines is not None, what="the lines")
+        time.sleep(3.0)
+        with app.server.atomic():
+            colours = np.asarray(app.scene.lines.colors, float).reshape(-1, 3)
+            tensions = np.concatenate([np.stack([t[:-1], t[1:]], axis=1).ravel() for t in app.sync().frame.line_tensions])
+        legend = app.scene.legend.html
+        assert legend.visible and "coloured by tension" in legend.content and " N</span>" in legend.content
+        assert len(np.unique(colours, axis=0)) >= 10  # many colours, not one
+        assert np.all(colours >= STOPS.min(axis=0) - 1) and np.all(colours <= STOPS.max(axis=0) + 1)
+        order = np.argsort(tensions)
+        assert np.corrcoef(tensions[order], -colours[order, 1])[0, 1] > 0.9  # taut: less green, from yellow to red
+        app.controls.paused.value = True
+        time.sleep(2.0)
+        shown = client.get_render(360, 480, timeout=60.0).astype(float)
+        app.scene._lines_time = math.inf  # (the view would show them again at its next update of the lines)
+        app.scene.lines.visible = False
+        time.sleep(2.0)
+        hidden = client.get_render(360, 480, timeout=60.0).astype(float)
+        Image.fromarray(np.concatenate([shown, hidden], axis=1).astype(np.uint8)).save("/tmp/floatsim-lines.png")  # (to look at)
+        along = np.abs(shown - hidden).sum(axis=2) > 8
+        assert along.sum() > 500, along.sum()  # the lines are drawn (under 0.85 of translucent sea: faintly)
+        warmth = lambda rgb: (rgb[..., 0] - rgb[..., 2])[along].mean()  # noqa: E731
+        assert warmth(shown) > warmth(hidden) + 4, (warmth(shown), warmth(hidden))  # 9 measured; grey lines would cool them
+    finally:
+        app.stop()

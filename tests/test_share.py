@@ -80,7 +80,7 @@ def test_a_replay_in_waves_follows_the_body_and_carries_the_shaded_sea():
 
     take, _ = record("waves", 6.0, waves__ramp=0.0)
     duration, messages = recording_messages(replay_html(take))
-    assert any(str(m.get("name", "")).startswith(f"{ROOT}/waves/shade") for _, m in messages)
+    assert any(str(m.get("name", "")).startswith(f"{ROOT}/waves/sea") for _, m in messages)
     shift, seen, drift = np.zeros(3), [], []
     for t, m in messages:
         if m.get("name") == ROOT and m["type"] == "SetPositionMessage":

@@ -35,7 +35,7 @@ from .recorder import RecordPanel
 from .scene import LINES_HZ
 from .take import MAX_SHOTS, Take
 from .tension import THICKNESS, TensionLegend, TensionScale, segment_colours
-from .water import WaterView
+from .water import LINED_OPACITY, WAVE_OPACITY, WaterView
 
 JOINT_COLOUR = (250, 170, 40)
 BODY_COLOURS = ((215, 235, 250), (250, 215, 160), (200, 240, 200), (240, 200, 230))
@@ -318,6 +318,7 @@ class BodiesScene:
                     self.joints = self.server.scene.add_line_segments("/joints", segments, JOINT_COLOUR, thickness=0.04)
                 else:
                     self.joints.points = segments
+            self.water.opacity = LINED_OPACITY if frame.lines else WAVE_OPACITY
             if frame.lines and now - self._lines_time >= 1.0 / LINES_HZ:  # the mooring lines, throttled
                 self._lines_time = now
                 self.tension.take(frame.line_tensions, frame.t)

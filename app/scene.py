@@ -20,7 +20,7 @@ from .hull import HULL_HZ, HullView
 from .loop import Snapshot
 from .markers import MarkersView
 from .tension import THICKNESS, TensionLegend, TensionScale, segment_colours
-from .water import REPLAY_HZ, WaterView
+from .water import LINED_OPACITY, REPLAY_HZ, WAVE_OPACITY, WaterView
 
 ROOT = "/world"
 """Every node of the scene hangs from this frame: following the body moves it, never the pages' cameras (camera.py)."""
@@ -157,6 +157,7 @@ class SceneView:
     def _show_lines(self, lines: tuple, tensions: tuple, t: float, now: float) -> None:
         """The mooring lines as segments between their nodes, coloured by the tension there, at most LINES_HZ times a
         second (none: hidden, with their legend)."""
+        self.water.opacity = LINED_OPACITY if lines else WAVE_OPACITY
         if not lines:
             if self.lines is not None and self.lines.visible:
                 self.lines.visible = False

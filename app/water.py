@@ -30,6 +30,8 @@ FAR = 16.0
 WATER_COLOUR, WATER_OPACITY = (25, 95, 175), 0.6
 """Calm sheet: deep enough a blue to read as water, translucent enough that the submerged part shows under it."""
 WAVE_OPACITY = 0.85
+LINED_OPACITY = 0.55
+"""A sea over mooring lines: see-through enough for their tension colours (at 0.85 they showed 15 % of them)."""
 TROUGH, CREST = np.array([4, 30, 80]), np.array([125, 185, 230])
 """The sea's darkest and lightest shades (deep troughs facing away from the light, crests facing it)."""
 SKY = (222, 232, 242)
@@ -242,6 +244,8 @@ class WaterView:
                 for k in range(2)
             ]
         self._front, self._pending = 1, False
+        self.opacity = WAVE_OPACITY
+        """The sea's opacity from its next surface on (LINED_OPACITY while the scene shows lines under it)."""
         self.vertices = flat.astype(np.float32)
         """(v, 3) the surface last sent (the fine patch's (cells + 1)^2 first, x major, then the ring's), m."""
         self.colours = np.zeros((len(flat), 3))
@@ -282,7 +286,7 @@ class WaterView:
                 node.visible = True
         else:
             self.colours = shade_colours(shade(vertices, self.grid.faces, sea_scale(water)))
-            self.seas[self._front ^ 1].glb_data = sea_glb(vertices, linear(self.colours), self.grid.faces)
+            self.seas[self._front ^ 1].glb_data = sea_glb(vertices, linear(self.colours), self.grid.faces, self.opacity)
             self._pending = True
         self._sent, self.sent_time = now, t
         self.updates += 1

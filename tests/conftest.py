@@ -41,7 +41,7 @@ def _compile_presets(terminal=None) -> None:
             return
         started = time.monotonic()
         say(f"floatsim: compiling the numba kernels of {len(todo)} preset specialisations in two processes, once per machine "
-            f"(cached in {KERNEL_CACHE}; about 15-40 s each on a free core); the tests start after")  # fmt: skip
+            f"(cached in {KERNEL_CACHE}; about 15-60 s each); the tests start after")  # fmt: skip
         children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]], stdout=subprocess.PIPE,
                                      text=True) for i in range(2) if todo[i::2]]  # fmt: skip
         watch = selectors.DefaultSelector()

@@ -45,9 +45,9 @@ NONNEGATIVE = ("L", "F")
 FLAT = 1e-2
 """A window varying by less than this fraction of its quantity's scale is flat: it gets an explicit y range."""
 MIN_TICK = 1e-3
-TICKS = tuple(m * 10.0**k for k in range(-3, 16) for m in (1, 2, 5))
-"""The y axes' tick steps: uPlot writes its labels with Intl's default of at most 3 decimals, so a step under
-MIN_TICK (or 2.5 x 10^k) labels ticks alike or wrongly ('0.001, 0.001, 0, 0'); multiples of these are exact."""
+TICKS = tuple(m * 10.0**k for k in range(-3, 16) for m in (1, 2, 2.5, 5) if m * 10.0**k >= MIN_TICK and (m, k) != (2.5, -3))
+"""The y axes' tick steps (uPlot's own, less those under MIN_TICK and 0.0025): uPlot writes its labels with Intl's
+default of at most 3 decimals, so a finer step labels ticks alike or wrongly ('0.001, 0.001, 0, 0')."""
 X_MIN_SPAN = 0.1
 """The x axis spans at least this (s): a window of one sample after a reset still has an axis."""
 X_STEPS = 20

@@ -2,6 +2,14 @@
 
 The plots keep a fixed window sampled at `PLOT_HZ` (a decimation of the published frames) and
 replace their data whole: uPlot has no append, so the window bounds what each update costs.
+
+Each update also names the window's x range (`window_range`). Without it viser's client moves the x axis
+by a window it remembers relative to the data's extent; a Live tab that opens mid-run builds its charts at
+0 px, then rebuilds them at their width (uplot-react), and that memory can be taken from a chart whose x
+scale is not set yet (read as 0..1): from then on the plots draw the window's first few percent (opened at
+t = 26 s they drew 0.9-2.1 s of a 1-26 s window) and, after a Reset, negative times. A named range turns
+that memory off and is applied whenever a chart is built. A window whose values vary by less than 1 % of
+its quantity's natural scale (`flat_range`) gets an explicit y range too, on tick steps uPlot labels exactly.
 """
 
 from __future__ import annotations
@@ -32,6 +40,18 @@ NOISE = 1e-9
 at rest) then plots as the flat zero it is, not as swings with every tick labelled 0."""
 Y_AXIS_PX = 76
 """Room for the y labels, px: uPlot's default 50 cuts the leading digits and the sign of '-1,226.3'."""
+NONNEGATIVE = ("L", "F")
+"""Plots of magnitudes: a flat one at zero gets [0, 2q], not [-q, q]."""
+FLAT = 1e-2
+"""A window varying by less than this fraction of its quantity's scale is flat: it gets an explicit y range."""
+MIN_TICK = 1e-3
+TICKS = tuple(m * 10.0**k for k in range(-3, 16) for m in (1, 2, 2.5, 5) if m * 10.0**k >= MIN_TICK and (m, k) != (2.5, -3))
+"""The y axes' tick steps (uPlot's own, less those under MIN_TICK and 0.0025): uPlot writes its labels with Intl's
+default of at most 3 decimals, so a finer step labels ticks alike or wrongly ('0.001, 0.001, 0, 0')."""
+X_MIN_SPAN = 0.1
+"""The x axis spans at least this (s): a window of one sample after a reset still has an axis."""
+X_STEPS = 20
+"""The x range moves in steps of a 20th of the window (about a second at PLOT_HZ and WINDOW)."""
 
 
 def scales(body, g: float) -> np.ndarray:
@@ -48,6 +68,48 @@ def denoise(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
     return np.round(values / quantum) * quantum
 
 
+def window_range(t: np.ndarray) -> tuple[float, float]:
+    """The x range of a window of sample times t: first to last, each rounded out to a step of about a
+    second's worth of samples (a 20th of the full window), so it changes about once a second (each change
+    rebuilds the chart in the page) while the data in between update at PLOT_HZ."""
+    lo, hi, n = float(t[0]), float(t[-1]), len(t)
+    full = (hi - lo) / (n - 1) * (WINDOW - 1) if n > 1 and hi > lo else 0.0
+    step = nice(max(full / X_STEPS, X_MIN_SPAN))
+    a, b = math.floor(lo / step) * step, math.ceil(hi / step) * step
+    return float(f"{a:.12g}"), float(f"{max(b, a + step):.12g}")
+
+
+def nice(x: float) -> float:
+    """The least of 1, 2, 5 x 10^k at or above x (x > 0)."""
+    k = math.floor(math.log10(x))
+    return next(m * 10.0**e for e in (k, k + 1) for m in (1, 2, 5) if m * 10.0**e >= x * (1 - 1e-12))
+
+
+def flat_range(values: np.ndarray, scale: float, nonnegative: bool = False) -> tuple[float, float] | None:
+    """A y range for a window that varies by less than q = FLAT x scale (rounded up to 1, 2, 5 x 10^k, at
+    least 2 x MIN_TICK): 2q wide around the window's middle rounded to q (so it moves only when the value
+    moves by q), from 0 for a magnitude near 0. None for a window that varies more (uPlot ranges it)."""
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return None
+    lo, hi = float(finite.min()), float(finite.max())
+    q = nice(max(FLAT * scale, 2 * MIN_TICK))
+    if hi - lo >= q:
+        return None
+    k = round((lo + hi) / 2 / q)
+    if nonnegative and lo >= 0 and k < 1:
+        return 0.0, 2 * q
+    return float(f"{(k - 1) * q:.12g}"), float(f"{(k + 1) * q:.12g}")
+
+
+def plot_scales(t: np.ndarray, values: np.ndarray, scale: float, nonnegative: bool = False) -> dict:
+    """One plot's uPlot scales for a window: x its time range, y explicit while the window is flat."""
+    scales: dict = {"x": {"time": False, "range": window_range(t)}}
+    if (y := flat_range(values, scale, nonnegative)) is not None:
+        scales["y"] = {"range": y}
+    return scales
+
+
 class Readouts:
     """A markdown block of numbers and one uPlot per quantity; `update` runs on the simulation thread."""
 
@@ -60,12 +122,14 @@ class Readouts:
             self.plots[key] = gui.add_uplot(
                 (np.zeros(1), np.zeros(1)),
                 ({"label": "t (s)"}, {"label": label, "stroke": colour, "width": 1.5}),
-                scales={"x": {"time": False}},
+                scales=plot_scales(np.zeros(1), np.zeros(1), 1.0),
                 legend={"show": True},
-                axes=({}, {"size": Y_AXIS_PX}),
+                axes=({}, {"size": Y_AXIS_PX, "incrs": TICKS}),
                 aspect=2.2,
                 visible=key not in JOINT_ONLY,
             )
+        self._scales = {key: plot.scales for key, plot in self.plots.items()}
+        """What each plot's scales were last set to (viser resends a dict at every assignment)."""
         self._history: collections.deque = collections.deque(maxlen=WINDOW)
         self._epoch = -1
         self._last = -math.inf
@@ -85,15 +149,22 @@ class Readouts:
             self._history.clear()
         if self._history and self._history[-1][0] == frame.t:
             return  # paused: nothing new to draw
-        values = denoise(np.array([f(frame) for *_, f in SERIES], dtype=float), scales(snap.body, snap.params.g))
+        size = scales(snap.body, snap.params.g)
+        values = denoise(np.array([f(frame) for *_, f in SERIES], dtype=float), size)
         self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
         data[~np.isfinite(data)] = np.nan
         jointed = snap.settings.joint != "free"
         for i, (key, *_) in enumerate(SERIES):
-            if key in JOINT_ONLY and self.plots[key].visible != jointed:
-                self.plots[key].visible = jointed
-            self.plots[key].data = (data[0], data[i + 1])
+            plot = self.plots[key]
+            if key in JOINT_ONLY and plot.visible != jointed:
+                plot.visible = jointed
+            if not plot.visible:
+                continue  # a hidden plot is not drawn: its data would only cost bytes
+            wanted = plot_scales(data[0], data[i + 1], float(size[i]), key in NONNEGATIVE)
+            if wanted != self._scales[key]:
+                plot.scales = self._scales[key] = wanted
+            plot.data = (data[0], data[i + 1])
 
 
 def _model_energy(f) -> str:

@@ -872,3 +872,19 @@ def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_
         assert not calm.camera.follow_box.value
     finally:
         calm.stop()
+
+
+def test_plot_scales_name_the_window_and_give_a_flat_series_a_readable_range():
+    """Each plot update names its x range (the window, rounded out to about a second; from the reset on), and a
+    window flat within 1 % of the quantity's scale gets a y range 2q wide on tick steps of at least 0.001 (uPlot's
+    labels keep 3 decimals: a settled z labelled '-0.4, -0.4, -0.4' before)."""
+    from app.readouts import MIN_TICK, TICKS, plot_scales
+
+    t = np.arange(200) * 0.1 + 30.03
+    settled = -0.4 + 1e-7 * np.sin(t)
+    scales = plot_scales(t, settled, 0.866)
+    assert scales["x"] == {"time": False, "range": (30.0, 50.0)}
+    assert scales["y"]["range"] == (-0.41, -0.39) and min(TICKS) == MIN_TICK
+    assert plot_scales(t, np.sin(t), 0.866).keys() == {"x"}  # a moving series: uPlot ranges it
+    assert plot_scales(t, 1e-9 * np.abs(np.sin(t)), 100.0, nonnegative=True)["y"]["range"] == (0.0, 2.0)
+    assert plot_scales(np.zeros(1), np.zeros(1), 1.0)["x"]["range"] == (0.0, 0.1)  # one sample after a reset

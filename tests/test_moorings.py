@@ -253,8 +253,8 @@ def test_a_recording_draws_the_lines_where_the_run_had_them():
     updates = [
         m[1]["updates"]["points"]
         for m in doc["messages"]
-        if m[1].get("name") == "/world/moorings" and m[1]["type"] == "SceneNodeUpdateMessage"
-    ]
+        if m[1].get("name") == "/world/moorings" and m[1]["type"] == "SceneNodeUpdateMessage" and "points" in m[1]["updates"]
+    ]  # (the lines' colours follow their tension in updates of their own)
     assert len(updates) >= 10  # streamed as the run goes (15 a second at most)
     i = updates[-1]["__binary_index"]
     last = np.frombuffer(inner[starts[i] : starts[i] + sizes[i]], dtype=np.float32).reshape(-1, 2, 3)

@@ -104,6 +104,19 @@ def test_help_says_where_unset_flags_come_from(capsys):
     assert "(default: from the scene)" in text and "{None}" not in text and "(default: None)" not in text
 
 
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_help_lists_every_preset(command):
+    """`python -m sim run --help` (and sweep's) names the presets --scene takes, each one (issue 39)."""
+    from sim.config import available_scenes
+
+    done = subprocess.run(
+        [sys.executable, "-m", "sim", command, "--help"], capture_output=True, text=True, env={**os.environ, "COLUMNS": "400"}
+    )
+    assert done.returncode == 0, done.stderr
+    line = next(line for line in done.stdout.splitlines() if "--scene" in line)
+    assert f"({', '.join(available_scenes())})" in line and len(available_scenes()) >= 10
+
+
 def test_missing_mesh_file_gets_one_clear_line(tmp_path, capsys):
     scene = tmp_path / "m.toml"
     scene.write_text('[body]\nshape = "mesh"\nmesh = "no-such.stl"\n')

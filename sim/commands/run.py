@@ -12,7 +12,7 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
+from ..config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
 from ..errors import WriteFailed
 from ..hydrostatics import describe_rest
 from ..limits import step_time
@@ -32,8 +32,10 @@ MAX_STEPS = 100_000_000
 class _RunBase:
     """Run a scene headless and write its trajectory to CSV. Flags override the scene."""
 
-    scene: str = "drop"
-    """Preset name (assets/scenes/NAME.toml) or path to a scene .toml."""
+    scene: Annotated[
+        str, tyro.conf.arg(metavar="NAME|FILE", help=f"Preset name ({', '.join(available_scenes())}) or path to a scene .toml.")
+    ] = "drop"
+    """Preset name or path to a scene .toml (the presets are listed in --help)."""
     z0: Annotated[float | None, tyro.conf.arg(metavar="FLOAT", help_behavior_hint=FROM_SCENE)] = None
     """Initial height of the centre of mass, m."""
     q0: Annotated[tuple[float, float, float, float] | None, tyro.conf.arg(metavar="QW QX QY QZ", help_behavior_hint=FROM_SCENE)] = None

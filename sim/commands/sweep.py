@@ -17,6 +17,7 @@ from typing import Annotated, Literal
 
 import tyro
 
+from ..config import available_scenes
 from ..errors import ConfigError, WriteFailed
 from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from ..sweeps.backends import WorkerLost, run
@@ -39,8 +40,11 @@ class SweepArgs:
     NAME: a body, water, wave or step parameter (density, damping, drag_coefficient, hs, integrator, ...), z0, tilt or orientation_seed."""
     file: str | None = None
     """A TOML sweep file (scene, params, set, settle, ...); flags given here override it."""
-    scene: str | None = None
-    """Preset name or scene .toml (default: damped)."""
+    scene: Annotated[
+        str | None,
+        tyro.conf.arg(metavar="NAME|FILE", help=f"Preset name ({', '.join(available_scenes())}) or scene .toml (default: damped)."),
+    ] = None
+    """Preset name or scene .toml (default: damped; the presets are listed in --help)."""
     set: Annotated[tuple[str, ...], tyro.conf.UseAppendAction] = ()
     """SECTION.KEY=VALUE, repeatable: a fixed change to the scene for every case (e.g. fluid.forces=panels)."""
     t_end: float | None = None

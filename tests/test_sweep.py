@@ -88,6 +88,21 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
     assert len(results(out)) == 32
 
 
+def test_a_cube_heavier_than_water_is_reported_sunk_without_a_draft(tmp_path):
+    """`python -m sim sweep` over densities above water's (issue 39): those cubes end wholly under water, sinking; their
+    status says `sank` and their draft is NaN (it said `end` with a "draft" of 64 m), while the floating one keeps its
+    Archimedes draft."""
+    out = tmp_path / "s"
+    done = subprocess.run([sys.executable, "-m", "sim", "sweep", "--param", "density=900,1100,1500", "--t-end", "8", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "(3 cases: 1 end, 2 sank)" in done.stdout
+    rows = results(out).set_index("density")
+    assert list(rows.status) == ["end", "sank", "sank"]
+    assert rows.draft.loc[[1100.0, 1500.0]].isna().all() and rows.period.loc[[1100.0, 1500.0]].isna().all()
+    assert (rows.z.loc[[1100.0, 1500.0]] < -2.0).all() and 0.5 < rows.draft.loc[900.0] < 3**0.5  # still bobbing: under its diagonal
+
+
 @pytest.mark.parametrize(
     "argv, message",
     [

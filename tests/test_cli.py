@@ -315,3 +315,15 @@ def test_a_slow_run_says_how_long_it_will_take_at_its_pace(monkeypatch, capsys):
     assert len(notes) == 2
     assert "20 of 1,000 steps in 12 s" in notes[0] and "about 10 min more" in notes[0]
     assert "200 of 1,000 steps in 330 s" in notes[1] and "about 22 min more" in notes[1]
+
+
+@pytest.mark.slow  # a compile from an empty kernel cache: 20-60 s
+def test_bench_startup_says_how_each_cold_run_ran_in_whole_parentheses():
+    """`python -m sim bench --startup --presets drop`: its progress line closes every parenthesis it opens (it cut the
+    run's note at 100 characters, inside one) and says the cold run stayed on numpy; the table has the preset's row."""
+    env = {k: v for k, v in os.environ.items() if k != "FLOATSIM_BACKEND"}
+    done = subprocess.run([sys.executable, "-m", "sim", "bench", "--startup", "--presets", "drop"], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr[-2000:]
+    line = next(line for line in done.stderr.splitlines() if line.strip().startswith("drop:"))
+    assert line.count("(") == line.count(")") and "(on the numpy reference" in line, line
+    assert "| drop |" in done.stdout

@@ -128,3 +128,16 @@ def test_the_tours_viewer_lines_serve_their_scene_and_run(line):
         assert app.sync().frame.t > 0.2 and app.address().startswith("http://")
     finally:
         app.stop()
+
+
+def test_the_viewer_page_answers_questions_and_leaves_measurements_to_performance():
+    """docs/viewer.md is sections a user looks for ("How do I ...", "What do ..."), none a wall of text, and the viewer's
+    costs (bandwidth, CPU, soak runs) sit in docs/performance.md (issue 39: one heading over ~6000 px of measurements)."""
+    viewer = (ROOT / "docs" / "viewer.md").read_text()
+    headings = re.findall(r"^## (.+)$", viewer, flags=re.M)
+    assert len(headings) >= 6 and all(h.startswith(("How do I", "What do")) for h in headings), headings
+    for section in viewer.split("\n## ")[1:]:
+        assert len(section.split()) < 700, section.splitlines()[0]
+    assert not re.search(r"MB/s|server CPU|app\.soak|cores", viewer)
+    costs = (ROOT / "docs" / "performance.md").read_text().split("## The viewer's costs")[1]
+    assert "MB/s" in costs and "app.soak" in costs and "server CPU" in costs

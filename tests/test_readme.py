@@ -141,3 +141,22 @@ def test_the_viewer_page_answers_questions_and_leaves_measurements_to_performanc
     assert not re.search(r"MB/s|server CPU|app\.soak|cores", viewer)
     costs = (ROOT / "docs" / "performance.md").read_text().split("## The viewer's costs")[1]
     assert "MB/s" in costs and "app.soak" in costs and "server CPU" in costs
+
+
+QUOTED = re.compile(r"`(?:floatsim: error: )?((\w+) must be [^`]*?, got (-?[\d.e+-]+))`")
+"""A parameter's message quoted in the docs: `density must be >= 0.001, got -5.0` (with or without the CLI's prefix)."""
+
+
+def test_the_docs_quote_the_messages_the_code_gives():
+    """Every "KEY must be ..., got VALUE" the README and the docs quote is the message that value gets from the code, word
+    for word (issue 39: the API page quoted "density must be > 0" where the code says "density must be >= 0.001")."""
+    from sim.config import PARAMS, ConfigError, load_scene, with_overrides
+
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    quoted = [(page.name, *m) for page in pages for m in QUOTED.findall(page.read_text())]
+    assert len(quoted) >= 2, quoted  # the API page's and the sweeps page's at least
+    for page, message, key, value in quoted:
+        (param,) = [p for p in PARAMS.values() if p.key == key]
+        with pytest.raises(ConfigError) as e:
+            with_overrides(load_scene("rest"), **{f"{param.section}__{key}": float(value)})
+        assert str(e.value) == message, f"{page} quotes {message!r}; the code says {str(e.value)!r}"

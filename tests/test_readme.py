@@ -160,3 +160,13 @@ def test_the_docs_quote_the_messages_the_code_gives():
         with pytest.raises(ConfigError) as e:
             with_overrides(load_scene("rest"), **{f"{param.section}__{key}": float(value)})
         assert str(e.value) == message, f"{page} quotes {message!r}; the code says {str(e.value)!r}"
+
+
+def test_the_tours_lines_say_which_extra_a_moored_scene_needs():
+    """A tour line running a scene with mooring lines says it needs `.[moorings]` (issue 39: the moored buoy's did not;
+    MoorDyn stays optional, see pyproject.toml)."""
+    from sim.config import load_scene
+
+    block = README.split("## A tour")[1].split("```bash")[1].split("```")[0]
+    moored = [line for line in block.splitlines() if (m := re.search(r"--scene (\S+)", line)) and load_scene(m.group(1)).moorings.lines]
+    assert moored and all('pip install -e ".[moorings]"' in line for line in moored), moored

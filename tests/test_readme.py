@@ -104,6 +104,27 @@ def test_the_tours_bench_line_works(capsys):
     assert "| model | samples | integrator | us/step |" in out and out.count("| implicit |") >= 3  # points, cells, panels
 
 
+@pytest.mark.slow
+def test_bench_says_how_long_it_takes_and_quick_is_the_first_table_alone():
+    """`python -m sim bench --quick` (issue 39): says first, before any row, what it runs and how long the whole benchmark
+    takes; then only the first table at N = 10, a row per model and integrator (4 points, 1 cells, 4 panels)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "sim", "bench", "--quick"], capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stderr.startswith("bench: the first table at N = 10 only (--quick): about"), done.stderr[:300]
+    rows = [line for line in done.stdout.splitlines() if re.match(r"\| (points|cells|panels) \|", line)]
+    assert len(rows) == 9 and all(r.split("|")[2].strip() in ("600", "12 triangles") for r in rows), rows
+    assert "ensemble of" not in done.stdout and "sweep of" not in done.stdout and "sea states" not in done.stdout
+
+
+def test_the_tours_bench_line_says_it_takes_minutes_and_how_to_cut_it():
+    """The README's bench line says how long it takes, and --quick (issue 39)."""
+    line = next(line for line in README.split("## A tour")[1].splitlines() if line.startswith("python -m sim bench"))
+    assert "min" in line and "--quick" in README.split("## A tour")[1]
+
+
 @pytest.mark.parametrize(
     "line",
     [line.split("#")[0].strip() for line in README.split("## A tour")[1].split("```")[1].splitlines() if line.startswith("python -m app")],

@@ -5,6 +5,7 @@ heave period is longer than sqrt(m / k) because the water it moves adds mass, an
 radiates waves (added mass and radiation damping from the preset's shipped Capytaine solve).
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,12 +33,17 @@ def main(args: Args) -> None:
     crossings = t[up] - z[up] * (t[up + 1] - t[up]) / (z[up + 1] - z[up])
     body = sim.body
     k = sim.params.rho * sim.params.g * np.pi * 0.5**2  # the water plane's stiffness
+    dry = 2 * np.pi * np.sqrt(body.mass / k)
+    if len(crossings) < 2 or len(z) < 20:  # no whole period to measure: say so, not "nan"
+        print(f"heave period: too short a run to measure ({len(crossings)} upward crossings in {args.t_end:g} s; it rings at over "
+              f"{dry:.3f} s: give --t-end {math.ceil(3 * dry)} or more)")  # fmt: skip
+        return
     print(
         f"heave period {np.diff(crossings).mean():.3f} s measured ({len(crossings) - 1} periods), "
-        f"{2 * np.pi * np.sqrt(body.mass / k):.3f} s without the added mass; "
+        f"{dry:.3f} s without the added mass; "
         f"amplitude from {abs(z[: len(z) // 10]).max():.4f} m to {abs(z[-len(z) // 10 :]).max():.4f} m"
     )
 
 
 if __name__ == "__main__":
-    main(tyro.cli(Args))
+    main(tyro.cli(Args, description=__doc__))

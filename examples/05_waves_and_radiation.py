@@ -5,6 +5,7 @@ the undisturbed waves only, then with the waves it radiates (added mass and radi
 the cube's shipped Capytaine solve. For waves a few body lengths long the difference is a third or more.
 """
 
+import sys
 from dataclasses import dataclass
 
 import tyro
@@ -35,6 +36,10 @@ def heave_amplitude(radiation: str, args: Args) -> float:
 
 
 def main(args: Args) -> None:
+    if args.t_end < 3 * args.period:  # the last third must hold a whole wave period to measure an amplitude
+        print(f"05_waves_and_radiation: error: --t-end {args.t_end:g} s is too short a run to measure: its last third must hold a "
+              f"wave period (give --t-end {3 * args.period:g} or more)", file=sys.stderr)  # fmt: skip
+        raise SystemExit(2)
     alone, with_water = heave_amplitude("none", args), heave_amplitude("bem", args)
     print(
         f"heave amplitude in {args.height:g} m waves of {args.period:g} s: {alone:.4f} m (Froude-Krylov only), {with_water:.4f} m "
@@ -43,4 +48,4 @@ def main(args: Args) -> None:
 
 
 if __name__ == "__main__":
-    main(tyro.cli(Args))
+    main(tyro.cli(Args, description=__doc__))

@@ -38,7 +38,7 @@ def main(args: Args) -> None:
     sim.forces.TERMS = (*sim.forces.TERMS, tether(args.stiffness))  # the registry line
     scene = with_overrides(load_scene("rest"), initial__position=(0.5, 0.0, -0.4), fluid__damping=0.0)
     run = Simulation(scene)
-    print("; ".join(run.notes) or "compiled")
+    print("; ".join(run.notes) or ("compiled" if run.compiled else "on the numpy reference"))
     x, t = [], []
     while run.state.t < args.t_end - 1e-9:
         run.step(4)
@@ -46,10 +46,14 @@ def main(args: Args) -> None:
         x.append(run.state.x_world[0])
     x, t = np.array(x), np.array(t)
     up = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
-    period = np.diff(t[up]).mean() if len(up) > 1 else math.nan
-    print(f"surge period {period:.3f} s on the tether; 2 pi sqrt(m / k) = {2 * math.pi * math.sqrt(run.body.mass / args.stiffness):.3f} s")
+    closed = 2 * math.pi * math.sqrt(run.body.mass / args.stiffness)
+    if len(up) > 1:
+        print(f"surge period {np.diff(t[up]).mean():.3f} s on the tether; 2 pi sqrt(m / k) = {closed:.3f} s")
+    else:  # no whole period to measure: say so, not "nan"
+        print(f"surge period: too short a run to measure ({len(up)} upward crossings in {args.t_end:g} s); 2 pi sqrt(m / k) = {closed:.3f} s: "
+              f"give --t-end {math.ceil(2 * closed)} or more")  # fmt: skip
     sim.forces.TERMS = sim.forces.TERMS[:-1]  # as it was
 
 
 if __name__ == "__main__":
-    main(tyro.cli(Args))
+    main(tyro.cli(Args, description=__doc__))

@@ -40,8 +40,10 @@ def main(args: Args) -> None:
     rows = pd.concat(pd.read_parquet(p) for p in sorted(Path(out).glob("chunk-*.parquet"))).sort_values("z0")
     linear = 2 * math.pi * math.sqrt(900.0 / (1000.0 * 9.81))  # m / (rho g A) for the 1 m cube: s rho_b / (rho_w g)
     for _, row in rows.iterrows():
-        print(f"dropped from {row['z0'] + 0.4:.3f} m above its rest: heave period {row['period']:.3f} s (linear: {linear:.3f} s)")
+        period = (f"{row['period']:.3f} s" if math.isfinite(row["period"])  # NaN: fewer than two bobs in the run, said so
+                  else f"too short a run to measure (give --t-end {math.ceil(3 * linear)} or more)")  # fmt: skip
+        print(f"dropped from {row['z0'] + 0.4:.3f} m above its rest: heave period {period} (linear: {linear:.3f} s)")
 
 
 if __name__ == "__main__":
-    main(tyro.cli(Args))
+    main(tyro.cli(Args, description=__doc__))

@@ -2,6 +2,7 @@
 
 import csv
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -35,6 +36,35 @@ def test_run_writes_the_promised_columns_and_rows(tmp_path, capsys):
     )
     summary = capsys.readouterr().out
     assert "z = -0.400000 m" in summary and "100 steps" in summary
+
+
+SPEEDS = re.compile(r"(\d+) steps in ([\d.e+-]+) s wall: ([\d.e+-]+)x real time for the whole run with its (\d+) rows; "
+                    r"stepping alone ([\d.e+-]+) s \(([\d,.e+-]+) us a step, ([\d.e+-]+)x real time; the rest: ")  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "flags",
+    [
+        ["--scene", "rest", "--t-end", "2", "--dt", "0.01", "--every", "1"],
+        ["--scene", "rm3", "--hydro", "linear", "--dt", "0.01", "--t-end", "10", "--every", "1"],
+    ],  # fmt: skip
+    ids=["one body", "several bodies"],
+)
+def test_the_summary_gives_the_whole_runs_speed_and_the_stepping_alone(flags, tmp_path):
+    """The summary's speed line (issue 39: the README's speeds are the stepping's, the tour's run printed the whole run's)
+    says both, labelled: the whole run with its rows, and the stepping alone (the time in the steps, as `bench` times it),
+    each consistent with its own seconds, the stepping taking part of the wall time; a row per step is in the CSV."""
+    out = tmp_path / "o.csv"
+    done = subprocess.run([sys.executable, "-m", "sim", "run", *flags, "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    m = SPEEDS.search(done.stdout)
+    assert m, done.stdout
+    steps, wall, whole, rows, stepping, us, alone = (float(v.replace(",", "")) for v in m.groups())
+    t = float(flags[flags.index("--t-end") + 1])
+    assert steps == round(t / 0.01) and rows == steps + 1 == len(out.read_text().splitlines()) - 1
+    assert 0 < stepping < wall and alone > whole
+    assert whole == pytest.approx(t / wall, rel=1.5e-2) and alone == pytest.approx(t / stepping, rel=1.5e-2)  # 3 digits each
+    assert us * 1e-6 * steps == pytest.approx(stepping, rel=1.5e-2)
 
 
 def test_flags_override_the_scene(tmp_path):
@@ -102,6 +132,19 @@ def test_help_says_where_unset_flags_come_from(capsys):
     assert e.value.code == 0
     text = capsys.readouterr().out
     assert "(default: from the scene)" in text and "{None}" not in text and "(default: None)" not in text
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_help_lists_every_preset(command):
+    """`python -m sim run --help` (and sweep's) names the presets --scene takes, each one (issue 39)."""
+    from sim.config import available_scenes
+
+    done = subprocess.run(
+        [sys.executable, "-m", "sim", command, "--help"], capture_output=True, text=True, env={**os.environ, "COLUMNS": "400"}
+    )
+    assert done.returncode == 0, done.stderr
+    line = next(line for line in done.stdout.splitlines() if "--scene" in line)
+    assert f"({', '.join(available_scenes())})" in line and len(available_scenes()) >= 10
 
 
 def test_missing_mesh_file_gets_one_clear_line(tmp_path, capsys):
@@ -302,3 +345,15 @@ def test_a_slow_run_says_how_long_it_will_take_at_its_pace(monkeypatch, capsys):
     assert len(notes) == 2
     assert "20 of 1,000 steps in 12 s" in notes[0] and "about 10 min more" in notes[0]
     assert "200 of 1,000 steps in 330 s" in notes[1] and "about 22 min more" in notes[1]
+
+
+@pytest.mark.slow  # a compile from an empty kernel cache: 20-60 s
+def test_bench_startup_says_how_each_cold_run_ran_in_whole_parentheses():
+    """`python -m sim bench --startup --presets drop`: its progress line closes every parenthesis it opens (it cut the
+    run's note at 100 characters, inside one) and says the cold run stayed on numpy; the table has the preset's row."""
+    env = {k: v for k, v in os.environ.items() if k != "FLOATSIM_BACKEND"}
+    done = subprocess.run([sys.executable, "-m", "sim", "bench", "--startup", "--presets", "drop"], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr[-2000:]
+    line = next(line for line in done.stderr.splitlines() if line.strip().startswith("drop:"))
+    assert line.count("(") == line.count(")") and "(on the numpy reference" in line, line
+    assert "| drop |" in done.stdout

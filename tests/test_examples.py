@@ -81,3 +81,25 @@ def test_07_dask_sweep_runs_on_a_cluster_and_finds_the_linear_period():
     first = next(line for line in out.splitlines() if line.startswith("dropped"))
     period, linear = numbers(first)[-2:]
     assert "backend dask" in out and abs(period / linear - 1) < 0.01
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+def test_every_examples_help_says_what_it_demonstrates(path):
+    """`python examples/NN_x.py --help` shows the script's docstring (issue 39: it showed the flags alone)."""
+    done = subprocess.run([sys.executable, str(path), "--help"], capture_output=True, text=True, timeout=120, cwd=ROOT, check=False)
+    title, body = path.read_text().split('"""')[1].split("\n", 1)
+    assert done.returncode == 0 and title.strip() in done.stdout and " ".join(body.split()[:8]) in " ".join(done.stdout.split())
+
+
+@pytest.mark.parametrize("name", ["04_decay_test.py", "06_custom_force_term.py"])
+def test_a_run_too_short_to_measure_says_so(name):
+    """A run with no whole period in it says it is too short and how long to run, instead of printing "nan" (issue 39)."""
+    out = run(name, "--t-end", "0.3")
+    assert "too short a run to measure" in out and "give --t-end" in out and "nan" not in out, out
+
+
+def test_a_swell_run_too_short_to_measure_is_one_line_and_exit_2():
+    """05's amplitude needs a wave period in the run's last third: a shorter run is one line and exit 2, not a traceback."""
+    done = subprocess.run([sys.executable, str(ROOT / "examples" / "05_waves_and_radiation.py"), "--t-end", "1"], capture_output=True,
+                          text=True, timeout=120, cwd=ROOT, check=False)  # fmt: skip
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "too short a run to measure" in done.stderr, done.stderr

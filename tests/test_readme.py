@@ -104,6 +104,27 @@ def test_the_tours_bench_line_works(capsys):
     assert "| model | samples | integrator | us/step |" in out and out.count("| implicit |") >= 3  # points, cells, panels
 
 
+@pytest.mark.slow
+def test_bench_says_how_long_it_takes_and_quick_is_the_first_table_alone():
+    """`python -m sim bench --quick` (issue 39): says first, before any row, what it runs and how long the whole benchmark
+    takes; then only the first table at N = 10, a row per model and integrator (4 points, 1 cells, 4 panels)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "sim", "bench", "--quick"], capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stderr.startswith("bench: the first table at N = 10 only (--quick): about"), done.stderr[:300]
+    rows = [line for line in done.stdout.splitlines() if re.match(r"\| (points|cells|panels) \|", line)]
+    assert len(rows) == 9 and all(r.split("|")[2].strip() in ("600", "12 triangles") for r in rows), rows
+    assert "ensemble of" not in done.stdout and "sweep of" not in done.stdout and "sea states" not in done.stdout
+
+
+def test_the_tours_bench_line_says_it_takes_minutes_and_how_to_cut_it():
+    """The README's bench line says how long it takes, and --quick (issue 39)."""
+    line = next(line for line in README.split("## A tour")[1].splitlines() if line.startswith("python -m sim bench"))
+    assert "min" in line and "--quick" in README.split("## A tour")[1]
+
+
 @pytest.mark.parametrize(
     "line",
     [line.split("#")[0].strip() for line in README.split("## A tour")[1].split("```")[1].splitlines() if line.startswith("python -m app")],
@@ -128,3 +149,45 @@ def test_the_tours_viewer_lines_serve_their_scene_and_run(line):
         assert app.sync().frame.t > 0.2 and app.address().startswith("http://")
     finally:
         app.stop()
+
+
+def test_the_viewer_page_answers_questions_and_leaves_measurements_to_performance():
+    """docs/viewer.md is sections a user looks for ("How do I ...", "What do ..."), none a wall of text, and the viewer's
+    costs (bandwidth, CPU, soak runs) sit in docs/performance.md (issue 39: one heading over ~6000 px of measurements)."""
+    viewer = (ROOT / "docs" / "viewer.md").read_text()
+    headings = re.findall(r"^## (.+)$", viewer, flags=re.M)
+    assert len(headings) >= 6 and all(h.startswith(("How do I", "What do")) for h in headings), headings
+    for section in viewer.split("\n## ")[1:]:
+        assert len(section.split()) < 700, section.splitlines()[0]
+    assert not re.search(r"MB/s|server CPU|app\.soak|cores", viewer)
+    costs = (ROOT / "docs" / "performance.md").read_text().split("## The viewer's costs")[1]
+    assert "MB/s" in costs and "app.soak" in costs and "server CPU" in costs
+
+
+QUOTED = re.compile(r"`(?:floatsim: error: )?((\w+) must be [^`]*?, got (-?[\d.e+-]+))`")
+"""A parameter's message quoted in the docs: `density must be >= 0.001, got -5.0` (with or without the CLI's prefix)."""
+
+
+def test_the_docs_quote_the_messages_the_code_gives():
+    """Every "KEY must be ..., got VALUE" the README and the docs quote is the message that value gets from the code, word
+    for word (issue 39: the API page quoted "density must be > 0" where the code says "density must be >= 0.001")."""
+    from sim.config import PARAMS, ConfigError, load_scene, with_overrides
+
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    quoted = [(page.name, *m) for page in pages for m in QUOTED.findall(page.read_text())]
+    assert len(quoted) >= 2, quoted  # the API page's and the sweeps page's at least
+    for page, message, key, value in quoted:
+        (param,) = [p for p in PARAMS.values() if p.key == key]
+        with pytest.raises(ConfigError) as e:
+            with_overrides(load_scene("rest"), **{f"{param.section}__{key}": float(value)})
+        assert str(e.value) == message, f"{page} quotes {message!r}; the code says {str(e.value)!r}"
+
+
+def test_the_tours_lines_say_which_extra_a_moored_scene_needs():
+    """A tour line running a scene with mooring lines says it needs `.[moorings]` (issue 39: the moored buoy's did not;
+    MoorDyn stays optional, see pyproject.toml)."""
+    from sim.config import load_scene
+
+    block = README.split("## A tour")[1].split("```bash")[1].split("```")[0]
+    moored = [line for line in block.splitlines() if (m := re.search(r"--scene (\S+)", line)) and load_scene(m.group(1)).moorings.lines]
+    assert moored and all('pip install -e ".[moorings]"' in line for line in moored), moored

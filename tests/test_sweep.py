@@ -4,6 +4,7 @@ found two independent ways (dynamics to rest, and the least potential over orien
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import signal
@@ -86,6 +87,37 @@ def test_a_worker_killed_mid_run_keeps_the_finished_chunks(tmp_path):
     done = subprocess.run([*args, "--resume"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0 and f"({written} already done, {16 - written} to run)" in done.stdout
     assert len(results(out)) == 32
+
+
+@pytest.mark.slow
+def test_a_small_sweep_on_every_core_is_cut_into_a_chunk_per_worker(tmp_path):
+    """The README's `sweep --param density=300:1500:7 --backend local` on 2 workers: 2 chunks (4 + 3 cases), not one chunk of
+    7 on one worker (issue 39); --resume on another backend keeps the sweep's own chunks and runs only the one lost."""
+    out = tmp_path / "s"
+    args = [sys.executable, "-m", "sim", "sweep", "--param", "density=300:1500:7", "--t-end", "0.5", "--out", str(out)]
+    done = subprocess.run([*args, "--backend", "local", "--workers", "2"], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "7 cases of 'damped' in 2 chunks of up to 4, backend local" in done.stdout
+    assert json.loads((out / "_manifest.json").read_text())["chunks"] == [[0, 1, 2, 3], [4, 5, 6]]
+    (out / "chunk-00001.parquet").unlink()
+    again = subprocess.run([*args, "--backend", "serial", "--resume"], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0 and "in 2 chunks of up to 4 (1 already done, 1 to run)" in again.stdout, again.stdout + again.stderr
+    assert len(results(out)) == 7
+
+
+def test_a_cube_heavier_than_water_is_reported_sunk_without_a_draft(tmp_path):
+    """`python -m sim sweep` over densities above water's (issue 39): those cubes end wholly under water, sinking; their
+    status says `sank` and their draft is NaN (it said `end` with a "draft" of 64 m), while the floating one keeps its
+    Archimedes draft."""
+    out = tmp_path / "s"
+    done = subprocess.run([sys.executable, "-m", "sim", "sweep", "--param", "density=900,1100,1500", "--t-end", "8", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "(3 cases: 1 end, 2 sank)" in done.stdout
+    rows = results(out).set_index("density")
+    assert list(rows.status) == ["end", "sank", "sank"]
+    assert rows.draft.loc[[1100.0, 1500.0]].isna().all() and rows.period.loc[[1100.0, 1500.0]].isna().all()
+    assert (rows.z.loc[[1100.0, 1500.0]] < -2.0).all() and 0.5 < rows.draft.loc[900.0] < 3**0.5  # still bobbing: under its diagonal
 
 
 @pytest.mark.parametrize(

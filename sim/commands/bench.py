@@ -7,6 +7,7 @@ import importlib.util
 import os
 import platform
 import statistics
+import sys
 import time
 from dataclasses import dataclass
 
@@ -52,6 +53,33 @@ class BenchArgs:
     empty kernel cache (a first run on a machine) and from the cache it left, for each preset (minutes each, cold)."""
     presets: tuple[str, ...] = ()
     """With --startup: the presets to time (all when empty)."""
+    quick: bool = False
+    """Only the first table at N = 10 (every model and integrator), in seconds: --sizes 10 --repeats 3 --ensemble 0
+    --no-radiation --no-waves --no-moorings --no-systems --sweep-cases 0. Without it every table takes minutes."""
+
+
+FULL_MINUTES = 6
+"""Wall minutes of every table with the kernels compiled, on this project's 2-core machine when nothing else runs
+(issue 39; 15.6 min measured with a load of 7-9 from other work: docs/performance.md)."""
+QUICK_SECONDS = 10
+"""Wall seconds of --quick there (9.2 s measured with the load of 7)."""
+
+
+def announce(args: BenchArgs, base, cells) -> None:
+    """Say, before the first row, how long the run takes and how to cut it: the whole benchmark is minutes of silence
+    but for its progress bar. Kernels not compiled on this machine yet add their compile (counted for the first table)."""
+    from ..kernels import cached
+
+    scenes = [
+        with_overrides(base, fluid__forces=f, step__integrator=i, body__points_per_edge=n or base.body.points_per_edge) for f, n, i in cells
+    ]
+    missing = {spec for spec in (Simulation(scene, backend="numpy").spec for scene in scenes) if not cached(spec)}
+    extra = f"; first {len(missing)} of its kernels compile (15-40 s each, once for this machine)" if missing else ""
+    said = (f"the first table at N = 10 only (--quick): about {QUICK_SECONDS} s" if args.quick else
+            f"every table, about {FULL_MINUTES} min on a free 2-core machine (longer on a busy one)" if args.ensemble and args.radiation and args.waves and args.moorings
+            and args.systems and args.sweep_cases else f"the tables asked (every table: about {FULL_MINUTES} min on a free 2-core machine)")  # fmt: skip
+    hint = "" if args.quick else f"; --quick: the first table at N = 10 in about {QUICK_SECONDS} s; --help: each table's switch"
+    print(f"bench: {said} with the kernels compiled{extra}{hint}", file=sys.stderr, flush=True)
 
 
 def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
@@ -92,10 +120,14 @@ def bench(args: BenchArgs) -> int:
     from ..ensemble import Ensemble
     from ..kernels import warm_up
 
+    if args.quick:
+        args = dataclasses.replace(args, sizes=(10,), repeats=min(args.repeats, 3), ensemble=0, radiation=False, waves=False, moorings=False,
+                                   systems=False, sweep_cases=0)  # fmt: skip
     compile_s = 0.0
     base = load_scene(args.scene)
     cells = ([("points", n, name) for n in args.sizes for name in args.integrators] + [("cells", n, "implicit") for n in args.sizes]
              + [("panels", 0, name) for name in args.integrators])  # fmt: skip
+    announce(args, base, cells)
     bar = progress_bar(len(cells) + (len(args.integrators) if args.ensemble else 0) + (2 if args.waves else 0), unit="cell")
     rows = []
     for forces, n, name in cells:

@@ -12,7 +12,7 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from ..config import PARAMS, ConfigError, SceneConfig, load_scene, with_overrides
+from ..config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
 from ..errors import WriteFailed
 from ..hydrostatics import describe_rest
 from ..limits import step_time
@@ -32,8 +32,10 @@ MAX_STEPS = 100_000_000
 class _RunBase:
     """Run a scene headless and write its trajectory to CSV. Flags override the scene."""
 
-    scene: str = "drop"
-    """Preset name (assets/scenes/NAME.toml) or path to a scene .toml."""
+    scene: Annotated[
+        str, tyro.conf.arg(metavar="NAME|FILE", help=f"Preset name ({', '.join(available_scenes())}) or path to a scene .toml.")
+    ] = "drop"
+    """Preset name or path to a scene .toml (the presets are listed in --help)."""
     z0: Annotated[float | None, tyro.conf.arg(metavar="FLOAT", help_behavior_hint=FROM_SCENE)] = None
     """Initial height of the centre of mass, m."""
     q0: Annotated[tuple[float, float, float, float] | None, tyro.conf.arg(metavar="QW QX QY QZ", help_behavior_hint=FROM_SCENE)] = None
@@ -192,7 +194,7 @@ def run(args: RunArgs, watch=None) -> int:
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     first = sim.frame()
     started = time.perf_counter()
-    error, rows = stream(sim, CSV_COLUMNS, args, n_steps, watch)
+    error, rows, stepping = stream(sim, CSV_COLUMNS, args, n_steps, watch)
     if error in (WRITE_FAILED, INTERRUPTED):
         return 2 if error == WRITE_FAILED else EXIT
     for note in sim.validity_notes():
@@ -219,23 +221,36 @@ def run(args: RunArgs, watch=None) -> int:
         n = len(last.lines)
         print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring_force):.4g} N, largest fairlead tension "
               f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
-    rate = steps / wall if wall > 0 else math.inf
-    print(f"{steps} steps in {wall:.3g} s wall ({rate:.0f} steps/s, {last.t / wall if wall > 0 else math.inf:.3g}x real time)"
-          + (f"; {rows} rows -> {args.out}" if args.out else ""))  # fmt: skip
+    print(speeds(steps, last.t, wall, stepping, rows if args.out else None) + (f" -> {args.out}" if args.out else ""))
     return 3 if error else 0
+
+
+def speeds(steps: int, t: float, wall: float, stepping: float, rows: int | None, checked: bool = True) -> str:
+    """The summary's speed line: the whole run (its rows' frames and writes, the energy check after every batch of steps
+    when `checked`, the progress bar) and the stepping alone, each as x real time. `python -m sim bench` times the
+    stepping alone, in long batches (docs/performance.md)."""
+    x = lambda seconds: f"{t / seconds:.3g}x real time" if seconds > 0 else "too fast to time"  # noqa: E731
+    us = stepping / steps * 1e6 if steps else 0.0
+    per = (f"{us:.3g}" if us < 1000 else f"{us:,.0f}") + " us a step, " if us > 0 else ""
+    rest = (("the energy check after every batch of steps" + (" and writing the rows" if rows is not None else ""))
+            if checked else "each row's frame and write" if rows is not None else "")  # fmt: skip
+    return (f"{steps} steps in {wall:.3g} s wall: {x(wall)} for the whole run{f' with its {rows} rows' if rows is not None else ''}; "
+            f"stepping alone {stepping:.3g} s ({per}{x(stepping)}{f'; the rest: {rest}' if rest else ''})")  # fmt: skip
 
 
 INTERRUPTED = "interrupted"
 WRITE_FAILED = "write failed"
 
 
-def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int]:
+def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int, float]:
     """Step `sim` (a Simulation, or anything with step, frame and state.t) to n_steps, writing `columns` and a row
-    every args.every steps to args.out (if given), with a progress bar. (error, rows): error is the divergence
+    every args.every steps to args.out (if given), with a progress bar. (error, rows, stepping): error is the divergence
     message, INTERRUPTED after Ctrl-C or WRITE_FAILED (said here, with the rows kept), or None. `rows` counts the
-    whole rows in the file: a write that fails (a full disk) cuts it back to the last of them."""
+    whole rows in the file: a write that fails (a full disk) cuts it back to the last of them. `stepping`: wall seconds
+    spent stepping alone (in `sim.step`, less its energy check after each call), without the rows, the bar and the rest."""
     out = LineFile(args.out) if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)
+    clock = [0.0]
 
     def write(frame):
         if out:
@@ -248,12 +263,12 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
         if watch is not None:
             watch(sim)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"), StopOnCtrlC() as stop:
-            error = _advance(sim, n_steps, args.every, bar, write, watch, stop)
+            error = _advance(sim, n_steps, args.every, bar, write if out else None, watch, stop, clock)
         if out:
             out.close()  # the last rows reach the disk here: this can fail too
     except WriteFailed as e:
         print(f"floatsim: {e} ({kept_rows(out)})", file=sys.stderr)
-        return WRITE_FAILED, data_rows(out)
+        return WRITE_FAILED, data_rows(out), clock[0]
     finally:
         bar.close()
         if out:
@@ -263,7 +278,7 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
         print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {n_steps * sim.dt:g} s: {said}", file=sys.stderr)
     elif error:
         print(f"floatsim: {error}" + (f" (kept {data_rows(out)} rows)" if out else ""), file=sys.stderr)
-    return error, data_rows(out)
+    return error, data_rows(out), clock[0]
 
 
 def data_rows(out: LineFile | None) -> int:
@@ -302,10 +317,10 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
 
 
-def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, stop=None) -> str | None:
+def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, stop=None, clock=None) -> str | None:
     """Step to n_steps, writing a frame every `every` steps (and calling `watch` every `watch.every`);
     the divergence message if the run blows up, INTERRUPTED after Ctrl-C (checked every CHECK_SECONDS
-    of stepping at most)."""
+    of stepping at most). clock[0] sums the seconds of stepping alone (sim.step less its energy check)."""
     done = 0
     chunk = every if watch is None else math.gcd(every, watch.every)
     per_step = None  # seconds, measured
@@ -318,11 +333,14 @@ def _advance(sim: Simulation, n_steps: int, every: int, bar, write, watch=None, 
             k = min(k, 1 if per_step is None else max(1, int(CHECK_SECONDS / per_step)))  # the first step measures
             began = time.perf_counter()
             sim.step(k)
-            per_step = max((time.perf_counter() - began) / k, 1e-9)
+            spent = time.perf_counter() - began
+            per_step = max(spent / k, 1e-9)
+            if clock is not None:
+                clock[0] += max(spent - getattr(sim, "check_seconds", 0.0), 0.0)
             done += k
             bar.update(k)
             pace.tell(done)
-            if done % every == 0 or done == n_steps:
+            if write is not None and (done % every == 0 or done == n_steps):
                 write(sim.frame())
             if stop is not None and stop.asked:
                 return INTERRUPTED

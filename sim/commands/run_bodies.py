@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 
@@ -14,7 +13,7 @@ from .interrupt import EXIT
 
 def run_bodies(args, scene: SceneConfig) -> int:
     from ..system import Assembly
-    from .run import INTERRUPTED, WRITE_FAILED, stream
+    from .run import INTERRUPTED, WRITE_FAILED, speeds, stream
 
     run = Assembly(scene)
     n_steps = max(0, round(scene.step.t_end / run.dt))
@@ -26,7 +25,7 @@ def run_bodies(args, scene: SceneConfig) -> int:
         print(f"floatsim: note: {note}", file=sys.stderr)
     first = run.frame()
     started = time.perf_counter()
-    error, rows = stream(run, run.columns(), args, n_steps)
+    error, rows, stepping = stream(run, run.columns(), args, n_steps)
     if error in (WRITE_FAILED, INTERRUPTED):
         return 2 if error == WRITE_FAILED else EXIT
     wall = time.perf_counter() - started
@@ -43,8 +42,8 @@ def run_bodies(args, scene: SceneConfig) -> int:
         )
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     steps = round(last.t / run.dt)
-    print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J; {steps} steps in {wall:.3g} s wall "
-          f"({last.t / wall if wall > 0 else math.inf:.3g}x real time)" + (f"; {rows} rows -> {args.out}" if args.out else ""))  # fmt: skip
+    print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J")
+    print(speeds(steps, last.t, wall, stepping, rows if args.out else None, checked=False) + (f" -> {args.out}" if args.out else ""))
     return 3 if error else 0
 
 

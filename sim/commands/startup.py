@@ -45,6 +45,16 @@ def timed(command: list[str], cache: str) -> tuple[float, float, int, str]:
     return wall, usage.ru_maxrss / 1024, child.returncode, said  # ru_maxrss: KiB on Linux
 
 
+def how_it_ran(said: str) -> str:
+    """What a cold run's announcement says, in a few words and whole parentheses (the note itself is long and
+    holds parentheses of its own: cut at a fixed length it left one open)."""
+    if "runs there" in said:
+        return " (on the numpy reference: a short run does not wait for the compiler)"
+    if "compil" in said:
+        return " (compiled its kernels first)"
+    return ""
+
+
 def startup(presets: tuple[str, ...], t_end: float) -> int:
     names = presets or tuple(one_body_scenes())  # (several bodies have no compiled twin yet)
     unknown = [n for n in names if n not in available_scenes()]
@@ -60,7 +70,7 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
             (name, f"{cold[0]:.1f}", f"{compiled[0]:.1f}", f"{compiled[1]:.0f}", f"{warm[0]:.1f}", str(cold[2] or compiled[2] or warm[2]))
         )
         print(
-            f"  {name}: cold {cold[0]:.1f} s ({cold[3][:100]}), compile {compiled[0]:.1f} s, warm {warm[0]:.1f} s",
+            f"  {name}: cold {cold[0]:.1f} s{how_it_ran(cold[3])}, compile {compiled[0]:.1f} s, warm {warm[0]:.1f} s",
             file=sys.stderr,
             flush=True,
         )

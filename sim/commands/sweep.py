@@ -7,6 +7,8 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
+import os
 import re
 import sys
 import time
@@ -17,6 +19,7 @@ from typing import Annotated, Literal
 
 import tyro
 
+from ..config import available_scenes
 from ..errors import ConfigError, WriteFailed
 from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from ..sweeps.backends import WorkerLost, run
@@ -39,8 +42,11 @@ class SweepArgs:
     NAME: a body, water, wave or step parameter (density, damping, drag_coefficient, hs, integrator, ...), z0, tilt or orientation_seed."""
     file: str | None = None
     """A TOML sweep file (scene, params, set, settle, ...); flags given here override it."""
-    scene: str | None = None
-    """Preset name or scene .toml (default: damped)."""
+    scene: Annotated[
+        str | None,
+        tyro.conf.arg(metavar="NAME|FILE", help=f"Preset name ({', '.join(available_scenes())}) or scene .toml (default: damped)."),
+    ] = None
+    """Preset name or scene .toml (default: damped; the presets are listed in --help)."""
     set: Annotated[tuple[str, ...], tyro.conf.UseAppendAction] = ()
     """SECTION.KEY=VALUE, repeatable: a fixed change to the scene for every case (e.g. fluid.forces=panels)."""
     t_end: float | None = None
@@ -62,7 +68,8 @@ class SweepArgs:
     timeout: float = 10.0
     """Seconds to wait for the scheduler to answer."""
     chunk: int | None = None
-    """Cases per chunk (default 64; cases that cannot share an ensemble never share a chunk)."""
+    """Cases per chunk (default: 64, or fewer so that every worker gets one: ceil(cases / workers) on local and a dask
+    LocalCluster; --resume keeps the sweep's own; cases that cannot share an ensemble never share a chunk)."""
     resume: bool = False
     """Finish a sweep in --out: run only the chunks not done (a chunk file missing, unreadable or unlike its checksum in the manifest runs again)."""
     history_every: int | None = None
@@ -118,7 +125,9 @@ def build(args: SweepArgs) -> Sweep:
         value = flag if flag is not None else data.get(key)
         if value is not None:
             overrides[f"step__{key}"] = value
-    chunk = args.chunk if args.chunk is not None else whole(data.get("chunk", 64), "chunk")
+    chunk = args.chunk if args.chunk is not None else whole(data["chunk"], "chunk") if "chunk" in data else None
+    if chunk is None:
+        chunk = resumed_chunk(args) or default_chunk(math.prod(len(v) for v in params.values()), args)
     if chunk < 1:
         raise ConfigError(f"--chunk must be >= 1, got {chunk}")
     every = args.history_every if args.history_every is not None else whole(data.get("history_every", 0), "history_every")
@@ -135,6 +144,31 @@ def build(args: SweepArgs) -> Sweep:
     for case in sweep.cases():  # any bad value fails here, with its one line, before anything runs
         case_scene(base, case)
     return sweep
+
+
+CHUNK = 64
+"""Most cases in a chunk unless asked (--chunk)."""
+
+
+def default_chunk(cases: int, args: SweepArgs) -> int:
+    """CHUNK, or fewer so that each worker of `local` or a dask LocalCluster gets one (7 cases on 2 cores ran as one
+    chunk of 7 on one core): ceil(cases / workers). A running scheduler's workers are not known before it answers: CHUNK."""
+    if args.scheduler or args.backend == "serial":
+        return CHUNK
+    workers = args.workers or os.cpu_count() or 1
+    return max(1, min(CHUNK, math.ceil(cases / workers)))
+
+
+def resumed_chunk(args: SweepArgs) -> int | None:
+    """With --resume and no --chunk: the chunk size the sweep in --out was started with (its chunks, and its key,
+    depend on it, and the default depends on the workers, which may differ this time)."""
+    if not args.resume:
+        return None
+    try:
+        chunk = json.loads((Path(args.out) / MANIFEST).read_text()).get("chunk")
+    except (OSError, ValueError, AttributeError):
+        return None  # no manifest, or a damaged one: open_folder says so
+    return chunk if isinstance(chunk, int) and not isinstance(chunk, bool) and chunk >= 1 else None
 
 
 def check_size(sweep: Sweep) -> None:
@@ -186,7 +220,7 @@ def sweep(args: SweepArgs) -> int:
     except OSError as e:
         raise ConfigError(f"--out {out}: cannot write there ({e.strerror})") from None
     skipped = len(plan) - len(todo)
-    print(f"sweep {key}: {len(cases)} cases of '{base.name}' in {len(plan)} chunks"
+    print(f"sweep {key}: {len(cases)} cases of '{base.name}' in {len(plan)} chunks of up to {spec.chunk}"
           + (f" ({skipped} already done, {len(todo)} to run)" if skipped else "") + f", backend {backend}", flush=True)  # fmt: skip
     bar = progress_bar(sum(len(idx) for _, idx in todo), unit="case", flag=args.progress)
     statuses: Counter = Counter()

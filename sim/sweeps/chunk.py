@@ -1,7 +1,8 @@
 """One chunk of a sweep (sim/grid.py): its cases advanced together in one ensemble to the end or,
 with `settle`, each until it is at rest; then a row of results per case, as plain columns.
 
-At rest means: at two checks one simulated second apart, |u| and |omega| x radius below 1e-3 sqrt(g L)
+A case that ends wholly under water and heavier than the water it displaces has status 'sank' and no draft or
+period (NaN): it is falling, not floating. At rest means: at two checks one simulated second apart, |u| and |omega| x radius below 1e-3 sqrt(g L)
 and the net force and torque below 1e-3 of the weight (and weight x radius). A case's numbers depend
 on itself alone (each body steps on its own in the compiled ensemble), so chunks can run anywhere.
 """
@@ -32,6 +33,11 @@ def at_rest(sim) -> bool:
     weight = body.mass * g
     return bool(np.linalg.norm(f.u_world) < REST * scale and np.linalg.norm(f.omega_world) * body.radius < REST * scale
                 and np.linalg.norm(f.force_world) < REST * weight and np.linalg.norm(f.torque_world) < REST * weight * body.radius)  # fmt: skip
+
+
+def sinks(sim) -> bool:
+    """The body weighs more than the water it displaces wholly under (it cannot float: no draft, no period of heave)."""
+    return sim.body.mass > sim.params.rho * sim.body.volume
 
 
 def nearest_face_tilt(body, q: np.ndarray) -> float:
@@ -114,12 +120,13 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
         rows[key] = []
     for j, s in enumerate(ensemble.sims):
         f = s.frame()
-        status = "diverged" if ensemble.diverged[j] else ("rest" if ensemble.stopped[j] else "end")
         upto = t_samples <= f.t + 1e-9
         vertices = s.body.mesh_vertices @ quat_to_matrix(f.q_world_body).T + f.x_world
+        sank = sinks(s) and float(vertices[:, 2].max()) < f.eta  # heavier than the water it displaces, and all of it under
+        status = "diverged" if ensemble.diverged[j] else ("rest" if ensemble.stopped[j] else "sank" if sank else "end")
         values = (status, f.t, rest_time[j], *f.x_world, *f.q_world_body, float(np.linalg.norm(f.u_world)), float(np.linalg.norm(f.omega_world)),
-                  f.E_total, nearest_face_tilt(s.body, f.q_world_body), -float(vertices[:, 2].min()),
-                  period(t_samples[upto], z_samples[upto, j]))  # fmt: skip
+                  f.E_total, nearest_face_tilt(s.body, f.q_world_body), math.nan if sank else -float(vertices[:, 2].min()),
+                  math.nan if sank else period(t_samples[upto], z_samples[upto, j]))  # fmt: skip
         for key, v in zip(SUMMARY, values):
             rows[key].append(v)
     return rows, history

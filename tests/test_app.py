@@ -596,8 +596,8 @@ def _replayed_seas(html: str) -> list[tuple[float, np.ndarray]]:
         at += length
     seas = []
     for t, m in doc["messages"]:
-        if "/waves/" in m.get("name", "") and "vertices" in m.get("updates", {}):
-            ref = m["updates"]["vertices"]
+        if "/waves/" in m.get("name", "") and "vertices" in (m.get("updates") or m.get("props") or {}):  # an update, or the mesh made
+            ref = (m.get("updates") or m["props"])["vertices"]
             start, length = spans[ref["__binary_index"]]
             seas.append((t, np.frombuffer(inner[start : start + length], dtype=ref["dtype"]).reshape(-1, 3)))
     return seas

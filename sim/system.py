@@ -555,20 +555,34 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     return system, replace(rest, v=_projected(system, rest, starts))
 
 
+def moored_body(scene) -> int | None:
+    """The index of the body the scene's mooring lines hold ([moorings] body, else the first); None without lines."""
+    from .config import moored
+
+    if not moored(scene):
+        return None
+    return [e.name for e in scene.bodies].index(scene.moorings.body) if scene.moorings.body else 0
+
+
+def lines_scene(scene, k: int):
+    """The scene as the lines of body k see it: its [initial] table is that body's (where their fairleads start)."""
+    return replace(scene, initial=scene.bodies[k].initial)
+
+
 def moored_lowest(scene, models: list, starts: list) -> float | None:
     """Where a moored scene's solve grid starts: below half the lines' natural frequency for all the bodies' mass
     (the slowest swing carries every body the joints hold; the whole mass errs low, the safe side); None unmoored.
     The scene's start is its rest with the lines in place (a preset sets the moored body's mass so that it is)."""
-    from .config import moored
     from .radiation import lowest_frequency
     from .rotation import quat_to_matrix
 
-    if not moored(scene):
+    k = moored_body(scene)
+    if k is None:
         return None
-    k = [e.name for e in scene.bodies].index(scene.moorings.body) if scene.moorings.body else 0
     q = np.asarray(scene.bodies[k].initial.orientation, float)
-    return lowest_frequency(replace(scene, initial=scene.bodies[k].initial), sum(m.body.mass for m in models), starts[k].x_world,
-                            quat_to_matrix(q / np.linalg.norm(q)))  # fmt: skip
+    return lowest_frequency(
+        lines_scene(scene, k), sum(m.body.mass for m in models), starts[k].x_world, quat_to_matrix(q / np.linalg.norm(q))
+    )
 
 
 def _projected(system: System, s: SystemState, starts) -> np.ndarray:
@@ -600,15 +614,13 @@ class Assembly:
 
     def __init__(self, scene: SceneConfig, backend: str | None = None):
         from .compiling import kernels_ready
-        from .config import moored
         from .simulation import default_backend
 
         self.scene = scene
         self.system, self.state = build(scene)
         self.start = self.state
         self.dt = float(scene.step.dt)
-        names = [m.name for m in self.system.members]
-        self.moored = (names.index(scene.moorings.body) if scene.moorings.body else 0) if moored(scene) else None
+        self.moored = moored_body(scene)
         """The index of the body the mooring lines hold (None: no lines)."""
         self.moorings = self._moorings()
         self.notes: list[str] = []
@@ -664,7 +676,7 @@ class Assembly:
         k, s = self.moored, self.start
         pose = self.system.pose(s)
         nu = pose.J[k] @ s.v
-        lines = Moorings.of_scene(replace(self.scene, initial=self.scene.bodies[k].initial), pose.x[k], pose.R[k], nu[:3], nu[3:])
+        lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
         self.system.held[k] = lines.load.copy()
         return lines
 

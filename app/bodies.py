@@ -22,10 +22,10 @@ from typing import Any
 import numpy as np
 import viser
 
+from sim.assembly import Assembly, AssemblyFrame
 from sim.compiling import Compiler, Loader, kernels_ready
 from sim.errors import SimulationDiverged
 from sim.simulation import default_backend
-from sim.system import Assembly, AssemblyFrame
 
 from .access import viewer_address
 from .controls import Bound, _control

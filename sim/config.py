@@ -462,17 +462,38 @@ def _check_steepness(w, g: float) -> None:
                           f"(wavelength {wavelength:.3g} m at period {period:g} s); use a smaller height or a longer period")  # fmt: skip
 
 
+ENTRY_KEYS = {p.key: p.section for name in ENTRY_SECTIONS for p in SECTIONS[name]}
+"""A body's own parameters (its shape, pose and joint) by key, and the table each belongs to."""
+
+
+def body_names(scene: SceneConfig) -> list[str]:
+    """The scene's bodies by name: its [[bodies]], or the one body of a one-body scene, named `body`."""
+    return [e.name for e in scene.bodies] if scene.bodies else ["body"]
+
+
 def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:
-    """Return `scene` with the given section fields replaced, e.g. body__density=500; validated.
-    None means 'keep' (an unset flag)."""
+    """Return `scene` with the given fields replaced, validated: 'section__key' (fluid__damping=100) or a body's own
+    parameter as 'BODY__key', BODY a body's name (float__pto_damping=1e6 in a scene of several bodies; `body` in a
+    one-body scene: body__density=500, body__pto_damping=...). None means 'keep' (an unset flag)."""
     sections: dict[str, dict] = {}
+    entries: dict[str, dict] = {}
     for key, value in changes.items():
         if value is None:
             continue
-        section, name = key.split("__")
+        section, _, name = key.partition("__")
+        if scene.bodies and section in body_names(scene) and name in ENTRY_KEYS | {"forces": None}:
+            entries.setdefault(section, {})[name] = value
+            continue
+        if section == "body" and not scene.bodies and name in ENTRY_KEYS:
+            section = ENTRY_KEYS[name]  # the one body's pose or joint, named as a body's
         if section not in SECTION_TYPES or name not in {p.key for p in SECTIONS[section]}:
-            raise ConfigError(f"unknown scene parameter '{section}.{name}'")
+            raise ConfigError(_unknown(scene, section, name))
+        if scene.bodies and section in ENTRY_SECTIONS and value != getattr(getattr(scene, section), name):
+            raise ConfigError(f"'{section}.{name}': this scene's bodies are its [[bodies]] ({', '.join(body_names(scene))}): name the "
+                              f"body, e.g. {body_names(scene)[-1]}.{name}")  # fmt: skip
         sections.setdefault(section, {})[name] = value
+    if entries:
+        scene = dataclasses.replace(scene, bodies=tuple(_entry_with(e, entries.get(e.name, {})) for e in scene.bodies))
     if sections.get("body", {}).get("mesh") and "shape" not in sections["body"]:
         sections["body"]["shape"] = "mesh"  # --mesh FILE alone means: this file is the body
     if (
@@ -486,3 +507,27 @@ def with_overrides(scene: SceneConfig, **changes) -> SceneConfig:
         sections["body"]["mass"] = None  # an explicit density wins over a preset's mass
     replaced = {sec: dataclasses.replace(getattr(scene, sec), **vals) for sec, vals in sections.items()}
     return validate(dataclasses.replace(scene, **replaced))
+
+
+def _entry_with(entry: BodyEntry, changes: dict) -> BodyEntry:
+    """A [[bodies]] entry with some of its own parameters (ENTRY_KEYS, forces) replaced (a density wins over a mass)."""
+    tables: dict[str, dict] = {}
+    for key, value in changes.items():
+        if key != "forces":
+            tables.setdefault(ENTRY_KEYS[key], {})[key] = value
+    if "density" in tables.get("body", {}):
+        tables["body"]["mass"] = None
+    own = {"forces": changes["forces"]} if "forces" in changes else {}
+    return dataclasses.replace(entry, **own, **{t: dataclasses.replace(getattr(entry, t), **v) for t, v in tables.items()})
+
+
+def _unknown(scene: SceneConfig, section: str, name: str) -> str:
+    """The one line for a parameter no scene has: what a scene's parameters are named."""
+    bodies = body_names(scene)
+    if section not in SECTION_TYPES and section not in bodies and scene.bodies:
+        return f"unknown scene parameter '{section}.{name}': '{section}' is not a section or one of the bodies ({', '.join(bodies)})"
+    if section in bodies and scene.bodies:
+        return f"unknown parameter '{name}' of body {section!r} (a body's are: {', '.join(sorted(ENTRY_KEYS))}, forces)"
+    if section not in SECTION_TYPES and name in ENTRY_KEYS:
+        return f"unknown scene parameter '{section}.{name}': the one body of this scene is named 'body' (body.{name})"
+    return f"unknown scene parameter '{section}.{name}'"

@@ -12,7 +12,7 @@ import numpy as np
 from . import stability
 from .body import Body, make_body, make_mesh_body
 from .config import SceneConfig, diffracting, moored, validate, with_overrides
-from .errors import ConfigError, SimulationDiverged
+from .errors import SimulationDiverged
 from .forces import Model, hydrostatic_energy
 from .hydrostatics import sampled_model_warning
 from .integrators import make_integrator
@@ -200,12 +200,23 @@ GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", 
 
 
 class Simulation:
-    """Owns the scene, body, water, model, integrator and state. Not thread-safe: one thread drives it.
+    """A running scene: steps, frames, resets and updates any scene. Not thread-safe: one thread drives it.
+
+    A scene of several bodies ([[bodies]]) comes back as its subclass for systems (system.Assembly), with the same
+    methods: step, frame, reset, update (a body's parameters named 'BODY__key', config.with_overrides), columns,
+    use_backend, close. This class runs one body: it owns the scene, body, water, model, integrator and state.
 
     `scene` always describes what runs: `update` changes it and rebuilds only what the change
     touches. backend 'numba' advances fixed-step integrators that have a compiled twin many steps
     per call (GIL released); 'numpy' is the plain reference the tests compare it with.
     """
+
+    def __new__(cls, scene: SceneConfig, *args, **kwargs):
+        if cls is Simulation and getattr(scene, "bodies", ()):
+            from .assembly import Assembly
+
+            return super().__new__(Assembly)
+        return super().__new__(cls)
 
     def __init__(self, scene: SceneConfig, body: Body | None = None, backend: str | None = None, mesh=None):
         """`scene` is checked here too (a hand-built SceneConfig gets the same one-line ConfigError as a
@@ -216,9 +227,6 @@ class Simulation:
             scene = with_overrides(scene, body__shape="mesh", body__mesh=name)
         self._mesh = mesh
         scene = validate(scene)
-        if scene.bodies:
-            raise ConfigError(f"scene {scene.name!r} has several bodies ([[bodies]]): run it with sim.system.Assembly (as `python -m sim run`, "
-                              "the viewer and sweeps do); Simulation and the studies take one-body scenes")  # fmt: skip
         self.scene = scene
         self.backend = backend or default_backend()
         self.notes: list[str] = []
@@ -352,6 +360,32 @@ class Simulation:
                 frame = dataclasses.replace(frame, P_pto=j.damping * rate * rate, E_pto=self.pto_energy, joint_axis=axis)
             self._frame, self._frame_key = frame, key
         return self._frame
+
+    def columns(self) -> list[str]:
+        """The CSV's header (Frame.row gives a row)."""
+        return list(CSV_COLUMNS)
+
+    @property
+    def n_samples(self) -> int:
+        """The body's samples (a system: its bodies' together)."""
+        return self.body.n_samples
+
+    def close(self) -> None:
+        """Let go of what runs beside the body (MoorDyn's lines)."""
+        if self.moorings is not None:
+            self.moorings.close()
+
+    @property
+    def kernels_ready(self) -> bool:
+        """Whether the compiled kernels can be used at once: a twin exists and this machine compiled it before."""
+        from .compiling import kernels_ready
+
+        return self.has_twin and kernels_ready(self.spec)
+
+    @property
+    def specs(self) -> list:
+        """The kernels.Spec the scene's compiled kernels specialise on (one here; a system's bodies may have several)."""
+        return [self.spec]
 
     @property
     def compiled(self) -> bool:

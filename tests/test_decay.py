@@ -57,7 +57,7 @@ def test_decay_command_writes_its_numbers_and_figure(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, message", [(["--tilt", "95"], "--tilt must be"), (["--duration", "0"], "--duration must be"),
-                                           (["--scene", "nosuch"], "unknown scene")])  # fmt: skip
+                                           (["--scene", "nosuch"], "unknown scene"), (["--scene", "rm3"], "has several bodies")])  # fmt: skip
 def test_decay_command_bad_input_is_one_line(argv, message, capsys):
     assert studies_main(["decay", *argv]) == 2
     err = capsys.readouterr().err.strip().splitlines()

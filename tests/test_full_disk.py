@@ -60,7 +60,7 @@ def assert_cut_at_a_whole_row(csv: Path, said: str) -> None:
     assert rows.shape[0] == kept and np.isfinite(rows).all()
 
 
-@pytest.mark.parametrize("scene", ["drop", "rm3"])  # one body; several (sim/commands/run_bodies.py)
+@pytest.mark.parametrize("scene", ["drop", "rm3"])  # one body; several
 def test_a_run_onto_a_full_disk_keeps_whole_rows_and_says_how_many(scene, tmp_path):
     with full_disk(tmp_path / "disk") as disk:
         csv = disk / "x.csv"

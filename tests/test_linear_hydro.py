@@ -166,11 +166,11 @@ def test_the_exact_stepper_keeps_the_frequency_domains_steady_state(period):
 def test_energy_closes_to_fourth_order_when_stepped_exactly():
     """The kicked float in still water, stepped exactly: the energies, the take-off's and the radiated waves' add up to the
     start's, the gap falling 16-fold when dt halves (Simpson's rule on the absorbed and radiated power: fourth order)."""
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
     errors = []
     for dt in (0.2, 0.1):
-        run = Assembly(kicked_float(fluid__hydro="linear", step__dt=dt))
+        run = Simulation(kicked_float(fluid__hydro="linear", step__dt=dt))
         assert run.exact is not None and any("stepped exactly" in note for note in run.notes)
         start = run.frame()
         run.step(round(30.0 / dt))
@@ -183,13 +183,13 @@ def test_energy_closes_to_fourth_order_when_stepped_exactly():
 
 def test_a_linear_system_that_turns_is_stepped_by_the_general_scheme():
     """rm3 with its spar on a planar joint (surge, heave, pitch) is not linear in its coordinates: Stormer-Verlet steps it."""
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
     base = rm3()
     spar = dataclasses.replace(
         base.bodies[0], constraint=dataclasses.replace(base.bodies[0].constraint, joint="planar", axis=(0.0, 1.0, 0.0))
     )
-    run = Assembly(dataclasses.replace(base, bodies=(spar, *base.bodies[1:])))
+    run = Simulation(dataclasses.replace(base, bodies=(spar, *base.bodies[1:])))
     assert run.exact is None and not any("stepped exactly" in note for note in run.notes)
     run.step(20)
     assert run.state.is_finite() and abs(run.state.t - 20 * run.dt) < 1e-9
@@ -215,13 +215,13 @@ def test_the_linear_froude_krylov_force_acts_where_the_body_is():
 def test_a_horizontal_slide_in_waves_is_stepped_by_the_general_scheme():
     """rm3 with its spar on a surge slide: the waves' phase at the spar changes as it slides, which the exact stepper's
     fixed-phase forcing cannot follow: Stormer-Verlet steps it (in still water the exact stepper still applies)."""
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
     base = rm3()
     spar = dataclasses.replace(base.bodies[0], constraint=dataclasses.replace(base.bodies[0].constraint, axis=(1.0, 0.0, 0.0)))
     surging = dataclasses.replace(base, bodies=(spar, *base.bodies[1:]))
-    run = Assembly(surging)
+    run = Simulation(surging)
     assert run.exact is None and not any("stepped exactly" in note for note in run.notes)
     run.step(5)
     assert run.state.is_finite()
-    assert Assembly(with_overrides(surging, waves__kind="still")).exact is not None
+    assert Simulation(with_overrides(surging, waves__kind="still")).exact is not None

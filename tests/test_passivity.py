@@ -153,13 +153,13 @@ def test_the_several_body_csv_closes_the_energy_with_the_radiated_waves():
     """The rows a several-body run writes (Assembly.columns and AssemblyFrame.row, as `python -m sim run` and the viewer's
     Record do) carry E_rad: rm3 kicked in still water, E_total + the take-off's E_pto + E_rad from the rows stays the
     start's to 1e-3 of the kick over 20 s, and E_rad has taken a share of it."""
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
     scene = still_rm3("linear", 0.0)
     f = scene.bodies[1]
     damped = dataclasses.replace(f, constraint=dataclasses.replace(f.constraint, pto_damping=1.2e6))  # the preset's damper
     scene = dataclasses.replace(scene, bodies=(scene.bodies[0], damped))
-    run = Assembly(scene, backend="numpy")
+    run = Simulation(scene, backend="numpy")
     try:
         header = run.columns()
         rows = [run.frame().row()]

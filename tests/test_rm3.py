@@ -100,9 +100,9 @@ def test_the_moored_rm3_starts_at_rest_on_its_lines():
     """rm3-moored in still water: the chains' hanging weight is what the spar's mass was reduced by, so the system
     starts in equilibrium: over 20 s nothing moves by more than 1 cm, the lines' pull staying within 1 % of its start."""
     pytest.importorskip("moordyn")
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
-    run = Assembly(with_overrides(load_scene("rm3-moored"), waves__kind="still"), backend="numpy")
+    run = Simulation(with_overrides(load_scene("rm3-moored"), waves__kind="still"), backend="numpy")
     try:
         start = run.frame()
         worst, pulls = 0.0, []

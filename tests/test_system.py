@@ -363,7 +363,7 @@ def test_bad_bodies_are_one_line_errors(tmp_path, entry, message):
 def test_one_body_flags_do_not_apply_to_several_bodies(tmp_path):
     (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDE))
     done = sim_cli("run", "--scene", str(tmp_path / "pair.toml"), "--density", "300")
-    assert done.returncode == 2 and "[body] (and their flags) do not apply" in done.stderr
+    assert done.returncode == 2 and "this scene's bodies are its [[bodies]] (cube): name the body, e.g. cube.density" in done.stderr
 
 
 MOORED = """
@@ -403,10 +403,10 @@ def test_mooring_lines_on_one_of_several_bodies_pull_as_on_one_body(tmp_path):
     same joint: the same lines' pull held over each step, so the same surge and take-off energy to round-off; the lines
     pull it back towards the middle (it starts 0.3 m off)."""
     pytest.importorskip("moordyn")
-    from sim.system import Assembly
+    from sim.simulation import Simulation
 
     scene = scene_file(tmp_path, MOORED)
-    run = Assembly(scene, backend="numpy")
+    run = Simulation(scene, backend="numpy")
     e = scene.bodies[0]
     sim = Simulation(dataclasses.replace(scene, bodies=(), body=e.body, initial=e.initial, constraint=e.constraint), backend="numpy")
     try:

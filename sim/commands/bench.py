@@ -278,7 +278,7 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     (hydrodynamics), the radiation memory and diffraction (radiation), and the rest (kinematics, the kicks'
     matrix exponentials)."""
     from ..config import with_overrides
-    from ..system import Assembly
+    from ..simulation import Simulation
 
     preset = load_scene("rm3")
     sea = with_overrides(preset, waves__kind="jonswap", waves__height=2.5, waves__period=8.0, waves__components=64, step__dt=0.01)
@@ -294,7 +294,7 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     for label, scene in cases:
         linear = scene.fluid.hydro == "linear"
         for backend in ("numpy",) if linear else ("numpy", "numba"):  # linear loads: nothing to compile
-            run = Assembly(scene, backend=backend)
+            run = Simulation(scene, backend=backend)
             t, h, r, m = _system_split(run, args.repeats)
             run.close()
             loads = ("linear, exact step" if run.exact else "linear") if linear else "compiled" if run.compiled else "numpy"

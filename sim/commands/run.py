@@ -16,7 +16,7 @@ from ..config import PARAMS, ConfigError, SceneConfig, available_scenes, load_sc
 from ..errors import WriteFailed
 from ..hydrostatics import describe_rest
 from ..limits import step_time
-from ..simulation import CSV_COLUMNS, Simulation, SimulationDiverged, default_backend
+from ..simulation import Simulation, SimulationDiverged, default_backend
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
 from .output import LineFile
@@ -77,8 +77,6 @@ SHORT_RUN_SECONDS = 60.0
 
 def numpy_seconds(sim: Simulation, n_steps: int) -> float:
     """The numpy reference's wall time for n_steps of this scene, from a few steps of a copy."""
-    import time
-
     probe = Simulation(sim.scene, backend="numpy")
     probe.step_seconds = sim.step_seconds
     try:
@@ -87,33 +85,32 @@ def numpy_seconds(sim: Simulation, n_steps: int) -> float:
         probe.step(3)
     except SimulationDiverged:  # the run stops as soon: no compile is worth it
         return 0.0
+    finally:
+        probe.close()
     return (time.perf_counter() - started) / 3 * n_steps
 
 
 def announce_compile(sim: Simulation, n_steps: int) -> None:
     """The compiled kernels build once per machine (then load from the disk cache): say so before the wait.
-    `sim` was built on the numpy reference when they are not built yet (kernels_ready): a short run stays
-    there, saying so; a longer one moves to the kernels, which compile first."""
-    from ..compiling import kernels_ready
+    `sim` is built on the numpy reference: where its kernels are not built yet (kernels_ready), a short run
+    stays there, saying so; a longer one moves to the kernels, which compile first."""
+    from ..kernels import cached, warm_up
 
-    if sim.has_twin and sim.backend != default_backend() and not kernels_ready(sim.spec):
-        if (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
+    if sim.has_twin and not sim.compiled and default_backend() == "numba":
+        if not sim.kernels_ready and (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
             print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (under a minute, once); this short run takes about "
                   f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.compiling`, compiles them)",
                   file=sys.stderr)  # fmt: skip
-            return
-        sim.use_backend(default_backend())
+        else:
+            if todo := [spec for spec in sim.specs if not cached(spec)]:  # say so before the wait, not after it
+                print(f"floatsim: compiling the fast kernels for this scene ({'; '.join(spec.describe() for spec in todo)}), once for this "
+                      "machine (under a minute each; cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
+            seconds = sum(warm_up(spec) for spec in sim.specs)
+            sim.use_backend(default_backend())
+            if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes
+                print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
     for note in sim.notes:
         print(f"floatsim: note: {note}", file=sys.stderr)
-    if sim.compiled:
-        from ..kernels import cached, warm_up
-
-        if not cached(sim.spec):  # say so before the wait, not after it
-            print(f"floatsim: compiling the fast kernels for this scene ({sim.spec.describe()}), once for this machine (under a minute; "
-                  "cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
-        seconds = warm_up(sim.spec)
-        if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes
-            print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)
 
 
 SAMPLES_NOTE = "a mesh's triangles are split by halving every edge over a length, or kept one sample each when more"
@@ -172,36 +169,47 @@ def run(args: RunArgs, watch=None) -> int:
         raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
     scene = scene_from_args(args)
-    if scene.bodies:
-        from .run_bodies import run_bodies
-
-        return run_bodies(args, scene)
-    from ..compiling import kernels_ready
-
     sim = Simulation(scene, backend="numpy")  # nothing compiles before we know the run needs it
-    if kernels_ready(sim.spec):
-        sim.use_backend(default_backend())
+    try:
+        return _run(sim, args, watch)
+    finally:
+        sim.close()
+
+
+def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
+    scene = sim.scene
     sim.step_seconds = args.step_budget  # an adaptive method stuck on one step stops with the viewer's message
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
     if n_steps > args.max_steps:
         raise ConfigError(f"t_end / dt = {scene.step.t_end:g} s / {sim.dt:g} s is {n_steps:.3g} steps, more than --max-steps {args.max_steps:.3g} "
-                          f"(about {step_time(sim.body.n_samples, n_steps) / 3600:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
+                          f"(about {step_time(sim.n_samples, n_steps) / 3600:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
     announce_compile(sim, n_steps)
-    if (seconds := step_time(sim.body.n_samples, n_steps)) > 600:
-        print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.body.n_samples:,} samples x {n_steps:,} steps); "
+    if (seconds := step_time(sim.n_samples, n_steps)) > 600:
+        print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.n_samples:,} samples x {n_steps:,} steps); "
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     first = sim.frame()
     started = time.perf_counter()
-    error, rows, stepping = stream(sim, CSV_COLUMNS, args, n_steps, watch)
+    error, rows, stepping = stream(sim, sim.columns(), args, n_steps, watch)
     if error in (WRITE_FAILED, INTERRUPTED):
         return 2 if error == WRITE_FAILED else EXIT
     for note in sim.validity_notes():
         print(f"floatsim: note: {note}", file=sys.stderr)
     wall = time.perf_counter() - started
     last = sim.frame()
+    (summarise_bodies if scene.bodies else summarise)(sim, first, last)
     steps = round(last.t / sim.dt)
+    print(
+        speeds(steps, last.t, wall, stepping, rows if args.out else None, checked=not scene.bodies)
+        + (f" -> {args.out}" if args.out else "")
+    )
+    return 3 if error else 0
+
+
+def summarise(sim: Simulation, first, last) -> None:
+    """The summary of a one-body run: the body, its scheme and forces, its rest, where it ended, its joint and lines."""
+    scene = sim.scene
     drift = last.E_total - first.E_total
     asked = (
         f" ({scene.body.samples} asked: {SAMPLES_NOTE})" if scene.body.shape == "mesh" and sim.body.n_samples != scene.body.samples else ""
@@ -221,8 +229,28 @@ def run(args: RunArgs, watch=None) -> int:
         n = len(last.lines)
         print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring_force):.4g} N, largest fairlead tension "
               f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
-    print(speeds(steps, last.t, wall, stepping, rows if args.out else None) + (f" -> {args.out}" if args.out else ""))
-    return 3 if error else 0
+
+
+def summarise_bodies(sim: Simulation, first, last) -> None:
+    """The summary of a run of several bodies: each body, the tree, how it was stepped, where each ended, each take-off."""
+    system = sim.system
+    names = ", ".join(f"{m.name} ({m.body.mass:.6g} kg, {m.body.n_samples} samples)" for m in system.members)
+    print(f"scene {sim.scene.name}: {len(system.members)} bodies: {names}; {len(system.groups)} rigid groups, {system.n_dofs} degrees of freedom; "
+          "{}, dt {:g} s; the bodies' loads {}".format(*how_stepped(sim)))  # fmt: skip
+    for b in last.bodies:
+        print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
+    for name, theta, _, _, absorbed in last.joints:
+        print(
+            f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)"
+        )
+    drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
+    print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J")
+
+
+def how_stepped(sim: Simulation) -> tuple[str, float, str]:
+    """(the scheme, dt, where the bodies' loads come from), as a several-body summary says them."""
+    loads = "linear" if sim.scene.fluid.hydro == "linear" else "compiled" if sim.compiled else "on the numpy reference"
+    return "stepped exactly (a linear system)" if sim.exact is not None else "Stormer-Verlet", sim.dt, loads
 
 
 def speeds(steps: int, t: float, wall: float, stepping: float, rows: int | None, checked: bool = True) -> str:

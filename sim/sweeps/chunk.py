@@ -22,7 +22,8 @@ SAMPLE = 0.1
 CHECK = 1.0
 """Seconds between rest checks."""
 REST = 1e-3
-SUMMARY = ("status", "t", "time_to_rest", "x", "y", "z", "qw", "qx", "qy", "qz", "speed", "spin", "E_total", "tilt_deg", "draft", "period")
+SUMMARY = ("status", "t", "time_to_rest", "x", "y", "z", "qw", "qx", "qy", "qz", "speed", "spin", "E_total", "E_pto", "tilt_deg", "draft",
+           "period")  # fmt: skip
 HISTORY = ("case", "t", "x", "y", "z", "qw", "qx", "qy", "qz")
 
 
@@ -125,7 +126,7 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
         sank = sinks(s) and float(vertices[:, 2].max()) < f.eta  # heavier than the water it displaces, and all of it under
         status = "diverged" if ensemble.diverged[j] else ("rest" if ensemble.stopped[j] else "sank" if sank else "end")
         values = (status, f.t, rest_time[j], *f.x_world, *f.q_world_body, float(np.linalg.norm(f.u_world)), float(np.linalg.norm(f.omega_world)),
-                  f.E_total, nearest_face_tilt(s.body, f.q_world_body), math.nan if sank else -float(vertices[:, 2].min()),
+                  f.E_total, f.E_pto, nearest_face_tilt(s.body, f.q_world_body), math.nan if sank else -float(vertices[:, 2].min()),
                   math.nan if sank else period(t_samples[upto], z_samples[upto, j]))  # fmt: skip
         for key, v in zip(SUMMARY, values):
             rows[key].append(v)
@@ -137,7 +138,7 @@ def run_system_chunk(sweep: Sweep, indices: list[int], stop=None) -> dict:
     coordinate's amplitude (half its range) over the run's second half (the start's transient left out), and the
     energy every take-off absorbed (`E_pto`). A case that diverges gets status 'diverged' and NaNs."""
     from ..errors import SimulationDiverged
-    from ..system import Assembly
+    from ..simulation import Simulation
 
     base = sweep.base()
     rows: dict = {"case": list(indices)}
@@ -146,7 +147,7 @@ def run_system_chunk(sweep: Sweep, indices: list[int], stop=None) -> dict:
     for key in ("status", "t", "E_pto"):
         rows[key] = []
     for i in indices:
-        run = Assembly(case_scene(base, sweep.case(i)))
+        run = Simulation(case_scene(base, sweep.case(i)))
         joints = run.system.joints
         n_steps = round(run.scene.step.t_end / run.dt)
         sample = max(1, round(SAMPLE / run.dt))

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import PARAMS, SceneConfig, load_scene, read_toml, validate, with_overrides
+from ..config import ENTRY_SECTIONS, PARAMS, SceneConfig, load_scene, read_toml, with_overrides
 from ..errors import ConfigError
 from ..limits import MAX_CASES
 
@@ -34,15 +34,16 @@ VARIABLE = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid", 
             and p.key not in ("shape", "mass", "t_end")}  # fmt: skip
 """Scene parameters a sweep can vary, by key."""
 assert not set(START) & set(VARIABLE), "a start parameter shadows a scene parameter"
-BODY_VARIABLE = {"pto_damping": "constraint", "pto_stiffness": "constraint", "density": "body", "mass": "body"}
-"""What a sweep can vary of one of a scene's [[bodies]], named BODY.KEY (e.g. float.pto_damping: a power matrix)."""
+BODY_VARIABLE = {p.key: p for p in PARAMS.values() if p.section in ENTRY_SECTIONS and p.kind in ("float", "int", "optional", "choice")}
+"""What a sweep can vary of a body, named BODY.KEY: BODY one of a scene's [[bodies]] (float.pto_damping: a power matrix), or
+`body`, the one body of a one-body scene (body.pto_damping, body.density); KEY any number or choice of its shape, pose or joint."""
 SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.mesh_unit", "body.samples", "fluid.rho",
           "fluid.g", "fluid.forces", "step.integrator", "step.dt")  # fmt: skip
 
 
 def parse_values(name: str, text: str) -> tuple:
     """'a:b:n' (n values from a to b, ends included), 'v1,v2,...' or one value."""
-    param = VARIABLE.get(name)
+    param = BODY_VARIABLE.get(name.split(".", 1)[1]) if "." in name else VARIABLE.get(name)
     choice = param is not None and param.kind == "choice"
     text = text.strip()
     if not text:
@@ -88,9 +89,8 @@ def parse_param(spec: str) -> tuple[str, tuple]:
     if "." in name:
         body, key = name.split(".", 1)
         if not body or key not in BODY_VARIABLE:
-            raise ConfigError(
-                f"--param {name}: a body's parameter is BODY.KEY, KEY one of {', '.join(BODY_VARIABLE)} (e.g. float.pto_damping)"
-            )
+            raise ConfigError(f"--param {name}: a body's parameter is BODY.KEY, KEY one of {', '.join(sorted(BODY_VARIABLE))} "
+                              "(e.g. float.pto_damping; body.KEY for the body of a one-body scene)")  # fmt: skip
         return name, parse_values(name, text)
     if name not in VARIABLE and name not in START:
         raise ConfigError(f"--param {name}: unknown parameter (known: {', '.join(sorted(VARIABLE) + sorted(START))}, "
@@ -137,11 +137,17 @@ class Sweep:
 
 
 def case_scene(base: SceneConfig, case: dict) -> SceneConfig:
-    """The scene of one case: the base with the case's values."""
+    """The scene of one case: the base with the case's values (a body's BODY.KEY as with_overrides names it, BODY__KEY)."""
     changes = {f"{VARIABLE[k].section}__{k}": v for k, v in case.items() if k in VARIABLE}
-    scene = with_overrides(base, **changes) if changes else base
-    if any("." in k for k in case) or base.bodies:
-        return _bodies_case(scene, case)
+    changes |= {k.replace(".", "__", 1): v for k, v in case.items() if "." in k}
+    try:
+        scene = with_overrides(base, **changes) if changes else base
+    except ConfigError as e:
+        raise ConfigError(f"--param: {e}") from None
+    if base.bodies:
+        if start := [k for k in case if k in START]:
+            raise ConfigError(f"--param {start[0]}: the start parameters are for one-body scenes (set a body's [initial] in the scene)")
+        return scene
     position, orientation = scene.initial.position, np.array(scene.initial.orientation, float)
     if "orientation_seed" in case:
         from scipy.spatial.transform import Rotation
@@ -159,29 +165,6 @@ def case_scene(base: SceneConfig, case: dict) -> SceneConfig:
         q = tuple(float(c) for c in np.asarray(orientation) / np.linalg.norm(orientation))
         scene = dataclasses.replace(scene, initial=dataclasses.replace(scene.initial, position=tuple(position), orientation=q))
     return scene
-
-
-def _bodies_case(scene: SceneConfig, case: dict) -> SceneConfig:
-    """A case's BODY.KEY values in its [[bodies]] entries (a scene of several bodies takes no start parameter)."""
-    if not scene.bodies:
-        raise ConfigError(f"--param {next(k for k in case if '.' in k)}: BODY.KEY is for scenes of several bodies ([[bodies]])")
-    if start := [k for k in case if k in START]:
-        raise ConfigError(f"--param {start[0]}: the start parameters are for one-body scenes (set a body's [initial] in the scene)")
-    names = [e.name for e in scene.bodies]
-    entries = list(scene.bodies)
-    for name, value in case.items():
-        if "." not in name:
-            continue
-        body, key = name.split(".", 1)
-        if body not in names:
-            raise ConfigError(f"--param {name}: the scene has no body {body!r} (its bodies: {', '.join(names)})")
-        i = names.index(body)
-        section = BODY_VARIABLE[key]
-        extra = {"mass": None} if key == "density" else {}
-        entries[i] = dataclasses.replace(
-            entries[i], **{section: dataclasses.replace(getattr(entries[i], section), **{key: value}, **extra)}
-        )
-    return validate(dataclasses.replace(scene, bodies=tuple(entries)))
 
 
 def group_key(scene: SceneConfig) -> tuple:

@@ -1,0 +1,300 @@
+"""A running scene of several bodies ([[bodies]]): the system (system.py), its state and step, its mooring lines;
+`Simulation(scene)` returns one for such a scene, with the one-body class's methods (step, frame, reset, update,
+columns, use_backend, close). Stops loudly on a non-finite state.
+
+`update` names a body's parameters 'BODY__key' (float__pto_damping=1e6, spar__density=900; config.with_overrides).
+A take-off's damping or stiffness changes in place; any other change rebuilds the system from the scene (the
+coefficients come from the disk cache) and carries the motion over: every body stays where it is and moves as it did
+(the joints' coordinates and rates as they are; a free group's centre of mass and its velocity moved with it where a
+welded member's mass changed). A new joint kind or tree starts the scene afresh from its starting pose, saying so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .config import SceneConfig, validate, with_overrides
+from .errors import ConfigError
+from .rotation import quat_to_matrix
+from .simulation import Simulation
+from .system import System, SystemState, body_frames, build, lines_scene, moored_body
+
+
+class Assembly(Simulation):
+    """A running scene of several bodies: the system, its state and step. On the numba backend the bodies' loads come
+    from their compiled twins when this machine has them (`kernels_ready`; `use_backend` loads or compiles them)."""
+
+    def __init__(self, scene: SceneConfig, body=None, backend: str | None = None, mesh=None):
+        from .compiling import kernels_ready
+        from .simulation import default_backend
+
+        if body is not None or mesh is not None:
+            raise ConfigError("a scene of several bodies takes each body's mesh from its [[bodies]] entry (mesh = FILE)")
+        scene = validate(scene)
+        if not scene.bodies:
+            raise ConfigError(f"scene {scene.name!r} has one body: run it with Simulation")
+        self.scene = scene
+        self.system, self.state = build(scene)
+        self.start = self.state
+        self.check_seconds = 0.0
+        self.step_seconds: float | None = None
+        self.moored = moored_body(scene)
+        """The index of the body the mooring lines hold (None: no lines)."""
+        self.moorings = self._moorings()
+        self.notes: list[str] = []
+        from .system_linear import exact_linear
+
+        self.exact = exact_linear(self.system, self.state)
+        """The exact stepper of a linear system (system_linear.py), or None: Stormer-Verlet."""
+        if self.exact is not None:
+            self.notes.append(
+                "linear hydrostatics on slides: the system is linear and stepped exactly (its solution over each step, at any dt)"
+            )
+        if scene.step.integrator != "implicit" and self.exact is None:
+            self.notes.append(
+                f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used"
+            )
+        self.backend = "numpy"
+        wanted = backend or default_backend()
+        if wanted == "numba" and not self.system.has_twin:
+            self.notes.append("a body's force model or term has no compiled twin: the scene runs on the numpy reference (slower)")
+        elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs):
+            self.use_backend("numba")
+        self._frame: tuple | None = None
+
+    @property
+    def compiled(self) -> bool:
+        return self.backend == "numba"
+
+    @property
+    def kernels_ready(self) -> bool:
+        """Whether the bodies' compiled loads can be loaded at once (this machine compiled them before)."""
+        from .compiling import kernels_ready
+
+        return self.system.has_twin and all(kernels_ready(spec) for spec in self.system.specs)
+
+    def use_backend(self, backend: str) -> None:
+        """The bodies' loads from their compiled twins ('numba': loaded from the disk cache, or compiled now) or numpy,
+        from the next step on; the state is kept as it is. Without a twin for every body's loads, numpy."""
+        from .kernels import warm_up
+
+        backend = backend if self.system.has_twin else "numpy"
+        if backend == "numba":
+            for spec in self.system.specs:
+                warm_up(spec)
+        self.system.use_kernels(backend == "numba")
+        self.backend = backend
+
+    @property
+    def has_twin(self) -> bool:
+        """Whether every body's loads have a compiled twin."""
+        return self.system.has_twin
+
+    @property
+    def specs(self) -> list:
+        """The kernels.Spec of the bodies' compiled loads, each once."""
+        return self.system.specs
+
+    @property
+    def spec(self):
+        raise AttributeError("a scene of several bodies compiles one specialisation per kind of body: see .specs")
+
+    @property
+    def body(self):
+        raise AttributeError("a scene of several bodies: its bodies are .system.members (each .body), its state .state")
+
+    @property
+    def model(self):
+        raise AttributeError("a scene of several bodies: each body's model is .system.members[i].model")
+
+    @property
+    def n_samples(self) -> int:
+        return sum(m.body.n_samples for m in self.system.members)
+
+    def stability_numbers(self) -> dict[str, float]:
+        return {}
+
+    def warnings(self) -> list[str]:
+        return []
+
+    def validity_notes(self) -> list[str]:
+        return []
+
+    def diagnose(self, t: float, what: str) -> str:
+        return f"{what} at t = {t:.6g} s: try a smaller time step"
+
+    def update(self, **changes) -> None:
+        """Change scene parameters between steps, validated ('section__key', or a body's 'BODY__key'): the scene stays the
+        description of what runs. A take-off's damping or stiffness changes in place; another change rebuilds the system
+        and carries the motion over (the module's docstring says how)."""
+        old, scene = self.scene, with_overrides(self.scene, **changes)
+        if scene == old:
+            return
+        if _only_take_offs(old, scene):
+            self.system.groups = [_with_take_off(g, scene) for g in self.system.groups]
+            self.system.joints = [g for g in self.system.groups if g.kind in ("prismatic", "revolute")]
+            self.scene, self._frame = scene, None
+            self._check_exact()
+            return
+        system, start = build(scene)  # a failure here leaves the run as it was
+        restarted = _tree(system) != _tree(self.system)
+        state = start if restarted else _carried(self.system, system, self.state, start)
+        if restarted:
+            self.notes.append("a joint's kind or the bodies' tree changed: the scene started again from its starting pose")
+        backend, lines = self.backend, (old.moorings, old.fluid.rho, old.fluid.g) != (scene.moorings, scene.fluid.rho, scene.fluid.g)
+        self.scene, self.system, self.state, self.start, self._frame = scene, system, state, start, None
+        if self.moorings is not None and not (lines or restarted):
+            self.system.held[self.moored] = self.moorings.load.copy()
+        else:
+            self.close()
+            self.moorings = self._moorings()
+        self._check_exact()
+        self.use_backend(backend if backend == "numpy" or self.kernels_ready else "numpy")
+
+    def _check_exact(self) -> None:
+        from .system_linear import exact_linear
+
+        self.exact = exact_linear(self.system, self.state)
+
+    def _moorings(self):
+        """The lines in MoorDyn at the starting state (moorings.py), or None."""
+        if self.moored is None:
+            return None
+        from .moorings import Moorings
+
+        k, s = self.moored, self.start
+        pose = self.system.pose(s)
+        nu = pose.J[k] @ s.v
+        lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
+        self.system.held[k] = lines.load.copy()
+        return lines
+
+    def reset(self, state: SystemState | None = None) -> None:
+        """Back to the starting state, or to `state` (the system, its coefficients and kernels kept; the lines start afresh)."""
+        self.state = self.start if state is None else state
+        if self.moorings is not None:
+            self.moorings.close()
+            self.moorings = self._moorings()
+        self._frame = None
+
+    def close(self) -> None:
+        if self.moorings is not None:
+            self.moorings.close()
+
+    def step(self, n: int = 1) -> SystemState:
+        from .errors import SimulationDiverged
+
+        if self.exact is not None:  # a linear system: all n steps at once (no lines: they rule it out)
+            new = self.exact.advance(self.state, self.dt, n)
+            if not new.is_finite():
+                raise SimulationDiverged(f"the state became non-finite by t = {new.t:.6g} s")
+            self.state = new
+            return new
+        for _ in range(n):
+            if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
+                k, pose = self.moored, self.system.pose(self.state)
+                nu = pose.J[k] @ self.state.v
+                self.system.held[k] = self.moorings.advance(pose.x[k], pose.R[k], nu[:3], nu[3:], self.dt)
+            new = self.system.step(self.state, self.dt)
+            if not new.is_finite():
+                raise SimulationDiverged(f"the state became non-finite at t = {self.state.t + self.dt:.6g} s: try a smaller time step")
+            self.state = new
+        return self.state
+
+    def frame(self) -> AssemblyFrame:
+        if self._frame is None or self._frame[0] is not self.state:
+            s = self.state
+            joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
+                       float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
+            lines, pull, tensions = (), (), ()
+            if self.moorings is not None:
+                lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
+                pull = (*self.moorings.load[:3], float(self.moorings.fairlead_tensions().max()))
+            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
+                                            pull, float(s.E_rad), tensions))  # fmt: skip
+        return self._frame[1]
+
+    def columns(self) -> list[str]:
+        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the energies,
+        E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without damping, drag and waves)."""
+        cols = ["t"]
+        for m in self.system.members:
+            cols += [f"{m.name}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
+        for g in self.system.joints:
+            cols += [f"{g.name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
+        if self.moorings is not None:
+            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
+        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
+
+
+@dataclass(frozen=True, eq=False)
+class AssemblyFrame:
+    t: float
+    bodies: list
+    """Each body's dict: name, x, q, u, omega (body_frames)."""
+    joints: list
+    """Each joint's (name, theta, rate, P_pto, E_pto)."""
+    energies: dict
+    joint_axes: list = field(default_factory=list)
+    """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
+    lines: tuple = ()
+    """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
+    mooring: tuple = ()
+    """The lines' pull on the moored body (Fx, Fy, Fz, N) and the largest fairlead tension (N); empty without lines."""
+    E_rad: float = 0.0
+    """Energy the radiated waves have carried away so far, J (0 without radiation)."""
+    line_tensions: tuple = ()
+    """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
+
+    @property
+    def E_pto(self) -> float:
+        return sum(j[4] for j in self.joints)
+
+    @property
+    def E_total(self) -> float:
+        """Kinetic, gravity, hydrostatic and the take-offs' springs, J (E_total + E_pto is conserved without damping, drag and waves)."""
+        return sum(self.energies.values())
+
+    def row(self) -> list[float]:
+        out = [self.t]
+        for b in self.bodies:
+            out += [*b["x"], *b["q"], *b["u"], *b["omega"]]
+        for _, *values in self.joints:
+            out += values
+        out += list(self.mooring)
+        e = self.energies
+        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad]
+
+
+def _only_take_offs(old: SceneConfig, new: SceneConfig) -> bool:
+    """Whether the scenes differ in their joints' take-offs alone."""
+    strip = lambda scene: replace(scene, bodies=tuple(replace(e, constraint=replace(e.constraint, pto_damping=0.0, pto_stiffness=0.0))  # noqa: E731
+                                                      for e in scene.bodies))  # fmt: skip
+    return strip(old) == strip(new)
+
+
+def _with_take_off(group, scene: SceneConfig):
+    """The group with its joint's take-off as the scene gives it (a group is named by its first body)."""
+    entry = next(e for e in scene.bodies if e.name == group.name)
+    return replace(group, stiffness=float(entry.constraint.pto_stiffness), damping=float(entry.constraint.pto_damping))
+
+
+def _tree(system: System) -> list:
+    return [(g.kind, g.parent, g.dofs, len(g.members)) for g in system.groups]
+
+
+def _carried(old: System, new: System, s: SystemState, start: SystemState) -> SystemState:
+    """The motion of `s` on the rebuilt system: coordinates and velocities as they are; a free group moved by the shift of
+    its centre of mass in its own frame (its frame's axes are the world's at the start), its velocity now that of its new
+    centre of mass; the memory kept where the
+    radiation is the same size (zeros otherwise: its states mean something else)."""
+    x, v = s.x_free.copy(), s.v.copy()
+    for g_old, g_new in zip(old.groups, new.groups):
+        if g_new.kind == "free":
+            shift = quat_to_matrix(s.q_free[g_new.coordinate]) @ (g_new.origin - g_old.origin)
+            x[g_new.coordinate] += shift
+            v[g_new.dofs.start : g_new.dofs.start + 3] += np.cross(v[g_new.dofs.start + 3 : g_new.dofs.stop], shift)  # u + omega x r
+    memory = s.memory if len(s.memory) == len(start.memory) else np.zeros_like(start.memory)
+    return replace(s, x_free=x, v=v, memory=memory, E_rad=s.E_rad if len(start.memory) else 0.0)

@@ -76,7 +76,9 @@ class Controls(Bound):
     """Handles of every control by parameter key (`controls.density.value = 500` runs the same path as
     the browser), plus paused, step, reset, speed and scene."""
 
-    def __init__(self, server: viser.ViserServer, post: Callable[[str, Any], None], settings: Settings, scene_options: tuple[str, ...]):
+    def __init__(self, server: viser.ViserServer, post: Callable[[str, Any], None], settings: Settings, scene_options: tuple[str, ...],
+                 bodies: tuple[str, ...] = ("body",)):  # fmt: skip
+        """`bodies`: the scene's bodies by name; with several, the Body folder starts with the choice of one (`focus`)."""
         super().__init__(post)
         gui = server.gui
         self._handles: dict[str, Any] = {}
@@ -94,11 +96,15 @@ class Controls(Bound):
             params = [p for p in CONTROLLED.values() if p.section in sections]
             if params:
                 with gui.add_folder(title):
+                    if title == "Body":
+                        self.focus = gui.add_dropdown("Body", bodies, initial_value=settings.focus, visible=len(bodies) > 1,
+                                                      hint="The body these controls, Joint and Start show and change, and the camera follows")  # fmt: skip
                     for p in params:
                         self._handles[p.key] = _control(gui, p, settings.value(p.key))
         for key in (*CONTROLLED, "speed", "scene"):
             self._bind(key, key)
         self._bind("paused", "pause")
+        self._bind("focus", "focus")
         self.step.on_click(lambda _: self._post("step", None))
         self.reset.on_click(lambda _: self._post("reset", None))
 
@@ -107,6 +113,19 @@ class Controls(Bound):
         if key in handles:
             return handles[key]
         raise AttributeError(key)
+
+    def show_setting(self, field: str, value: Any) -> None:
+        if field == "bodies":  # another scene or body chosen: (its bodies' names, the chosen one's)
+            names, focus = value
+            if tuple(self.focus.options) != tuple(names):
+                self._quiet.on = True
+                try:
+                    self.focus.options = names
+                finally:
+                    self._quiet.on = False
+            self.focus.visible = len(names) > 1
+            field, value = "focus", focus
+        super().show_setting(field, value)
 
     def show_shape(self, shape: str) -> None:
         """Only the sampling control that applies to the body at hand: points per edge for a cube or

@@ -140,21 +140,15 @@ async def _page(port: int, frames: list[bytes], camera: bool = True, origin: str
 # ---- what the viewer has, one body or several
 
 
-def _one_body(app) -> bool:
-    return hasattr(app, "body_file")
-
-
 def _fields(app) -> dict[str, object]:
     """The controls a user sets, by the field the run keeps its value under."""
     from .loop import CONTROLLED
 
-    keys = (*CONTROLLED, "speed", "paused") if _one_body(app) else ("speed", "paused")
+    keys = (*CONTROLLED, "speed", "paused")
     return {key: getattr(app.controls, key) for key in keys}
 
 
 def _used(app, snap, key: str):
-    if not _one_body(app):
-        return getattr(snap, key)
     return snap.settings.paused if key == "paused" else snap.settings.value(key)
 
 
@@ -193,7 +187,7 @@ async def _newcomer(app) -> tuple[bool, list[str]]:
 
 def _paused(app) -> bool:
     snap = app.sync()
-    return snap.settings.paused if _one_body(app) else snap.paused
+    return snap.settings.paused
 
 
 def _still_works(app) -> bool:
@@ -201,11 +195,10 @@ def _still_works(app) -> bool:
     time goes on."""
     c = app.controls
     ok = True
-    if _one_body(app):  # (damping: a density would need a new boundary-element solve where the body radiates, refused live)
-        damping = c.damping.value
-        c.damping.value = 32.1
-        ok &= app.sync().damping == 32.1
-        c.damping.value = damping
+    damping = c.damping.value  # (a density would need a new boundary-element solve where the body radiates, refused live)
+    c.damping.value = 32.1
+    ok &= app.sync().damping == 32.1
+    c.damping.value = damping
     c.speed.value = 1.0
     c.paused.value = True
     ok &= _paused(app)
@@ -319,12 +312,11 @@ def _round(app, rng: random.Random, args: HostileArgs, tally: Tally) -> None:
     tally.tunnels += getattr(app.server, "_share_tunnel", None) is not None
     tally.foreign_accepted += asyncio.run(_page(app.port, [], origin="http://evil.example"))
 
-    if _one_body(app):
-        _meshes(app, tally)
-    for query in (LINKS + REFUSED_LINKS) if _one_body(app) else REFUSED_LINKS + LINKS:
+    _meshes(app, tally)
+    for query in LINKS + REFUSED_LINKS:
         restarted = _open_link(app, query)
         tally.links += 1
-        tally.restarts_by_refused_links += (query in REFUSED_LINKS or not _one_body(app)) and restarted  # several bodies: no link setup
+        tally.restarts_by_refused_links += query in REFUSED_LINKS and restarted
 
     for _ in range(args.connections):
         tally.pages_refused += not asyncio.run(_page(app.port, [], linger=0.02))
@@ -390,14 +382,13 @@ def main(args: HostileArgs) -> int:
     with contextlib.redirect_stdout(io.StringIO()):
         app = start(ViewArgs(scene=scene, port=0), kernels=args.kernels)
     rng, tally = random.Random(args.seed), Tally()
-    if _one_body(app):
-        show_error = app.body_file._show_error
+    show_error = app.body_file._show_error
 
-        def refused(text, client=None):  # counts the notes a refused upload gets (they go on to the page as usual)
-            tally.uploads_refused_with_a_note += 1
-            show_error(text, client)
+    def refused(text, client=None):  # counts the notes a refused upload gets (they go on to the page as usual)
+        tally.uploads_refused_with_a_note += 1
+        show_error(text, client)
 
-        app.body_file._show_error = refused
+    app.body_file._show_error = refused
     growth = []
     try:
         time.sleep(2.0)
@@ -406,8 +397,7 @@ def main(args: HostileArgs) -> int:
         before = rss_mib()
         for k in range(args.rounds):
             _round(app, rng, args, tally)
-            if _one_body(app):
-                app.loop.post("scene", scene)  # back to the setup measured before: what stays is what was retained
+            app.loop.post("scene", scene)  # back to the setup measured before: what stays is what was retained
             app.sync()
             gc.collect()  # what is still held, not garbage awaiting collection
             release_memory()

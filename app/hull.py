@@ -112,16 +112,17 @@ def _root(height, h0: np.ndarray, h1: np.ndarray) -> np.ndarray:
 class HullView:
     """The waterline and the wet part as children of the body's frame; `show` runs on the simulation thread only."""
 
-    def __init__(self, server, body, water, root: str = "", hz: float = HULL_HZ):
+    def __init__(self, server, body, water, root: str = "", hz: float = HULL_HZ, node: str = "body"):
+        """Its nodes hang from the body's frame, `root`/`node`."""
         self.hull = Hull.of(body, water)
         self._for = (body, getattr(water, "k", None))
         scene, r = server.scene, body.radius
         self.line = scene.add_line_segments(
-            f"{root}/body/waterline", np.zeros((1, 2, 3), np.float32), LINE_COLOUR, thickness=0.012 * r, visible=False
+            f"{root}/{node}/waterline", np.zeros((1, 2, 3), np.float32), LINE_COLOUR, thickness=0.012 * r, visible=False
         )
         dot = np.zeros((3, 3), np.float32)
         self.wet = scene.add_mesh_simple(
-            f"{root}/body/wet", dot, np.array([[0, 1, 2]], np.uint32), color=WET_COLOUR, flat_shading=True, visible=False
+            f"{root}/{node}/wet", dot, np.array([[0, 1, 2]], np.uint32), color=WET_COLOUR, flat_shading=True, visible=False
         )
         self._normals = _vertex_normals(self.hull.vertices, self.hull.faces) * (LIFT * r)
         self.hz = hz
@@ -133,8 +134,8 @@ class HullView:
         """Whether this view was made for this body in this sea (else make another: its mesh may need refining anew)."""
         return self._for[0] is body and np.array_equal(self._for[1], getattr(water, "k", None))
 
-    def show(self, snap, line: bool, wet: bool, now: float | None = None, due: bool = False) -> None:
-        """The line (if `line`) and the wet part (if `wet`) at the snapshot's pose and time; throttled unless `due`."""
+    def show(self, frame, water, line: bool, wet: bool, now: float | None = None, due: bool = False) -> None:
+        """The line (if `line`) and the wet part (if `wet`) at the body's pose and time (its Frame) in `water`; throttled unless `due`."""
         now = time.monotonic() if now is None else now
         if not line and self.line.visible:
             self.line.visible = False
@@ -144,8 +145,7 @@ class HullView:
             return
         from sim.rotation import quat_to_matrix
 
-        frame = snap.frame
-        segments, vertices, faces = self.hull.cut(quat_to_matrix(frame.q_world_body), frame.x_world, snap.water, frame.t)
+        segments, vertices, faces = self.hull.cut(quat_to_matrix(frame.q_world_body), frame.x_world, water, frame.t)
         if line:
             if len(segments):
                 self.line.points = segments.astype(np.float32)

@@ -25,7 +25,7 @@ import sim
 from sim.bem import no_solves
 from sim.body import printable
 from sim.compiling import Compiler, Loader, kernels_ready
-from sim.config import IN_EFFECT, PARAMS, in_effect, load_scene
+from sim.config import ENTRY_KEYS, ENTRY_SECTIONS, IN_EFFECT, MESH_FORCES, PARAMS, in_effect, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
@@ -60,9 +60,12 @@ class Settings:
     scene_name: str
     config: sim.SceneConfig
     body: sim.Body
+    """The chosen body (the one body of a one-body scene): the Body folder's controls show and change its parameters."""
     speed: float = 1.0
     """Simulated seconds per wall-clock second asked for."""
     paused: bool = False
+    focus: str = "body"
+    """The chosen body's name (config.body_names): `body` in a one-body scene."""
 
     @property
     def scene(self) -> str:
@@ -73,6 +76,9 @@ class Settings:
         return self.body.mass / self.body.volume
 
     def __getattr__(self, key: str):
+        if key in ENTRY_KEYS and self.config.bodies:  # a body's own parameter: the chosen body's
+            entry = next(e for e in self.config.bodies if e.name == self.focus)
+            return getattr(getattr(entry, ENTRY_KEYS[key]), key)
         if key in _QUALNAME:
             return in_effect(self.config, _QUALNAME[key])
         raise AttributeError(key)
@@ -91,8 +97,18 @@ class Posed:
 
 
 @dataclass(frozen=True, eq=False)
+class Part(Posed):
+    """One body as the viewer draws it: its name, its Body and its one-body Frame."""
+
+    name: str
+    body: sim.Body
+    frame: sim.Frame
+
+
+@dataclass(frozen=True, eq=False)
 class Snapshot(Posed):
-    """One published state of the run: what the viewer draws and what tests read."""
+    """One published state of the run: what the viewer draws and what tests read. `frame` and `body` are the chosen
+    body's (the one body's: the run's own frame); `parts` every body's, `run` the run's own frame (its CSV row)."""
 
     frame: sim.Frame
     settings: Settings
@@ -116,6 +132,20 @@ class Snapshot(Posed):
     """A standing warning about the running model for this body, a sentence ('' when none): the points model in its bad band."""
     engine: str = ""
     """What steps the run when not the compiled kernels ('numpy reference', with the compile's progress), else ''."""
+    parts: tuple = ()
+    """Every body (Part), in the scene's order (one body: itself)."""
+    run_frame: object = None
+    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.assembly.AssemblyFrame)."""
+
+    @property
+    def run(self):
+        """The run's own frame: its CSV row, the mooring lines, the joints' axes."""
+        return self.frame if self.run_frame is None else self.run_frame
+
+    @property
+    def system(self) -> bool:
+        """Whether the run is a scene of several bodies."""
+        return self.run_frame is not None
 
     @property
     def params(self):
@@ -182,7 +212,7 @@ class SimLoop(Mailbox):
         self._budget = budget * self.period
         self._resync_after = resync_after
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
-        self.scene_options = tuple(scene_options) or tuple(sim.config.one_body_scenes())
+        self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
 
         self._background = background_compile and kernels and default_backend() == "numba"
         """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""
@@ -195,6 +225,7 @@ class SimLoop(Mailbox):
         self._backend = "numpy" if self._background or not kernels else None  # None: the default (compiled where there is a twin)
         self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
+        self._focus = 0  # the chosen body's index (Settings.focus)
         self._queue: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
         self._latest: Snapshot | None = None
@@ -221,7 +252,8 @@ class SimLoop(Mailbox):
     @property
     def settings(self) -> Settings:
         """The controls' values: a view of the running simulation's scene plus the viewer's own."""
-        return Settings(self._scene_name, self.sim.scene, self.sim.body, self._speed, self._paused)
+        return Settings(self._scene_name, self.sim.scene, self.sim.bodies[self._focus], self._speed, self._paused,
+                        self.sim.body_names[self._focus])  # fmt: skip
 
     # ---- any thread (post, latest, sync: Mailbox) ------------------------------------------
 
@@ -237,6 +269,8 @@ class SimLoop(Mailbox):
         self.post("_wake")
         if self._thread is not None:
             self._thread.join(timeout)
+        if not self.is_alive():
+            self.sim.close()  # MoorDyn's lines, if any
 
     def is_alive(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
@@ -281,26 +315,28 @@ class SimLoop(Mailbox):
         Nothing here waits for numba: the simulation thread must answer Pause, Reset and the tests' sync at once."""
         if not self._background or not self.sim.has_twin:
             return
-        spec = self.sim.spec
-        self._collect_kernels(spec)
+        specs = self.sim.specs  # one; a scene of several bodies: one per kind of body, compiled one after the other
+        self._collect_kernels(specs)
         busy = {job.spec for job in (self._compiler, self._loader) if job is not None}
-        if spec not in self._loaded and spec not in self._failed and spec not in busy:
+        todo = [spec for spec in specs if spec not in self._loaded and spec not in self._failed]
+        if todo and todo[0] not in busy:
+            spec = todo[0]
             if kernels_ready(spec):
                 if self._loader is None:  # one load at a time; the next check starts this one
                     self._loader = Loader(spec)
-            else:
+            elif self._compiler is None or self._compiler.spec not in specs:
                 if self._compiler is not None:
                     self._compiler.stop()  # compiling kernels the scene no longer needs
                 self._compiler = Compiler(spec)
                 print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
                       "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
-        self._backend = default_backend() if spec in self._loaded else "numpy"
+        self._backend = default_backend() if all(spec in self._loaded for spec in specs) else "numpy"
         if self.sim.backend != self._backend:
             self.sim.use_backend(self._backend)
             self._cost_unknown()
             self._restart_clock()
 
-    def _collect_kernels(self, spec) -> None:
+    def _collect_kernels(self, specs: list) -> None:
         """Take the result of a compile or a load that ended: a compile is followed by a load of its kernels."""
         compiler = self._compiler
         if compiler is not None and compiler.done:
@@ -321,7 +357,7 @@ class SimLoop(Mailbox):
                 self._raise_notice(f"The fast kernels did not load ({loader.failure()}); the run stays on the numpy reference.")
                 return
             self._loaded.add(loader.spec)
-            if loader.compiled_in is not None and loader.spec == spec:
+            if loader.compiled_in is not None and loader.spec in specs and all(s in self._loaded for s in specs):
                 self._raise_notice(
                     f"The fast kernels are ready (compiled in {loader.compiled_in:.0f} s in the background): the run goes on with them."
                 )
@@ -330,9 +366,9 @@ class SimLoop(Mailbox):
         """What steps the run, for the readouts: '' on the compiled kernels."""
         if self.sim.compiled:
             return ""
-        if self._compiler is not None and self._compiler.spec == self.sim.spec:
+        if self._compiler is not None and self._compiler.spec in self.sim.specs:
             return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - self._compiler.started:.0f} s so far)"
-        if self._loader is not None and self._loader.spec == self.sim.spec:
+        if self._loader is not None and self._loader.spec in self.sim.specs:
             return "numpy reference (loading the fast kernels)"
         return "numpy reference"
 
@@ -354,7 +390,7 @@ class SimLoop(Mailbox):
 
     def _publish_now(self) -> None:
         try:
-            frame = self.sim.frame()
+            run, frames = self.sim.frame(), self.sim.parts()
         except Exception as e:  # noqa: BLE001
             self._log("observe", e)
             return
@@ -362,11 +398,12 @@ class SimLoop(Mailbox):
         if self._notice and not self._diverged and now > self._notice_until:
             self._notice = ""
         advice = self._advice()  # before the notice is read: it raises one when it starts to apply
+        parts = tuple(Part(name, body, f) for name, body, f in zip(self.sim.body_names, self.sim.bodies, frames))
         snap = Snapshot(
-            frame=frame,
+            frame=parts[self._focus].frame,
             settings=self.settings,
-            body=self.sim.body,
-            water=self.sim.model.water,
+            body=parts[self._focus].body,
+            water=self.sim.water,
             real_time_factor=self._rate(),
             behind=(not self.settings.paused) and (now < self._behind_until or self._rate() < 0.85 * self.settings.speed),
             notice=self._notice,
@@ -376,6 +413,8 @@ class SimLoop(Mailbox):
             steps=self._steps,
             advice=advice,
             engine=self.engine(),
+            parts=parts,
+            run_frame=None if run is parts[0].frame else run,
         )
         with self._lock:
             self._latest = snap
@@ -392,7 +431,7 @@ class SimLoop(Mailbox):
 
     def _advice(self) -> str:
         """sampled_model_warning for the running body and fluid, computed again only when either changes."""
-        key = (self.sim.body, self.sim.params)
+        key = (self.sim.bodies[self._focus], self.sim.params)
         if self._advice_key != key:
             try:
                 text = sampled_model_warning(*key) or ""
@@ -538,10 +577,11 @@ class SimLoop(Mailbox):
         used, note = param.clamp(value, current)
         if note:
             self._raise_notice(note)
-        old_body, old_integrator = self.sim.body, self.sim.integrator
-        change = {f"{param.section}__{param.key}": used}
-        if param.key == "points_per_edge" and self.sim.scene.body.shape == "mesh":
-            change = {"body__samples": 6 * used * used}  # a mesh is refined to about as many samples as a cube of N per edge
+        old_body, old_integrator = self.sim.bodies[self._focus], self.sim.integrator
+        named = self.sim.body_names[self._focus] if param.section in ENTRY_SECTIONS else param.section  # a body's own: the chosen one's
+        change = {f"{named}__{param.key}": used}
+        if param.key == "points_per_edge" and self.settings.value("shape") == "mesh":
+            change = {f"{named}__samples": 6 * used * used}  # a mesh is refined to about as many samples as a cube of N per edge
         try:
             self.sim.update(**change)
         except sim.ConfigError as e:
@@ -549,7 +589,7 @@ class SimLoop(Mailbox):
             used = current
         if param.key in ("points_per_edge", "samples"):
             self._epoch += 1  # a rebuilt body: new history for the plots
-        if self.sim.body is not old_body or self.sim.integrator is not old_integrator:
+        if self.sim.bodies[self._focus] is not old_body or self.sim.integrator is not old_integrator:
             self._cost_unknown()
         if param.key == "dt":
             self._restart_clock()
@@ -589,6 +629,17 @@ class SimLoop(Mailbox):
         self._epoch += 1
         self._restart_clock()
 
+    def _cmd_focus(self, value) -> None:
+        """Choose the body the Body, Joint and Start controls show and change, the camera follows and the readouts describe."""
+        names = self.sim.body_names
+        if value not in names:
+            self._raise_notice(f"Body: {str(value)[:40]!r} is not one of {', '.join(names)}; kept {names[self._focus]}.")
+            self._tell("focus", names[self._focus])
+            return
+        old = self.settings
+        self._focus = names.index(value)
+        self._tell_changes(old)
+
     def _cmd_scene(self, value) -> None:
         """Load another preset with its own parameters (speed and pause are kept)."""
         if value not in self.scene_options:
@@ -596,7 +647,9 @@ class SimLoop(Mailbox):
             self._tell("scene", self._scene_name)
             return
         old = self.settings
-        self.sim = self._simulation(load_scene(value))
+        new = self._simulation(load_scene(value))
+        self.sim.close()
+        self.sim, self._focus = new, 0
         self._scene_name = value
         self._tell_changes(old)
         self._diverged = False
@@ -616,9 +669,11 @@ class SimLoop(Mailbox):
             why = str(e) if isinstance(e, sim.ConfigError) else f"{type(e).__name__}: {e}"
             self._raise_notice(f"Mesh not loaded: {why[:300]}. The running body is unchanged.")
             return
+        self.sim.close()
         self.sim = new
         self._tell_changes(old)
-        self._raise_notice(f"Loaded {printable(Path(path).name.rsplit('-', 1)[0])}: {describe_rest(new.body, new.params)}." + note)
+        body = new.bodies[self._focus]
+        self._raise_notice(f"Loaded {printable(Path(path).name.rsplit('-', 1)[0])}: {describe_rest(body, new.params)}." + note)
         self._diverged = False
         self._epoch += 1
         self._cost_unknown()
@@ -626,11 +681,17 @@ class SimLoop(Mailbox):
     def _mesh_simulation(self, path: str, unit: str) -> tuple[sim.Simulation, str]:
         """The running scene with the mesh as its body, set a quarter of its height above rest and
         reset; and the note that goes with it."""
-        change = {"body__shape": "mesh", "body__mesh": path, "body__mesh_unit": unit}
+        name = self.sim.body_names[self._focus]
+        change = {f"{name}__shape": "mesh", f"{name}__mesh": path, f"{name}__mesh_unit": unit}
         note = ""
         if self.sim.scene.fluid.radiation != "none":  # a new body would need a boundary-element solve: not on this thread
             change["fluid__radiation"] = "none"
             note = " Radiation is off for it (solve its coefficients with `floatsim decay --mesh FILE --radiation bem`)."
+        if self.sim.scene.bodies:  # one of several: it takes the chosen body's place on its joint; the scene starts again
+            change[f"{name}__forces"] = MESH_FORCES
+            new = self._simulation(sim.with_overrides(self.sim.scene, **change))
+            new.frame()
+            return new, note + " The scene started again with it in the place of " + name + "."
         new = self._simulation(sim.with_overrides(self.sim.scene, **change))
         body = new.body
         R = initial_state(body, new.scene).R_world_body
@@ -649,6 +710,8 @@ class SimLoop(Mailbox):
 
     def _tell_changes(self, old: Settings) -> None:
         new = self.settings
+        if (old.focus, old.config.bodies) != (new.focus, new.config.bodies):
+            self._tell("bodies", (tuple(self.sim.body_names), new.focus))
         for key in CONTROLLED:
             if old.value(key) != new.value(key):
                 self._tell(key, new.value(key))

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import viser
 
-from sim.config import ConfigError, load_scene, one_body_scenes
+from sim.config import ConfigError, available_scenes, load_scene
 from sim.hydrostatics import describe_rest
 
 from .about import About
@@ -47,7 +47,7 @@ class ViewerApp:
             self.about = About(server)
         with tabs.add_tab("Live", viser.Icon.CHART_LINE):
             self.readouts = Readouts(server)
-        self.controls = Controls(server, loop.post, snap.settings, loop.scene_options)
+        self.controls = Controls(server, loop.post, snap.settings, loop.scene_options, tuple(p.name for p in snap.parts))
         self.camera = CameraView(server, follow=not snap.water.flat)  # a sea carries the body off: follow it there
         self._view_of = snap.settings.scene
         self.layers = Layers(server)
@@ -57,7 +57,7 @@ class ViewerApp:
         with server.gui.add_folder("Share a link"):
             self.link = server.gui.add_html(copy_button_html(link_query(snap.settings)))
             self.link_text = server.gui.add_markdown("")
-        self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.flat)
+        self.scene = SceneView(server, self.layers, snap.body, waves=not snap.water.flat, parts=snap.parts)
         self._notice_id = snap.notice_id
         self._query, self._link_time = None, -1e9
         self._described = None
@@ -79,8 +79,8 @@ class ViewerApp:
 
     def _running_mesh(self) -> str | None:
         """The running body's mesh file, which the uploads folder's bound never removes."""
-        body = self.loop.latest().settings.config.body
-        return str(body.mesh) if body.shape == "mesh" and body.mesh else None
+        settings = self.loop.latest().settings  # (the chosen body's, of several)
+        return str(settings.value("mesh")) if settings.value("shape") == "mesh" and settings.value("mesh") else None
 
     def _apply_link(self, client: viser.ClientHandle, query: str) -> None:
         """A page's address (its token, if one is asked, already checked by the gate): the setup it carries."""
@@ -121,7 +121,7 @@ class ViewerApp:
                 self.camera.follow_box.value = not snap.water.flat
             self.camera.follow(self.scene.root, snap.frame.x_world)
             self.readouts.update(snap)
-            self.controls.show_shape(snap.settings.config.body.shape)
+            self.controls.show_shape(snap.settings.value("shape"))
             self._update_link(snap)
             fresh = snap.notice_id != self._notice_id and snap.notice
             if fresh or (not snap.notice and self.controls.notice.visible):
@@ -182,14 +182,15 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
     no compile child killed a few seconds later, no load fighting the simulation thread for the GIL).
     """
     scene = load_scene(args.scene)
-    if scene.bodies:
-        return start_bodies(args, scene, publish_hz=publish_hz, kernels=kernels)
+    if scene.bodies and args.mesh is not None:
+        raise ConfigError(f"--mesh gives the one body of a scene its mesh: {args.scene} has several bodies (choose one under Body in the "
+                          "viewer and load its mesh there, or give it in its [[bodies]] entry)")  # fmt: skip
     if args.mesh is not None:
         from sim.body import load_mesh
 
         load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
     port = check_address(args.host, args.port)
-    presets = one_body_scenes()
+    presets = available_scenes()
     options = tuple(presets) + (() if args.scene in presets else (args.scene,))
     loop = SimLoop(
         scene, args.scene, publish_hz=publish_hz, fp_raise=strict, scene_options=options, background_compile=True, kernels=kernels
@@ -200,24 +201,6 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
         server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
         return ViewerApp(server, loop, args.host, args.token, args.share)
-    except BaseException:
-        loop.stop()
-        server.stop()
-        raise
-
-
-def start_bodies(args: ViewArgs, scene, *, publish_hz: float = 30.0, kernels: bool = True):
-    """The viewer of a scene of several bodies (app/bodies.py)."""
-    from .bodies import BodiesApp, BodiesLoop
-
-    if args.mesh is not None:
-        raise ConfigError(f"--mesh is for one-body scenes: the viewer of several bodies ({args.scene}) has no such control yet")
-    port = check_address(args.host, args.port)
-    loop = BodiesLoop(scene, args.scene, publish_hz=publish_hz, kernels=kernels)
-    with own_origin_only(args.host):
-        server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
-    try:
-        return BodiesApp(server, loop, args.host, args.token, args.share)
     except BaseException:
         loop.stop()
         server.stop()

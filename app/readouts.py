@@ -150,7 +150,10 @@ class Readouts:
         if self._history and self._history[-1][0] == frame.t:
             return  # paused: nothing new to draw
         size = scales(snap.body, snap.params.g)
-        values = denoise(np.array([f(frame) for *_, f in SERIES], dtype=float), size)
+        raw = [f(frame) for *_, f in SERIES]
+        if snap.system:  # the chosen body's take-off is its joint's (the run's frame lists each joint's power)
+            raw[-1] = next((p for name, _, _, p, _ in snap.run.joints if name == snap.settings.focus), 0.0)
+        values = denoise(np.array(raw, dtype=float), size)
         self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
         data[~np.isfinite(data)] = np.nan
@@ -174,8 +177,23 @@ def _model_energy(f) -> str:
     return f" (exact potential; the model's own {f.E_kin + f.E_grav + f.E_hyd_model:.6g} J)"
 
 
+def _system(snap: Snapshot) -> list[str]:
+    """A scene of several bodies: where each body is, each joint's stroke and take-off, the lines' pull, the energies of all."""
+    run = snap.run
+    out = [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies)]
+    for name, theta, _, p, e in run.joints:
+        out.append(f"Joint {name}: stroke **{theta:+.4f}** · take-off **{p / 1e3:.4g} kW** now, **{e / 1e6:.4g} MJ** absorbed")
+    if run.mooring:
+        out.append(
+            f"Mooring: pull **{np.linalg.norm(run.mooring[:3]) / 1e3:.4g} kN**, largest fairlead tension **{run.mooring[3] / 1e3:.4g} kN**"
+        )
+    out.append(f"All bodies: E total = **{run.E_total:.6g} J**, with the take-offs' {run.E_pto:.4g} J and the radiated {run.E_rad:.4g} J · "
+               f"the numbers above are {snap.settings.focus}'s (choose the body under Body)")  # fmt: skip
+    return out
+
+
 def describe(snap: Snapshot) -> str:
-    """The readout text of a snapshot."""
+    """The readout text of a snapshot (of several bodies: the chosen one's, then the system's)."""
     f, s = snap.frame, snap.settings
     rate = snap.real_time_factor
     state = "paused" if s.paused else (f"{rate:.2f}× real time" if math.isfinite(rate) else "starting")
@@ -186,11 +204,13 @@ def describe(snap: Snapshot) -> str:
         f"inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
         f"Speed: {state} (asked {s.speed:g}×){' on the ' + snap.engine if snap.engine else ''} · {snap.body.n_samples} samples",
     ]
+    if snap.system:
+        lines += _system(snap)
     if f.lines:
         pull = f.mooring_force
         lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
                      f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**")  # fmt: skip
-    if s.joint != "free":
+    if s.joint != "free" and not snap.system:
         lines.append(f"Joint: {s.joint} to the seabed · power take-off **{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"

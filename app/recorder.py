@@ -78,7 +78,7 @@ def prune_recordings(folder: Path, keep: set[str], takes: int | None = None, siz
 class RecordPanel:
     def __init__(self, server: viser.ViserServer, notify: Callable[[str, object, bool], None], folder: Path | None = None,
                  new_take: Callable[[], Take] = Take):  # fmt: skip
-        """new_take: what a recording keeps (app/take.py: one body's shots; app/bodies.py: a system's)."""
+        """new_take: what a recording keeps (app/take.py)."""
         gui = server.gui
         self.server, self._notify, self._new_take = server, notify, new_take
         self.folder = folder or Path.cwd() / "floatsim-recordings"

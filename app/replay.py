@@ -51,11 +51,9 @@ def private_server():
 
 
 def stage(server: viser.ViserServer, take: Take, layers: FixedLayers | None = None) -> SceneView:
-    """The take's scene at its first shot, on `server` (a take of several bodies stages its own: app/bodies.py)."""
-    if hasattr(take, "stage"):
-        return take.stage(server)
+    """The take's scene at its first shot, on `server` (every body of a scene of several)."""
     first = take[0]
-    view = SceneView(server, layers or FixedLayers.of(), first.body, waves=not first.water.flat, replay=True)
+    view = SceneView(server, layers or FixedLayers.of(), first.body, waves=not first.water.flat, replay=True, parts=first.parts)
     view.show(first, now=0.0)
     return view
 

@@ -17,7 +17,7 @@ import sim
 from .camera import Follower
 from .controls import Layers
 from .hull import HULL_HZ, HullView
-from .loop import Snapshot
+from .loop import Part, Snapshot
 from .markers import MarkersView
 from .tension import THICKNESS, TensionLegend, TensionScale, segment_colours
 from .water import LINED_OPACITY, REPLAY_HZ, WAVE_OPACITY, WaterView
@@ -34,125 +34,192 @@ WET = np.array([30, 110, 230], np.uint8)
 DRY = np.array([245, 150, 40], np.uint8)
 
 
-class SceneView:
-    """Scene nodes of one viewer; `show` runs on the simulation thread only."""
+BODY_COLOURS = ((215, 235, 250), (250, 215, 160), (200, 240, 200), (240, 200, 230))
+"""Each body's mesh colour, in the scene's order (one body: the first)."""
 
-    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, waves: bool = False, replay: bool = False):
-        """replay=True: for a recording (app/replay.py): every pose exactly, a lighter wave surface, and
-        the throttles counted in the time passed to `show` (simulated) rather than wall time."""
-        self.server, self.layers, self.replay = server, layers, replay
-        self.follower = Follower(REPLAY_FOLLOW_HZ) if replay and waves else None
-        """A replay in waves follows the body as the live view does by default (the live view's own: camera.py)."""
+
+class BodyNodes:
+    """One body's nodes: its frame with its mesh and samples as children, its waterline and wet part, its force
+    arrows and its B and M markers. `node` names its frame under the world root: `body` for the one body of a scene,
+    `bodies/NAME` for each of several."""
+
+    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, node: str, colour, replay: bool):
+        self.server, self.layers, self.node, self.colour, self.replay = server, layers, node, colour, replay
         scene = server.scene
-        self.root = scene.add_frame(ROOT, show_axes=False)
-        self._sized_for = body.radius
-        size = max(8.0, 8.0 * body.radius)
-        self.water = WaterView(server, size, lighter=replay, root=ROOT)
-        self.markers = MarkersView(server, body.radius, root=ROOT)
+        marks = f"{ROOT}" if node == "body" else f"{ROOT}/marks/{node.rsplit('/', 1)[-1]}"
+        self.markers = MarkersView(server, body.radius, root=marks)
         self.frame = scene.add_frame(
-            f"{ROOT}/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=layers.axes.value
+            f"{ROOT}/{node}", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=layers.axes.value
         )
-        self.arrows = scene.add_arrows(
-            f"{ROOT}/forces", np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02, head_radius=0.05
-        )
-        view = size / 8 * (2.5 if waves else 1.0)  # a sea needs a wider view than a calm pond
-        server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
-        server.initial_camera.look_at = (0.0, 0.0, -0.3)
+        arrows = f"{ROOT}/forces" if node == "body" else f"{ROOT}/forces/{node.rsplit('/', 1)[-1]}"
+        self.arrows = scene.add_arrows(arrows, np.zeros((2, 2, 3)), np.array([[220, 40, 40], [40, 170, 70]]), shaft_radius=0.02,
+                                       head_radius=0.05)  # fmt: skip
         self.body: sim.Body | None = None
         self.hull: HullView | None = None
         """The waterline and the wet part (made for each body and sea)."""
         self.mesh = self.points = None
         self._wet: np.ndarray | None = None  # wet set last sent
-        self._colour_time = self._arrow_time = self._lines_time = -np.inf
+        self._colour_time = self._arrow_time = -np.inf
         self.colour_updates = 0
-        self.lines = None
-        """The mooring lines' node (made for the first scene that has lines), coloured by tension (app/tension.py)."""
-        self.tension = TensionScale()
-        self.legend = None if replay else TensionLegend(server)
-        """The lines' colour bar in the panel (a recording keeps no panel)."""
-        self.joint = None
-        self._joint_of = None  # the [constraint] table the joint's node shows
         self.set_body(body)
 
     def set_body(self, body: sim.Body) -> None:
         """(Re)send the body's geometry; only when the body itself changes (scene, points per edge, a loaded mesh)."""
         self.body = body
         scene = self.server.scene
-        if not 0.5 < body.radius / self._sized_for < 2.0:  # another size of body: water, frame and markers to its scale
-            self._sized_for = body.radius
-            self.water = WaterView(self.server, max(8.0, 8.0 * body.radius), lighter=self.replay, root=ROOT)
-            self.markers = MarkersView(self.server, body.radius, root=ROOT)
-            self.frame = scene.add_frame(
-                f"{ROOT}/body", axes_length=0.8 * body.radius, axes_radius=0.012 * body.radius, show_axes=self.layers.axes.value
-            )
-        self.mesh = scene.add_mesh_simple(
-            f"{ROOT}/body/mesh",
-            body.mesh_vertices,
-            body.mesh_faces,
-            color=(215, 235, 250),
-            flat_shading=True,
-            visible=self.layers.mesh.value,
-        )
+        self.mesh = scene.add_mesh_simple(f"{ROOT}/{self.node}/mesh", body.mesh_vertices, body.mesh_faces, color=self.colour, flat_shading=True,
+                                          visible=self.layers.mesh.value)  # fmt: skip
         # Lift the points a little off the faces so the opaque mesh does not hide half of each one.
         lifted = body.r_body + 0.01 * body.radius * body.n_body
         size = 0.3 * np.sqrt(body.area.mean())  # a third of the sample spacing
         self.points = scene.add_point_cloud(
-            f"{ROOT}/body/points", lifted, np.tile(DRY, (body.n_samples, 1)), point_size=float(size), precision="float32",
+            f"{ROOT}/{self.node}/points", lifted, np.tile(DRY, (body.n_samples, 1)), point_size=float(size), precision="float32",
             point_shape="circle", visible=self.layers.points.value,
         )  # fmt: skip
         self._wet = None
         self._colour_time = -np.inf
         self.hull = None
 
-    def show(self, snap: Snapshot, now: float | None = None) -> None:
-        """Move the body to the snapshot's pose, plus throttled colours, arrows, markers and waves;
-        `now` is the clock the throttles count in (default: wall time)."""
-        if snap.body is not self.body:
-            self.set_body(snap.body)
-        layers = self.layers
-        now = time.monotonic() if now is None else now
+    def remove(self) -> None:
+        for node in (self.frame, self.arrows, self.markers.b, self.markers.m):
+            node.remove()
+
+    def show(self, part, water, params, now: float, due: bool) -> None:
+        """The body at its part's pose (snapshot.Part), with its throttled colours, arrows, markers and waterline."""
+        if part.body is not self.body:
+            self.set_body(part.body)
+        layers, frame = self.layers, part.frame
         for node, box in ((self.mesh, layers.mesh), (self.points, layers.points), (self.arrows, layers.forces)):
             if node.visible != box.value:
                 node.visible = box.value
         if self.frame.show_axes != layers.axes.value:
             self.frame.show_axes = layers.axes.value
-        frame = snap.frame
+        if self.replay:  # viser skips a pose within 1e-5 of the last one sent: a replay keeps every pose exactly
+            self.frame._impl.position[:] = np.nan
+            self.frame._impl.wxyz[:] = np.nan
+        self.frame.position = frame.x_world
+        self.frame.wxyz = frame.q_world_body
+        self.markers.show(part, now, layers.markers.value)
+        if layers.points.value and now - self._colour_time >= 1.0 / COLOUR_HZ:
+            self._send_colours(frame.wet_index, now)
+        if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
+            self._send_arrows(part, params, now)
+        if self.hull is None or not self.hull.fits(part.body, water):
+            self.hull = HullView(self.server, part.body, water, root=ROOT, hz=REPLAY_HZ if self.replay else HULL_HZ, node=self.node)
+        self.hull.show(
+            frame, water, layers.markers.value, layers.mesh.value and not self.replay, now, due=due
+        )  # with the sea: the same instant
+
+    def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
+        if self._wet is not None and np.array_equal(self._wet, wet_index):
+            return
+        colours = np.tile(DRY, (self.body.n_samples, 1))
+        colours[wet_index] = WET
+        self.points.colors = colours
+        self._wet, self._colour_time = wet_index.copy(), now
+        self.colour_updates += 1
+
+    def _send_arrows(self, part, params, now: float) -> None:
+        """Net force at the centre of mass (1 m per body weight) and torque (1 m per weight x radius)."""
+        frame, body = part.frame, part.body
+        weight = body.mass * (params.g or 9.81)  # without gravity keep the scale of an ordinary weight
+        x = frame.x_world
+        ends = np.array([[x, x + frame.force_world / weight], [x, x + frame.torque_world / (weight * body.radius)]])
+        if np.isfinite(ends).all():
+            self.arrows.points = ends
+        self._arrow_time = now
+
+
+class SceneView:
+    """Scene nodes of one viewer: the water, every body (BodyNodes), the joints' axes, the mooring lines; `show` runs on
+    the simulation thread only."""
+
+    def __init__(self, server: viser.ViserServer, layers: Layers, body: sim.Body, waves: bool = False, replay: bool = False,
+                 parts: tuple = ()):  # fmt: skip
+        """`parts`: every body of a scene of several (snapshot.Part), else the one `body`. replay=True: for a recording
+        (app/replay.py): every pose exactly, a lighter wave surface, and the throttles counted in the time passed to
+        `show` (simulated) rather than wall time."""
+        self.server, self.layers, self.replay = server, layers, replay
+        self.follower = Follower(REPLAY_FOLLOW_HZ) if replay and waves else None
+        """A replay in waves follows the body as the live view does by default (the live view's own: camera.py)."""
+        self.root = server.scene.add_frame(ROOT, show_axes=False)
+        radius = max(p.body.radius for p in parts) if parts else body.radius
+        self._sized_for = radius
+        size = max(8.0, 8.0 * radius)
+        self.water = WaterView(server, size, lighter=replay, root=ROOT)
+        view = size / 8 * (2.5 if waves else 1.0)  # a sea needs a wider view than a calm pond
+        server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
+        server.initial_camera.look_at = (0.0, 0.0, -0.3)
+        self.bodies: list[BodyNodes] = []
+        self._names: tuple = ()
+        self._colour_time = self._arrow_time = self._lines_time = -np.inf
+        self.lines = None
+        """The mooring lines' node (made for the first scene that has lines), coloured by tension (app/tension.py)."""
+        self.tension = TensionScale()
+        self.legend = None if replay else TensionLegend(server)
+        """The lines' colour bar in the panel (a recording keeps no panel)."""
+        self.joint = None
+        self._joint_of = None  # the joints' axes the node shows
+        self._place(parts or (Part("body", body, None),))
+
+    def _place(self, parts) -> None:
+        """Nodes for these bodies (their names decide: a scene of other bodies replaces them all)."""
+        names = tuple(p.name for p in parts)
+        if names == self._names:
+            return
+        for nodes in self.bodies:
+            nodes.remove()
+        radius = max(p.body.radius for p in parts)
+        if not 0.5 < radius / self._sized_for < 2.0:  # another size of body: the water to its scale
+            self._sized_for = radius
+            self.water = WaterView(self.server, max(8.0, 8.0 * radius), lighter=self.replay, root=ROOT)
+        one = len(parts) == 1
+        self.bodies = [BodyNodes(self.server, self.layers, p.body, "body" if one else f"bodies/{p.name}", BODY_COLOURS[k % len(BODY_COLOURS)],
+                                 self.replay) for k, p in enumerate(parts)]  # fmt: skip
+        self._names = names
+
+    def __getattr__(self, key: str):
+        """The first body's nodes by name (mesh, points, hull, markers, arrows, frame, body, colour_updates): the one body's."""
+        if key in ("mesh", "points", "hull", "markers", "arrows", "frame", "body", "colour_updates") and self.__dict__.get("bodies"):
+            return getattr(self.bodies[0], key)
+        raise AttributeError(key)
+
+    def set_body(self, body: sim.Body) -> None:
+        self._place((Part("body", body, None),))
+        self.bodies[0].set_body(body)
+
+    def show(self, snap: Snapshot, now: float | None = None) -> None:
+        """Every body at its pose, plus throttled colours, arrows, markers and waves; `now` is the clock the throttles count
+        in (default: wall time). The water is centred on the chosen body (snap.frame)."""
+        parts = snap.parts or (Part("body", snap.body, snap.frame),)
+        self._place(parts)
+        now = time.monotonic() if now is None else now
+        frame, run = snap.frame, snap.run
         with self.server.atomic():
-            if self.replay:  # viser skips a pose within 1e-5 of the last one sent: a replay keeps every pose exactly
-                self.frame._impl.position[:] = np.nan
-                self.frame._impl.wxyz[:] = np.nan
-            self.frame.position = frame.x_world
-            self.frame.wxyz = frame.q_world_body
-            self.markers.show(snap, now, layers.markers.value)
-            if layers.points.value and now - self._colour_time >= 1.0 / COLOUR_HZ:
-                self._send_colours(frame.wet_index, now)
-            if layers.forces.value and now - self._arrow_time >= 1.0 / ARROW_HZ:
-                self._send_arrows(snap, now)
-            sent = self.water.show(snap.water, frame.t, frame.x_world, layers.water.value, now)
-            if self.hull is None or not self.hull.fits(snap.body, snap.water):
-                self.hull = HullView(self.server, snap.body, snap.water, root=ROOT, hz=REPLAY_HZ if self.replay else HULL_HZ)
-            self.hull.show(
-                snap, layers.markers.value, layers.mesh.value and not self.replay, now, due=sent
-            )  # with the sea: the same instant
-            self._show_lines(frame.lines, frame.line_tensions, frame.t, now)
-            self._show_joint(frame.joint_axis)
+            sent = self.water.show(snap.water, frame.t, frame.x_world, self.layers.water.value, now)
+            for nodes, part in zip(self.bodies, parts):
+                nodes.show(part, snap.water, snap.params, now, sent)
+            self._show_lines(run.lines, run.line_tensions, frame.t, now)
+            self._show_joint(run.joint_axes)
             if self.follower is not None:
                 self.follower.step(self.root, frame.x_world, now)
 
-    def _show_joint(self, axis) -> None:
-        """A slide's or a hinge's axis (frame.joint_axis), 4 body radii long; sent when it changes, hidden without one."""
-        key = None if axis is None else (tuple(axis[0]), tuple(axis[1]))
+    def _show_joint(self, axes: list) -> None:
+        """The joints' axes (a slide's or a hinge's: point and direction, world frame), 4 body radii long; sent when they
+        change, hidden without one."""
+        key = tuple((tuple(p), tuple(a)) for p, a in axes)
         if key == self._joint_of:
             return
         self._joint_of = key
-        if axis is None:
+        if not axes:
             if self.joint is not None:
                 self.joint.visible = False
             return
-        point, direction = (np.asarray(a, float) for a in axis)
         reach = 2.0 * self._sized_for
-        segment = np.array([[point - reach * direction, point + reach * direction]], np.float32)
-        self.joint = self.server.scene.add_line_segments(f"{ROOT}/joint", segment, JOINT_COLOUR, thickness=0.04)
+        segments = np.array(
+            [[p - reach * a, p + reach * a] for p, a in ((np.asarray(p, float), np.asarray(a, float)) for p, a in axes)], np.float32
+        )
+        self.joint = self.server.scene.add_line_segments(f"{ROOT}/joint", segments, JOINT_COLOUR, thickness=0.04)
 
     def _show_lines(self, lines: tuple, tensions: tuple, t: float, now: float) -> None:
         """The mooring lines as segments between their nodes, coloured by the tension there, at most LINES_HZ times a
@@ -181,22 +248,3 @@ class SceneView:
         if self.legend is not None:
             self.legend.show(self.tension)
         self._lines_time = now
-
-    def _send_colours(self, wet_index: np.ndarray, now: float) -> None:
-        if self._wet is not None and np.array_equal(self._wet, wet_index):
-            return
-        colours = np.tile(DRY, (self.body.n_samples, 1))
-        colours[wet_index] = WET
-        self.points.colors = colours
-        self._wet, self._colour_time = wet_index.copy(), now
-        self.colour_updates += 1
-
-    def _send_arrows(self, snap: Snapshot, now: float) -> None:
-        """Net force at the centre of mass (1 m per body weight) and torque (1 m per weight x radius)."""
-        frame, body = snap.frame, snap.body
-        weight = body.mass * (snap.params.g or 9.81)  # without gravity keep the scale of an ordinary weight
-        x = frame.x_world
-        ends = np.array([[x, x + frame.force_world / weight], [x, x + frame.torque_world / (weight * body.radius)]])
-        if np.isfinite(ends).all():
-            self.arrows.points = ends
-        self._arrow_time = now

@@ -15,7 +15,7 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import in_effect, load_scene, with_overrides
+from sim.config import ENTRY_SECTIONS, in_effect, load_scene, with_overrides
 from sim.errors import ConfigError
 
 from .loop import CONTROLLED, DERIVED, SPEED, Settings
@@ -112,17 +112,19 @@ def _preset(name: str):
 
 def link_query(settings: Settings) -> str:
     """The query that reproduces the running setup: the preset and every controlled parameter that
-    differs from it (a loaded mesh lives on this server only: it is not part of the link). A value
+    differs from it (a loaded mesh lives on this server only: it is not part of the link; in a scene of several bodies
+    the link carries the scene-wide parameters, not yet each body's own). A value
     other parameters decide (`IN_EFFECT`) is compared with what the link's scene would have in effect."""
     preset = _preset(settings.scene)
-    written = {key: _shown(settings, key) for key in CONTROLLED.keys() - DERIVED}
+    keys = [k for k in CONTROLLED if not (settings.config.bodies and CONTROLLED[k].section in ENTRY_SECTIONS)]  # a body's own: not yet
+    written = {key: _shown(settings, key) for key in set(keys) - DERIVED}
     written = {key: v for key, v in written.items() if preset is None or v != in_effect(preset, _qualname(key))}
     target = preset
     try:
         target = preset and with_overrides(preset, **{_qualname(key).replace(".", "__"): v for key, v in written.items()})
     except ConfigError:  # (the run took each of these values, so the preset should too: then the link gives every value)
         target = None
-    derived = {key: settings.value(key) for key in DERIVED}
+    derived = {key: settings.value(key) for key in DERIVED if key in keys}
     differ = written | {key: v for key, v in derived.items() if target is None or v != in_effect(target, _qualname(key))}
     pairs = [("scene", settings.scene)] + [(key, _text(CONTROLLED[key], differ[key])) for key in CONTROLLED if key in differ]
     if settings.speed != 1.0:
@@ -151,7 +153,12 @@ def _text(param, value) -> str:
 def mesh_left_out(settings: Settings) -> bool:
     """Whether the running body is a mesh the link cannot carry (loaded here, not the preset's)."""
     preset = _preset(settings.scene)
-    return settings.config.body.shape == "mesh" and (preset is None or preset.body.mesh != settings.config.body.mesh)
+    if settings.value("shape") != "mesh":
+        return False
+    if settings.config.bodies:
+        entry = next((e for e in preset.bodies if e.name == settings.focus), None) if preset is not None else None
+        return entry is None or entry.body.mesh != settings.value("mesh")
+    return preset is None or preset.body.mesh != settings.config.body.mesh
 
 
 def copy_button_html(query: str) -> str:

@@ -1,7 +1,8 @@
 """A recorded run: the frames a replay, a CSV and a video are made from (app/replay.py, app/video.py).
 
 The live viewer records the snapshots it publishes; `floatsim run --record` the frames it takes at the
-replay's rate. Each shot carries what the scene draws: the frame, the body, the water, the fluid.
+replay's rate. Each shot carries what the scene draws: the frame, the body, the water, the fluid, and for a scene of
+several bodies every body's part and the run's own frame (its CSV row).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 import sim
 from sim.simulation import CSV_COLUMNS
 
-from .loop import Posed
+from .loop import Part, Posed
 
 MAX_SHOTS = 30 * 600
 """Ten minutes at 30 frames a second: a longer recording stops itself (memory and file size)."""
@@ -24,14 +25,44 @@ MAX_SHOTS = 30 * 600
 @dataclass(frozen=True, eq=False)
 class Shot(Posed):
     frame: sim.Frame
+    """The chosen body's (the one body's: the run's own)."""
     body: sim.Body
     water: object
     params: object
     """The fluid table in use (g scales the arrows)."""
+    parts: tuple = ()
+    """Every body (loop.Part) of a scene of several bodies; () for one body."""
+    run_frame: object = None
+    """The run's own frame where it is not `frame` (several bodies): its CSV row."""
+
+    @property
+    def run(self):
+        return self.frame if self.run_frame is None else self.run_frame
 
 
 def shot_of(simulation: sim.Simulation) -> Shot:
-    return Shot(simulation.frame(), simulation.body, simulation.model.water, simulation.params)
+    run, frames = simulation.frame(), simulation.parts()
+    if len(frames) == 1:
+        return Shot(run, simulation.body, simulation.water, simulation.params)
+    parts = tuple(Part(n, b, f) for n, b, f in zip(simulation.body_names, simulation.bodies, frames))
+    return Shot(frames[0], parts[0].body, simulation.water, simulation.params, parts, run)
+
+
+def _packed(frame, body, pack: bool):
+    """The frame with its wet set as a bit mask (pack) or back as indices (not pack)."""
+    if pack:
+        mask = np.zeros(body.n_samples, bool)
+        mask[frame.wet_index] = True
+        return dataclasses.replace(frame, wet_index=np.packbits(mask))
+    mask = np.unpackbits(frame.wet_index, count=body.n_samples).astype(bool)
+    return dataclasses.replace(frame, wet_index=np.flatnonzero(mask))
+
+
+def _shot(shot, pack: bool) -> Shot:
+    parts = tuple(Part(p.name, p.body, _packed(p.frame, p.body, pack)) for p in shot.parts)
+    focus = next((p.frame for p, q in zip(parts, shot.parts) if q.frame is shot.frame), None)
+    frame = focus if focus is not None else _packed(shot.frame, shot.body, pack)
+    return Shot(frame, shot.body, shot.water, shot.params, parts, shot.run_frame)
 
 
 class Take:
@@ -50,10 +81,7 @@ class Take:
             return False
         if not self._tick(shot.frame.t):
             return True
-        mask = np.zeros(shot.body.n_samples, bool)
-        mask[shot.frame.wet_index] = True
-        frame = dataclasses.replace(shot.frame, wet_index=np.packbits(mask))
-        self._shots.append(Shot(frame, shot.body, shot.water, shot.params))
+        self._shots.append(_shot(shot, pack=True))
         return True
 
     def _tick(self, t: float) -> bool:
@@ -71,9 +99,7 @@ class Take:
         return len(self._shots)
 
     def __getitem__(self, i: int) -> Shot:
-        packed = self._shots[i]
-        mask = np.unpackbits(packed.frame.wet_index, count=packed.body.n_samples).astype(bool)
-        return dataclasses.replace(packed, frame=dataclasses.replace(packed.frame, wet_index=np.flatnonzero(mask)))
+        return _shot(self._shots[i], pack=False)
 
     @property
     def shots(self):
@@ -92,7 +118,7 @@ class Take:
     def csv(self) -> str:
         """Every shot as a row of the run CSV (the columns of `floatsim run --out`)."""
         out = io.StringIO()
-        out.write(",".join(CSV_COLUMNS) + "\n")
+        out.write(",".join(self._shots[0].run.columns() if self._shots else CSV_COLUMNS) + "\n")
         for shot in self._shots:
-            out.write(",".join(f"{v:.12g}" for v in shot.frame.row()) + "\n")
+            out.write(",".join(f"{v:.12g}" for v in shot.run.row()) + "\n")
         return out.getvalue()

@@ -63,6 +63,7 @@ class Assembly(Simulation):
         elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs):
             self.use_backend("numba")
         self._frame: tuple | None = None
+        self._parts: tuple | None = None
 
     @property
     def compiled(self) -> bool:
@@ -108,6 +109,21 @@ class Assembly(Simulation):
     @property
     def model(self):
         raise AttributeError("a scene of several bodies: each body's model is .system.members[i].model")
+
+    @property
+    def body_names(self) -> list[str]:
+        return [m.name for m in self.system.members]
+
+    @property
+    def bodies(self) -> list:
+        return [m.body for m in self.system.members]
+
+    @property
+    def water(self):
+        return self.system.water
+
+    integrator = None
+    """(Several bodies step by their own scheme: system.py.)"""
 
     @property
     def n_samples(self) -> int:
@@ -216,17 +232,24 @@ class Assembly(Simulation):
                                             pull, float(s.E_rad), tensions))  # fmt: skip
         return self._frame[1]
 
+    def parts(self) -> list:
+        """Each body's one-body Frame at the current state (its pose and twist, its wet surface, the water's force and
+        gravity on it about its centre of mass, its energies; not the joints' reactions, the lines' pull or the radiation
+        of the bodies together): what a viewer draws of each body. Computed once per state, on the numpy reference."""
+        if self._parts is None or self._parts[0] is not self.state:
+            from .simulation import observe
+            from .state import State
+
+            s, frames = self.state, []
+            for m, b, R in zip(self.system.members, body_frames(self.system, s), self.system.pose(s).R):
+                L = R @ (m.body.inertia * (R.T @ b["omega"]))
+                frames.append(observe(m.model, State(s.t, b["x"].copy(), b["q"], b["u"].copy(), L)))
+            self._parts = (self.state, frames)
+        return self._parts[1]
+
     def columns(self) -> list[str]:
-        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the energies,
-        E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without damping, drag and waves)."""
-        cols = ["t"]
-        for m in self.system.members:
-            cols += [f"{m.name}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
-        for g in self.system.joints:
-            cols += [f"{g.name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
-        if self.moorings is not None:
-            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
-        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
+        """The CSV's header (AssemblyFrame.columns)."""
+        return self.frame().columns()
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,6 +279,19 @@ class AssemblyFrame:
     def E_total(self) -> float:
         """Kinetic, gravity, hydrostatic and the take-offs' springs, J (E_total + E_pto is conserved without damping, drag and waves)."""
         return sum(self.energies.values())
+
+    def columns(self) -> list[str]:
+        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the lines'
+        pull; the energies, E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without
+        damping, drag and waves)."""
+        cols = ["t"]
+        for b in self.bodies:
+            cols += [f"{b['name']}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
+        for name, *_ in self.joints:
+            cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
+        if self.mooring:
+            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
+        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
 
     def row(self) -> list[float]:
         out = [self.t]

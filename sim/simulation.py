@@ -83,6 +83,11 @@ class Frame:
     about (None: free or fixed)."""
 
     @property
+    def joint_axes(self) -> list:
+        """The joint's axis as a list (none when free or fixed), as a scene of several bodies lists its joints'."""
+        return [] if self.joint_axis is None else [self.joint_axis]
+
+    @property
     def E_hyd_of_model(self) -> float:
         """The hydrostatic energy the running force model conserves (the sampled models' own), J."""
         return self.E_hyd if self.E_hyd_model is None else self.E_hyd_model
@@ -91,6 +96,10 @@ class Frame:
     def E_total(self) -> float:
         """Kinetic, gravity and exact hydrostatic energy, J (constant without damping, drag, waves or radiation)."""
         return self.E_kin + self.E_grav + self.E_hyd
+
+    def columns(self) -> list[str]:
+        """The CSV's header (CSV_COLUMNS): `row` gives the values."""
+        return list(CSV_COLUMNS)
 
     def row(self) -> list[float]:
         """Values in CSV_COLUMNS order."""
@@ -364,6 +373,25 @@ class Simulation:
     def columns(self) -> list[str]:
         """The CSV's header (Frame.row gives a row)."""
         return list(CSV_COLUMNS)
+
+    @property
+    def body_names(self) -> list[str]:
+        """The scene's bodies by the names update takes them by (config.body_names): here `body`."""
+        return ["body"]
+
+    @property
+    def bodies(self) -> list[Body]:
+        """The running bodies, in the scene's order."""
+        return [self.body]
+
+    @property
+    def water(self):
+        """The running water (its surface, current and sea)."""
+        return self.model.water
+
+    def parts(self) -> list[Frame]:
+        """Each body's one-body Frame (here the run's own): what a viewer draws of each."""
+        return [self.frame()]
 
     @property
     def n_samples(self) -> int:

@@ -34,7 +34,7 @@ def viewer(scene: str = "damped", **kwargs):
 
 def paused(app) -> bool:
     snap = app.sync()
-    return snap.paused if hasattr(snap, "paused") else snap.settings.paused
+    return snap.settings.paused
 
 
 async def click_pause_from(app, values) -> list[bool]:
@@ -162,11 +162,14 @@ def test_an_idle_upload_is_dropped_and_frees_the_way_for_others(monkeypatch):
         assert "Loaded cube" in snap.notice and app.gate.uploads.dropped_idle == 2 and _held(app) == 0
 
 
-def test_the_several_body_viewer_refuses_what_the_one_body_viewer_refuses():
+def test_a_scene_of_several_bodies_refuses_what_one_body_refuses():
     """Properties other than the value, values of the wrong type, numbers past msgpack's range and nested values, sent
-    to Pause, Step, Reset and Speed: none changes a control, and Pause, Step and Speed still work from a page."""
+    to Pause, Step, Reset, Speed and the choice of body: none changes a control, and Pause, Step and Speed still work
+    from a page (one viewer, one gate, whatever the scene)."""
     with viewer("rm3") as app:
-        handles = app.server.gui._gui_input_handle_from_uuid
+        handles = {uuid: h for uuid, h in app.server.gui._gui_input_handle_from_uuid.items()
+                   if str(getattr(h._impl.props, "label", "")).split(" (")[0] in ("Pause", "Step", "Reset", "Speed", "Body")}  # fmt: skip
+        assert len(handles) == 5
         before = {uuid: (type(h.value), h._impl.props) for uuid, h in handles.items()}
         bad = ({"removed": True}, {"update_cb": []}, {"update_cb": 5}, {"value": -1}, {"value": float("inf")}, {"value": {"a": 1}},
                {"value": 2**64 - 1}, {"value": [[[1.0]]]}, {"value": "x" * 100_000}, {"disabled": True})  # fmt: skip
@@ -181,13 +184,13 @@ def test_the_several_body_viewer_refuses_what_the_one_body_viewer_refuses():
                 await page.read(1.0)
 
         asyncio.run(attack())
-        assert not paused(app) and app.sync().speed == app.controls.speed.value == 0.01  # -1 on Speed: clamped, and shown so
+        assert not paused(app) and app.sync().settings.speed == app.controls.speed.value == 0.01  # -1 on Speed: clamped, and shown so
         assert {uuid: (type(h.value), h._impl.props) for uuid, h in handles.items()} == before
         assert app.gate.refusals.count >= len(handles) * (len(bad) - 1)  # (-1 on Pause is refused; on Speed it is a clamp)
         assert asyncio.run(click_pause_from(app, [True, False, True, False, True, False, True, False, True, False])) == [True, False] * 5
 
 
-def test_the_several_body_viewer_takes_a_token():
+def test_a_scene_of_several_bodies_takes_a_token():
     """`--token` on rm3: a page without it watches (its Pause is refused), the page opened at the banner's link drives."""
     with viewer("rm3", token="s3cret") as app:
         query = app.address().split("/?", 1)[1]

@@ -150,6 +150,10 @@ class SceneView:
         view = size / 8 * (2.5 if waves else 1.0)  # a sea needs a wider view than a calm pond
         server.initial_camera.position = (2.6 * view, -3.4 * view, 1.9 * view)
         server.initial_camera.look_at = (0.0, 0.0, -0.3)
+        if len(parts) > 1:  # several bodies: the view takes in their whole height (rm3's spar reaches 35 m down)
+            extent = max(max(float(np.ptp(p.body.mesh_vertices, axis=0).max()) for p in parts), 2.0)
+            server.initial_camera.position = (1.6 * extent, -2.2 * extent, 0.9 * extent)
+            server.initial_camera.look_at = (0.0, 0.0, -0.25 * extent)
         self.bodies: list[BodyNodes] = []
         self._names: tuple = ()
         self._colour_time = self._arrow_time = self._lines_time = -np.inf

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import load_scene, with_overrides
+from ..config import ConfigError, load_scene, with_overrides
 from ..simulation import Simulation
 from .progress import progress_bar
 
@@ -125,6 +125,9 @@ def bench(args: BenchArgs) -> int:
                                    systems=False, sweep_cases=0)  # fmt: skip
     compile_s = 0.0
     base = load_scene(args.scene)
+    if base.bodies:  # the first tables time one body's samples and schemes; several bodies have their own rows
+        raise ConfigError(f"bench --scene times one body's step (its samples and integrators): scene {args.scene!r} has several bodies; "
+                          "their rows are the table `--systems` prints (rm3, rm3-moored)")  # fmt: skip
     cells = ([("points", n, name) for n in args.sizes for name in args.integrators] + [("cells", n, "implicit") for n in args.sizes]
              + [("panels", 0, name) for name in args.integrators])  # fmt: skip
     announce(args, base, cells)

@@ -61,6 +61,9 @@ CompareArgs = declared_flags("CompareArgs", _CompareBase, SCENE_FLAGS)
 def scene_from_args(args: CompareArgs):
     """The scene file with every flag given applied on top, over args.t_end."""
     scene = load_scene(args.scene)
+    if scene.bodies:  # its integrators and their orders are one body's (several bodies step by their own scheme)
+        raise ConfigError(f"compare runs one body under each integrator: scene {args.scene!r} has several bodies, which step by their "
+                          "own scheme (Stormer-Verlet; python -m sim run --scene NAME --dt DT to see its convergence)")  # fmt: skip
     position = scene.initial.position
     if args.z0 is not None:
         position = (position[0], position[1], args.z0)

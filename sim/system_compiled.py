@@ -10,6 +10,7 @@ loads (the mooring lines') are read from system.held at each call: fixed over th
 from __future__ import annotations
 
 import os
+
 import numpy as np
 
 from .system import System, SystemState

@@ -146,20 +146,37 @@ def inertia_matrix(tree, R, J, added, R0, radiating):
     k, n = R.shape[0], tree.n_dofs
     M = np.zeros((n, n))
     G = np.zeros((6 * k, n))
+    MJ = np.empty((6, n))
     for b in range(k):
         I3 = world_inertia(R[b], tree.inertia[b])
         Jb = J[b]
-        MJ = np.zeros((6, n))
         for c in range(n):
             for i in range(3):
                 MJ[i, c] = tree.mass[b] * Jb[i, c]
                 MJ[3 + i, c] = I3[i, 0] * Jb[3, c] + I3[i, 1] * Jb[4, c] + I3[i, 2] * Jb[5, c]
-        M += Jb.T @ MJ
+        transposed_product(M, Jb, MJ)
         if radiating:
             G[6 * b : 6 * b + 6] = turned(R[b], R0[b], Jb)
     if radiating:
-        M += G.T @ (added @ G)
+        AG = np.zeros((6 * k, n))
+        for i in range(6 * k):
+            for m in range(6 * k):
+                a = added[i, m]
+                for c in range(n):
+                    AG[i, c] += a * G[m, c]
+        transposed_product(M, G, AG)
     return M, G
+
+
+@njit(**JIT)
+def transposed_product(M, A, B):
+    """M += A^T B."""
+    for a in range(A.shape[1]):
+        for c in range(B.shape[1]):
+            acc = 0.0
+            for i in range(A.shape[0]):
+                acc += A[i, a] * B[i, c]
+            M[a, c] += acc
 
 
 @njit(**JIT)
@@ -181,27 +198,52 @@ def bias(tree, R, J, along_e, v):
     """(b(v), db/dv) (System.bias): b = sum_b J_b^T (M_b J_b_dot v + (0, omega x I omega))."""
     n, k = tree.n_dofs, R.shape[0]
     b, B = np.zeros(n), np.zeros((n, n))
+    along_v, crossed, rows = np.empty((6, n)), np.empty((6, n)), np.empty((6, n))
+    a, omega, load = np.empty(6), np.empty(3), np.empty(6)
     for m in range(k):
-        along_v = np.zeros((6, n))
-        for i in tree.turning:
-            along_v += v[i] * along_e[i, m]
-        I3 = world_inertia(R[m], tree.inertia[m])
         Jm = J[m]
-        omega = Jm[3:] @ v
-        Iw = I3 @ omega
-        a = along_v @ v
-        load = np.empty(6)
-        load[:3] = tree.mass[m] * a[:3]
-        load[3:] = I3 @ a[3:] + cross(omega, Iw)
-        b += Jm.T @ load
-        crossed = along_v.copy()  # d(J_dot(v) v)/dv
-        for i in range(n):
-            crossed[:, i] += along_e[i, m] @ v
-        Wx = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
-        Lx = np.array([[0.0, -Iw[2], Iw[1]], [Iw[2], 0.0, -Iw[0]], [-Iw[1], Iw[0], 0.0]])
-        gyro = (Wx @ I3 - Lx) @ Jm[3:]  # d(omega x I omega)/dv
-        rows = np.empty((6, n))
-        rows[:3] = tree.mass[m] * crossed[:3]
-        rows[3:] = I3 @ crossed[3:] + gyro
-        B += Jm.T @ rows
+        along_v[:] = 0.0
+        for i in tree.turning:
+            for r in range(6):
+                for c in range(n):
+                    along_v[r, c] += v[i] * along_e[i, m, r, c]
+        for r in range(6):  # a = J_dot v; crossed = d(J_dot(v) v)/dv = J_dot(v) + [J_dot(e_i) v]_i
+            acc = 0.0
+            for c in range(n):
+                acc += along_v[r, c] * v[c]
+                crossed[r, c] = along_v[r, c]
+            a[r] = acc
+        for i in tree.turning:
+            for r in range(6):
+                acc = 0.0
+                for c in range(n):
+                    acc += along_e[i, m, r, c] * v[c]
+                crossed[r, i] += acc
+        for r in range(3):
+            acc = 0.0
+            for c in range(n):
+                acc += Jm[3 + r, c] * v[c]
+            omega[r] = acc
+        I3 = world_inertia(R[m], tree.inertia[m])
+        Iw = mv(I3, omega)
+        spin = cross(omega, Iw)
+        Ia = mv(I3, a[3:])
+        for r in range(3):
+            load[r] = tree.mass[m] * a[r]
+            load[3 + r] = Ia[r] + spin[r]
+        for c in range(n):
+            acc = 0.0
+            for r in range(6):
+                acc += Jm[r, c] * load[r]
+            b[c] += acc
+        # gyro = (skew(omega) I3 - skew(I omega)) J_omega: d(omega x I omega)/dv
+        W = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
+        L = np.array([[0.0, -Iw[2], Iw[1]], [Iw[2], 0.0, -Iw[0]], [-Iw[1], Iw[0], 0.0]])
+        P = mm3(W, I3) - L
+        for c in range(n):
+            for r in range(3):
+                rows[r, c] = tree.mass[m] * crossed[r, c]
+                rows[3 + r, c] = (I3[r, 0] * crossed[3, c] + I3[r, 1] * crossed[4, c] + I3[r, 2] * crossed[5, c]
+                                  + P[r, 0] * Jm[3, c] + P[r, 1] * Jm[4, c] + P[r, 2] * Jm[5, c])  # fmt: skip
+        transposed_product(B, Jm, rows)
     return b, B

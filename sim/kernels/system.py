@@ -14,10 +14,21 @@ import math
 
 import numpy as np
 
-from .expm import expm, solve
+from .expm import expm, matmul, solve
 from .jit import JIT, njit
-from .kinematics import bias, body_poses, drifted, inertia_matrix, rates
+from .kinematics import bias, body_poses, drifted, inertia_matrix, mm3, rates
 from .water import ramp_factor
+
+
+@njit(**JIT)
+def matvec(M, x):
+    out = np.zeros(M.shape[0])
+    for i in range(M.shape[0]):
+        acc = 0.0
+        for j in range(M.shape[1]):
+            acc += M[i, j] * x[j]
+        out[i] = acc
+    return out
 
 
 @njit(**JIT)
@@ -30,6 +41,35 @@ def sparse_matvec(rows, x):
             acc += values[p] * x[indices[p]]
         out[i] = acc
     return out
+
+
+@njit(**JIT)
+def add_transposed(Q, J, f):
+    """Q += J^T f."""
+    for c in range(J.shape[1]):
+        acc = 0.0
+        for i in range(J.shape[0]):
+            acc += J[i, c] * f[i]
+        Q[c] += acc
+
+
+@njit(**JIT)
+def add_sandwich(D, J, Db):
+    """D += J^T Db J (J (6, n))."""
+    n = J.shape[1]
+    DJ = np.zeros((6, n))
+    for i in range(6):
+        for m in range(6):
+            d = Db[i, m]
+            if d != 0.0:
+                for c in range(n):
+                    DJ[i, c] += d * J[m, c]
+    for a in range(n):
+        for c in range(n):
+            acc = 0.0
+            for i in range(6):
+                acc += J[i, a] * DJ[i, c]
+            D[a, c] += acc
 
 
 @njit(**JIT)
@@ -83,24 +123,29 @@ def linear_loads(lin, x, R, t):
     k = x.shape[0]
     f, D = np.empty((k, 6)), lin.D0.copy()
     r = ramp_factor(t, lin.ramp)
+    xi = np.empty(6)
     for b in range(k):
-        xi = np.empty(6)
         xi[:3] = x[b] - lin.x0[b]
-        xi[3:] = rotation_vector(R[b] @ lin.R0[b].T)
-        f[b] = lin.f0[b] - lin.C[b] @ xi
+        xi[3:] = rotation_vector(mm3(R[b], lin.R0[b].T))
         wave = np.zeros(6)
         for i in range(lin.omega.shape[0]):
             psi = lin.k[i, 0] * (x[b, 0] - lin.x0[b, 0]) + lin.k[i, 1] * (x[b, 1] - lin.x0[b, 1]) - lin.omega[i] * t
             c, s = math.cos(psi), math.sin(psi)
-            wave += c * lin.X_re[b, i] - s * lin.X_im[b, i]
-        f[b] += r * wave
+            for j in range(6):
+                wave[j] += c * lin.X_re[b, i, j] - s * lin.X_im[b, i, j]
+        for j in range(6):
+            acc = 0.0
+            for m in range(6):
+                acc += lin.C[b, j, m] * xi[m]
+            f[b, j] = lin.f0[b, j] - acc + r * wave[j]
     return f, D
 
 
 @njit(**JIT)
 def radiation_load(mem, G, J, x, memory, t):
     """(n,) the memory's load and the diffraction force, generalised: J^T (-T H x + f_d(t, x_b))."""
-    Q = -(G.T @ sparse_matvec(mem.H, memory))
+    Q = np.zeros(G.shape[1])
+    add_transposed(Q, G, -sparse_matvec(mem.H, memory))
     if mem.diffracting:
         k = x.shape[0]
         f = np.zeros(6 * k)
@@ -110,9 +155,9 @@ def radiation_load(mem, G, J, x, memory, t):
                 c, s = math.cos(psi), math.sin(psi)
                 for j in range(6 * b, 6 * b + 6):
                     f[j] += c * mem.A_re[i, j] - s * mem.A_im[i, j]
-        f *= ramp_factor(t, mem.ramp)
+        r = ramp_factor(t, mem.ramp)
         for b in range(k):
-            Q += J[b].T @ f[6 * b : 6 * b + 6]
+            add_transposed(Q, J[b], r * f[6 * b : 6 * b + 6])
     return Q
 
 
@@ -124,8 +169,8 @@ def kick(tree, mem, config, t, theta, v, absorbed, memory, f, D_b, held, h):
     n = tree.n_dofs
     Q, D = np.zeros(n), np.zeros((n, n))
     for b in range(x.shape[0]):
-        Q += J[b].T @ (f[b] + held[b])
-        D += J[b].T @ (D_b[b] @ J[b])
+        add_transposed(Q, J[b], f[b] + held[b])
+        add_sandwich(D, J[b], D_b[b])
     for gi in tree.joints:
         i = tree.dof[gi]
         Q[i] -= tree.stiffness[gi] * theta[tree.coordinate[gi]]
@@ -146,21 +191,21 @@ def kick(tree, mem, config, t, theta, v, absorbed, memory, f, D_b, held, h):
     big[n + 1 :, n + 1 :] = -A.T
     E = expm(big * h)
     Phi = E[: n + 1, : n + 1]
-    gram = E[: n + 1, n + 1 :] @ Phi.T
+    gram = matmul(E[: n + 1, n + 1 :], Phi.T)
     out = absorbed.copy()
     for gi in tree.joints:
         i = tree.dof[gi]
         out[tree.coordinate[gi]] += tree.damping[gi] * gram[i, i]
-    return (Phi @ z)[:n], out
+    return matvec(Phi, z)[:n], out
 
 
 @njit(**JIT)
 def memory_drift(mem, G0, G1, v, memory, E_rad, h):
     """The memory over a drift at v, driven by the twists in the fit's axes averaged over both ends, and the radiated
     energy h nu . mu likewise (SystemRadiation.drift)."""
-    nu0, nu1 = G0 @ v, G1 @ v
+    nu0, nu1 = matvec(G0, v), matvec(G1, v)
     after = sparse_matvec(mem.Phi, memory) + sparse_matvec(mem.Gamma, 0.5 * (nu0 + nu1))
-    power = 0.5 * (nu0 @ sparse_matvec(mem.H, memory) + nu1 @ sparse_matvec(mem.H, after))
+    power = 0.5 * (np.dot(nu0, sparse_matvec(mem.H, memory)) + np.dot(nu1, sparse_matvec(mem.H, after)))
     return after, E_rad + h * power
 
 

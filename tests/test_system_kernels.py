@@ -57,7 +57,8 @@ def test_each_stage_matches_the_reference(rm3_linear):
     """On the planar rm3 after 40 steps (moving, turning, the memory charged): each body's pose and twist Jacobian, the mass
     matrix with the added mass, b(v) and its Jacobian, the linear loads, the memory's load with diffraction, a kick (v and
     the take-off's energy) and the memory's drift, each to round-off."""
-    from sim.kernels import kinematics, system as kernels
+    from sim.kernels import kinematics
+    from sim.kernels import system as kernels
 
     system, s0, dt = rm3_linear
     s = moved(system, s0)

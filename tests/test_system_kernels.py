@@ -165,7 +165,7 @@ def test_moored_bodies_step_as_the_reference(tmp_path):
             run.step(200)
         close(runs[0].state.theta, runs[1].state.theta, 1e-9)
         close(runs[0].state.absorbed, runs[1].state.absorbed, 1e-9)
-        assert abs(runs[1].state.theta[0]) > 0.05
+        assert abs(runs[1].state.theta[0]) > 0.02  # pulled back towards the middle
     finally:
         for run in runs:
             run.close()

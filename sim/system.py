@@ -718,14 +718,22 @@ class Assembly:
             return new
         for _ in range(n):
             if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
-                k, pose = self.moored, self.system.pose(self.state)
-                nu = pose.J[k] @ self.state.v
-                self.system.held[k] = self.moorings.advance(pose.x[k], pose.R[k], nu[:3], nu[3:], self.dt)
+                k = self.moored
+                x, R, J = self._moored_pose()
+                nu = J @ self.state.v
+                self.system.held[k] = self.moorings.advance(x, R, nu[:3], nu[3:], self.dt)
             new = self.system.step(self.state, self.dt) if self.stepper is None else self.stepper.step(self.state, self.dt, 1)[0]
             if not new.is_finite():
                 raise SimulationDiverged(f"the state became non-finite at t = {self.state.t + self.dt:.6g} s: try a smaller time step")
             self.state = new
         return self.state
+
+    def _moored_pose(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, R, J) of the moored body now, from the kinematics of the step that runs."""
+        if self.stepper is not None:
+            return self.stepper.pose(self.state, self.dt, self.moored)
+        pose = self.system.pose(self.state)
+        return pose.x[self.moored], pose.R[self.moored], pose.J[self.moored]
 
     def frame(self) -> AssemblyFrame:
         if self._frame is None or self._frame[0] is not self.state:

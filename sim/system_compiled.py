@@ -37,6 +37,7 @@ class CompiledStep:
         self.tree = tree_pack(system)
         self.linear = linear_pack(system)
         self._memory: tuple = (None, None)
+        self._config: tuple = (None, None)
 
     def memory(self, dt: float):
         if self._memory[0] != dt:
@@ -61,7 +62,7 @@ class CompiledStep:
             *out, taken = kernels.advance(self.tree, self.linear, mem, *args, held, dt, n)
             return self._state(*out), taken
         t, x_free, q_free, theta, v, absorbed, memory, E_rad = args
-        config = kernels.configure(self.tree, mem, x_free, q_free, theta)
+        config = self.configuration(s, dt)
         for taken in range(1, n + 1):
             f, D = self._loads(config, t, v)
             config, x_free, q_free, theta, v, absorbed, memory, E_rad = kernels.first_half(
@@ -72,7 +73,22 @@ class CompiledStep:
             v, absorbed = kernels.kick(self.tree, mem, config, t, theta, v, absorbed, memory, f, D, held, 0.5 * dt)
             if not (np.isfinite(v).all() and np.isfinite(theta).all() and np.isfinite(x_free).all() and np.isfinite(q_free).all()):
                 break
-        return self._state(t, x_free, q_free, theta, v, absorbed, memory, E_rad), taken
+        out = self._state(t, x_free, q_free, theta, v, absorbed, memory, E_rad)
+        self._config = (out, config)
+        return out, taken
+
+    def configuration(self, s: SystemState, dt: float):
+        """kernels.system.configure at s's configuration (the last step's end kept: the next step starts there)."""
+        from .kernels import system as kernels
+
+        if self._config[0] is not s:
+            self._config = (s, kernels.configure(self.tree, self.memory(dt), s.x_free, s.q_free, s.theta))
+        return self._config[1]
+
+    def pose(self, s: SystemState, dt: float, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, R, J) of body b at s (System.pose's), from the compiled kinematics."""
+        x, R, J = self.configuration(s, dt)[:3]
+        return x[b], R[b], J[b]
 
     def _loads(self, config, t: float, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(f (k, 6), D (k, 6, 6)): each body's loads near its twist, from its own loads (body_loads.BodyLoads)."""

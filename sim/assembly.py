@@ -29,6 +29,7 @@ class Assembly(Simulation):
     def __init__(self, scene: SceneConfig, body=None, backend: str | None = None, mesh=None):
         from .compiling import kernels_ready
         from .simulation import default_backend
+        from .system_compiled import ready as step_ready
 
         if body is not None or mesh is not None:
             raise ConfigError("a scene of several bodies takes each body's mesh from its [[bodies]] entry (mesh = FILE)")
@@ -57,10 +58,12 @@ class Assembly(Simulation):
                 f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used"
             )
         self.backend = "numpy"
+        self.stepper = None
+        """The compiled system step (system_compiled.CompiledStep) on the numba backend, else None: System.step."""
         wanted = backend or default_backend()
         if wanted == "numba" and not self.system.has_twin:
             self.notes.append("a body's force model or term has no compiled twin: the scene runs on the numpy reference (slower)")
-        elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs):
+        elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs) and (self.exact or step_ready()):
             self.use_backend("numba")
         self._frame: tuple | None = None
         self._parts: tuple | None = None
@@ -77,15 +80,20 @@ class Assembly(Simulation):
         return self.system.has_twin and all(kernels_ready(spec) for spec in self.system.specs)
 
     def use_backend(self, backend: str) -> None:
-        """The bodies' loads from their compiled twins ('numba': loaded from the disk cache, or compiled now) or numpy,
-        from the next step on; the state is kept as it is. Without a twin for every body's loads, numpy."""
+        """The step compiled ('numba': the bodies' loads from their compiled twins and the system step,
+        system_compiled.py, each loaded from the disk cache or compiled now) or numpy, from the next step on; the state
+        is kept as it is. Without a twin for every body's loads, numpy. A linear system stepped exactly keeps its stepper."""
         from .kernels import warm_up
+        from .system_compiled import CompiledStep
 
         backend = backend if self.system.has_twin else "numpy"
         if backend == "numba":
             for spec in self.system.specs:
                 warm_up(spec)
         self.system.use_kernels(backend == "numba")
+        self.stepper = CompiledStep(self.system) if backend == "numba" and self.exact is None else None
+        if self.stepper is not None:
+            self.stepper.step(self.state, self.dt, 1)  # compiled now, or loaded from the disk cache
         self.backend = backend
 
     @property
@@ -153,6 +161,8 @@ class Assembly(Simulation):
             self.system.joints = [g for g in self.system.groups if g.kind in ("prismatic", "revolute")]
             self.scene, self._frame = scene, None
             self._check_exact()
+            if self.stepper is not None:  # the take-offs are packed in the compiled step's tree
+                self.use_backend("numba")
             return
         system, start = build(scene)  # a failure here leaves the run as it was
         restarted = _tree(system) != _tree(self.system)
@@ -208,16 +218,29 @@ class Assembly(Simulation):
                 raise SimulationDiverged(f"the state became non-finite by t = {new.t:.6g} s")
             self.state = new
             return new
+        if self.stepper is not None and self.moorings is None:  # all n steps in one compiled call (or a loop of two a step)
+            new, _ = self.stepper.step(self.state, self.dt, n)
+            if not new.is_finite():
+                raise SimulationDiverged(f"the state became non-finite at t = {new.t:.6g} s: try a smaller time step")
+            self.state = new
+            return new
         for _ in range(n):
             if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
-                k, pose = self.moored, self.system.pose(self.state)
-                nu = pose.J[k] @ self.state.v
-                self.system.held[k] = self.moorings.advance(pose.x[k], pose.R[k], nu[:3], nu[3:], self.dt)
-            new = self.system.step(self.state, self.dt)
+                x, R, J = self._moored_pose()
+                nu = J @ self.state.v
+                self.system.held[self.moored] = self.moorings.advance(x, R, nu[:3], nu[3:], self.dt)
+            new = self.system.step(self.state, self.dt) if self.stepper is None else self.stepper.step(self.state, self.dt, 1)[0]
             if not new.is_finite():
                 raise SimulationDiverged(f"the state became non-finite at t = {self.state.t + self.dt:.6g} s: try a smaller time step")
             self.state = new
         return self.state
+
+    def _moored_pose(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, R, J) of the moored body now, from the kinematics of the step that runs."""
+        if self.stepper is not None:
+            return self.stepper.pose(self.state, self.dt, self.moored)
+        pose = self.system.pose(self.state)
+        return pose.x[self.moored], pose.R[self.moored], pose.J[self.moored]
 
     def frame(self) -> AssemblyFrame:
         if self._frame is None or self._frame[0] is not self.state:

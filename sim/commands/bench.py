@@ -209,9 +209,21 @@ def bench(args: BenchArgs) -> int:
     if system_rows:
         print()
         print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
-              "its time goes; compiled: the bodies' loads (the kinematics and kicks are numpy)")  # fmt: skip
+              "its time goes; loads: the bodies' (numpy, compiled or linear), step: the kinematics, kicks, radiation memory and take-offs "
+              "(numpy, or the compiled system step: kernels/system.py); vs numpy: against the case's all-numpy row in this run")  # fmt: skip
         _table(
-            ("case", "loads", "us/step", "x real time", "hydrodynamics us", "radiation us", "MoorDyn us", "joints and stepping us"),
+            (
+                "case",
+                "loads",
+                "step",
+                "us/step",
+                "x real time",
+                "vs numpy",
+                "hydrodynamics us",
+                "radiation us",
+                "MoorDyn us",
+                "joints and stepping us",
+            ),
             system_rows,
         )
     return 0
@@ -296,13 +308,23 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     rows = []
     for label, scene in cases:
         linear = scene.fluid.hydro == "linear"
-        for backend in ("numpy",) if linear else ("numpy", "numba"):  # linear loads: nothing to compile
-            run = Simulation(scene, backend=backend)
+        reference = None
+        for loads_on, step_on in ((False, False),) + (((True, True),) if linear else ((True, False), (True, True))):
+            run = Simulation(scene, backend="numpy")
+            if loads_on:
+                run.use_backend("numba")  # the bodies' compiled loads and the compiled step
+                run.stepper = run.stepper if step_on else None
             t, h, r, m = _system_split(run, args.repeats)
             run.close()
+            reference = reference or t
             loads = ("linear, exact step" if run.exact else "linear") if linear else "compiled" if run.compiled else "numpy"
-            rows.append((label, loads, f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{h * 1e6:.0f}", f"{r * 1e6:.0f}",
+            step = "exact" if run.exact else "compiled" if run.stepper is not None else "numpy"
+            inside = run.stepper is not None  # the radiation runs inside the compiled step (and the linear loads too)
+            rows.append((label, loads, step, f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{reference / t:.1f}x",
+                         "in step" if inside and linear else f"{h * 1e6:.0f}", "in step" if inside else f"{r * 1e6:.0f}",
                          f"{m * 1e6:.0f}" if run.moorings else "-", f"{(t - h - r - m) * 1e6:.0f}"))  # fmt: skip
+            if run.exact:
+                break
     return rows
 
 

@@ -1,0 +1,125 @@
+"""Compiled twin of scipy.linalg.expm for the system's kicks (system.py: System.kick): Pade approximants of degree
+3, 5, 7, 9 or 13 with scaling and squaring (Higham 2005, "The scaling and squaring method for the matrix exponential
+revisited"), and the small dense algebra it needs, written out as loops: at 10 x 10 a BLAS or LAPACK call costs
+more than its arithmetic."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .jit import JIT, njit
+
+THETA = (1.495585217958292e-2, 2.539398330063230e-1, 9.504178996162932e-1, 2.097847961257068e0, 5.371920351148152e0)
+"""The largest 1-norm for which the Pade approximant of degree 3, 5, 7, 9, 13 is exact to double precision (Higham 2005, table 2.3)."""
+B3 = np.array([120.0, 60.0, 12.0, 1.0])
+B5 = np.array([30240.0, 15120.0, 3360.0, 420.0, 30.0, 1.0])
+B7 = np.array([17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0])
+B9 = np.array([17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0, 2162160.0, 110880.0, 3960.0, 90.0, 1.0])
+B13 = np.array([64764752532480000.0, 32382376266240000.0, 7771770303897600.0, 1187353796428800.0, 129060195264000.0,
+                10559470521600.0, 670442572800.0, 33522128640.0, 1323241920.0, 40840800.0, 960960.0, 16380.0, 182.0, 1.0])  # fmt: skip
+
+
+@njit(**JIT)
+def matmul(A, B):
+    """A B for small dense matrices."""
+    n, m, p = A.shape[0], A.shape[1], B.shape[1]
+    out = np.zeros((n, p))
+    for i in range(n):
+        for k in range(m):
+            a = A[i, k]
+            if a != 0.0:
+                for j in range(p):
+                    out[i, j] += a * B[k, j]
+    return out
+
+
+@njit(**JIT)
+def solve(A, B):
+    """X with A X = B ((n, n) and (n, p)): Gaussian elimination with partial pivoting (LAPACK's getrf/getrs, unblocked)."""
+    n, p = A.shape[0], B.shape[1]
+    LU, X = A.copy(), B.copy()
+    for c in range(n):
+        r, best = c, abs(LU[c, c])
+        for i in range(c + 1, n):
+            if abs(LU[i, c]) > best:
+                r, best = i, abs(LU[i, c])
+        if r != c:
+            for j in range(n):
+                LU[c, j], LU[r, j] = LU[r, j], LU[c, j]
+            for j in range(p):
+                X[c, j], X[r, j] = X[r, j], X[c, j]
+        pivot = LU[c, c]
+        for i in range(c + 1, n):
+            f = LU[i, c] / pivot
+            if f != 0.0:
+                for j in range(c + 1, n):
+                    LU[i, j] -= f * LU[c, j]
+                for j in range(p):
+                    X[i, j] -= f * X[c, j]
+    for c in range(n - 1, -1, -1):
+        for j in range(p):
+            acc = X[c, j]
+            for k in range(c + 1, n):
+                acc -= LU[c, k] * X[k, j]
+            X[c, j] = acc / LU[c, c]
+    return X
+
+
+@njit(**JIT)
+def _odd_even(A, powers, b):
+    """(U, V) of the Pade approximant of degree len(b) - 1 <= 9: U = A sum b_odd A^(k-1), V = sum b_even A^k (powers: A^2, A^4, ...)."""
+    n = A.shape[0]
+    u, V = np.zeros((n, n)), np.zeros((n, n))
+    for i in range(n):
+        u[i, i], V[i, i] = b[1], b[0]
+    for k in range(powers.shape[0]):
+        u += b[2 * k + 3] * powers[k]
+        V += b[2 * k + 2] * powers[k]
+    return matmul(A, u), V
+
+
+@njit(**JIT)
+def _pade13(A, A2, A4, A6):
+    n = A.shape[0]
+    b = B13
+    inner_u = b[13] * A6 + b[11] * A4 + b[9] * A2
+    inner_v = b[12] * A6 + b[10] * A4 + b[8] * A2
+    u = matmul(A6, inner_u) + b[7] * A6 + b[5] * A4 + b[3] * A2
+    V = matmul(A6, inner_v) + b[6] * A6 + b[4] * A4 + b[2] * A2
+    for i in range(n):
+        u[i, i] += b[1]
+        V[i, i] += b[0]
+    return matmul(A, u), V
+
+
+@njit(**JIT)
+def expm(A):
+    """e^A of a small square matrix: the lowest Pade degree exact at A's 1-norm, else degree 13 on A / 2^s, squared s times."""
+    n = A.shape[0]
+    norm = 0.0
+    for j in range(n):
+        col = 0.0
+        for i in range(n):
+            col += abs(A[i, j])
+        norm = max(norm, col)
+    A2 = matmul(A, A)
+    if norm <= THETA[3]:
+        count = 1 if norm <= THETA[0] else 2 if norm <= THETA[1] else 3 if norm <= THETA[2] else 4
+        b = B3 if count == 1 else B5 if count == 2 else B7 if count == 3 else B9
+        powers = np.empty((count, n, n))
+        powers[0] = A2
+        for k in range(1, count):
+            powers[k] = matmul(powers[k - 1], A2)
+        U, V = _odd_even(A, powers, b)
+        return solve(V - U, U + V)
+    s = max(0, int(math.ceil(math.log2(norm / THETA[4]))))
+    scale = 0.5**s
+    As, A2s = A * scale, A2 * (scale * scale)
+    A4 = matmul(A2s, A2s)
+    U, V = _pade13(As, A2s, A4, matmul(A4, A2s))
+    E = solve(V - U, U + V)
+    for _ in range(s):
+        E = matmul(E, E)
+    return E

@@ -27,9 +27,7 @@ class Assembly(Simulation):
     from their compiled twins when this machine has them (`kernels_ready`; `use_backend` loads or compiles them)."""
 
     def __init__(self, scene: SceneConfig, body=None, backend: str | None = None, mesh=None):
-        from .compiling import kernels_ready
         from .simulation import default_backend
-        from .system_compiled import ready as step_ready
 
         if body is not None or mesh is not None:
             raise ConfigError("a scene of several bodies takes each body's mesh from its [[bodies]] entry (mesh = FILE)")
@@ -63,7 +61,7 @@ class Assembly(Simulation):
         wanted = backend or default_backend()
         if wanted == "numba" and not self.system.has_twin:
             self.notes.append("a body's force model or term has no compiled twin: the scene runs on the numpy reference (slower)")
-        elif wanted == "numba" and all(kernels_ready(spec) for spec in self.system.specs) and (self.exact or step_ready()):
+        elif wanted == "numba" and self.kernels_ready:
             self.use_backend("numba")
         self._frame: tuple | None = None
         self._parts: tuple | None = None
@@ -77,7 +75,7 @@ class Assembly(Simulation):
         """Whether the bodies' compiled loads can be loaded at once (this machine compiled them before)."""
         from .compiling import kernels_ready
 
-        return self.system.has_twin and all(kernels_ready(spec) for spec in self.system.specs)
+        return self.system.has_twin and all(kernels_ready(spec) for spec in self.specs)
 
     def use_backend(self, backend: str) -> None:
         """The step compiled ('numba': the bodies' loads from their compiled twins and the system step,
@@ -103,8 +101,11 @@ class Assembly(Simulation):
 
     @property
     def specs(self) -> list:
-        """The kernels.Spec of the bodies' compiled loads, each once."""
-        return self.system.specs
+        """The kernels.Spec of the bodies' compiled loads, each once, and the system step's (kernels.SYSTEM_STEP) where it
+        runs (not for a linear system stepped exactly)."""
+        from .kernels import SYSTEM_STEP
+
+        return self.system.specs + ([] if self.exact is not None else [SYSTEM_STEP])
 
     @property
     def spec(self):

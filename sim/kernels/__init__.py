@@ -65,9 +65,16 @@ class Spec(NamedTuple):
         return "waves" if self.waves else "current" if self.current else "still"
 
     def describe(self) -> str:
+        if self == SYSTEM_STEP:
+            return "the step of several bodies on joints (kinematics, kicks, radiation memory)"
         terms = " + ".join(self.terms) or "no forces"
         water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
         return f"{'the loads of one of several bodies' if self.system else self.scheme + ' scheme'}, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
+
+
+SYSTEM_STEP = Spec("system-step", "any", (), False, False, False, False, True)
+"""The kernels of the step of several bodies (system_compiled.py): one set for every scene, compiled and loaded as a
+Spec is (in a child while the numpy reference runs, then from the disk cache)."""
 
 
 def spec_of(model, scheme: str) -> Spec:
@@ -147,6 +154,10 @@ _import_shared()
 
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
+    if spec == SYSTEM_STEP:
+        from ..system_compiled import ready
+
+        return ready()
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
     return ({"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}) <= found
 
@@ -155,10 +166,14 @@ def warm_up(spec: Spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken."""
     import time
 
+    if spec == SYSTEM_STEP:
+        from ..system_compiled import warm
+
+        return warm()
     start = time.perf_counter()
     specialised(spec).schemes.warm_up()
     return time.perf_counter() - start
 
 
-__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
+__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_STEP", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
            "sea_pack", "spec_of", "specialised", "warm_up"]  # fmt: skip

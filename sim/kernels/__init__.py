@@ -148,7 +148,8 @@ _import_shared()
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
-    return ({"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}) <= found
+    wanted = {"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}
+    return (wanted | ({"schemes.step_held"} if spec.held and not spec.system else set())) <= found
 
 
 def warm_up(spec: Spec) -> float:

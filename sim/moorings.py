@@ -255,6 +255,8 @@ def check_start(lines: LineSet, rho: float, dt: float | None = None) -> None:
     if seconds <= START_SECONDS:
         return
     floor = step * seconds / START_SECONDS  # the shortest step the budget allows with these segments
+    if dt is not None and dt > 0:  # in whole sub-steps of the body's step, longer than the floor itself (at the budget's edge)
+        floor = dt / max(1, math.ceil(dt / floor) - 1)
     if limits["axial"] <= limits["seabed"]:
         why = f"{CROSSINGS:g} of an axial wave's {limits['axial'] / CROSSINGS:.3g} s crossing of a {lines.line_length / lines.segments:.3g} m segment"
     else:
@@ -263,7 +265,7 @@ def check_start(lines: LineSet, rho: float, dt: float | None = None) -> None:
         stiffness = lines.line_stiffness * (limits["axial"] / floor) ** 2
         change = f"lower [moorings] line_stiffness to {_two_digits(stiffness, up=False)} N or less, or use fewer segments"
     else:  # both limits grow as sqrt(line_mass)
-        heavier = _two_digits(lines.line_mass * (seconds / START_SECONDS) ** 2, up=True)
+        heavier = _two_digits(lines.line_mass * (floor / min(limits.values())) ** 2, up=True)
         change = f"use a heavier [moorings] line_mass ({heavier} kg/m or more) or a thinner line_diameter"
     raise ConfigError(f"the mooring lines need MoorDyn steps of {step:.3g} s ({why}): MoorDyn's start-up could take up to {_duration(seconds)} "
                       f"({RELAX_SECONDS:g} s of relaxation, {RELAX_SECONDS / step:.2g} steps of {segments} segments) and every simulated second "

@@ -338,13 +338,22 @@ class Simulation:
         return float(self.scene.step.dt)
 
     def frame(self) -> Frame:
-        """Diagnostics of the current state (computed once per state and model)."""
+        """Diagnostics of the current state (computed once per state and model), with the mooring lines' nodes."""
+        frame = self._checked()
+        if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
+            frame = dataclasses.replace(frame, lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))
+            self._frame = frame
+        return frame
+
+    def _checked(self) -> Frame:
+        """The frame without the lines' nodes: what a step's blow-up check reads."""
         key = (self.state, self.model)
         if self._frame_key != key:
             frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
             if self.moorings is not None:
-                frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions(),
-                                            lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))  # fmt: skip
+                frame = dataclasses.replace(
+                    frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions()
+                )
             if self.joint is not None:
                 rate = self.joint.rate(self.body, self.state)
                 j = self.joint
@@ -411,7 +420,7 @@ class Simulation:
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
             self.largest_turn = max(self.largest_turn, turn)
         started = time.perf_counter()
-        frame = self.frame()
+        frame = self._checked()
         self.check_seconds = time.perf_counter() - started
         energy = frame.E_total
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:

@@ -513,13 +513,18 @@ class Simulation:
         """The compiled body and MoorDyn in turn, a step each: the kernels keep their carry and scratch from step to step
         (schemes.step_held, which also takes the lines' pull into the held load and gives the fairleads' next kinematics),
         so a step is one compiled call and one MoorDyn call. The same steps as the one-step-a-call loop, to round-off."""
+        from .kernels import entry_point
+
         compiled, packed, sea, rad = self._packs()
         lines, dt, t = self.moorings, self.dt, self.state.t
         levers = lines.r_body
         pos, vel = np.empty(levers.size), np.empty(levers.size)
         y = self.state.as_vector()
         s, keep = compiled.schemes.held_start(y, t, dt, packed, sea, rad, levers, pos, vel)
-        step, pull = compiled.schemes.step_held, lines.pull
+        step = entry_point(
+            compiled.schemes.step_held, (y, t, dt, packed, sea, rad, s, keep, lines._forces, lines._forces, levers, pos, vel)
+        )
+        pull = lines.pull
         try:
             for _ in range(n):
                 now = lines._forces

@@ -152,6 +152,13 @@ def cached(spec: Spec) -> bool:
     return (wanted | ({"schemes.step_held"} if spec.held and not spec.system else set())) <= found
 
 
+def entry_point(kernel, args: tuple):
+    """The compiled function behind `kernel` for these arguments' types, called without the dispatcher's typing of each
+    argument (6 us a call for the moored step's nested tuples); the kernel itself where it has none compiled yet."""
+    compiled = kernel.overloads.get(tuple(numba.typeof(a) for a in args))
+    return kernel if compiled is None else compiled.entry_point
+
+
 def warm_up(spec: Spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken."""
     import time

@@ -384,7 +384,7 @@ def validate(scene: SceneConfig) -> SceneConfig:
             raise ConfigError(f"[moorings] anchor {i + 1} is at z = {anchor[2]:g} m, above the water: MoorDyn would take its line as "
                               "submerged all along; put anchors at or below z = 0")  # fmt: skip
     if not m.line_file and (spread := lines_of(m)) is not None:
-        check_start(spread, checked["fluid"].rho)  # before MoorDyn: its start-up cannot be cut short
+        check_start(spread, checked["fluid"].rho, scene.step.dt)  # before MoorDyn: its start-up cannot be cut short
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)

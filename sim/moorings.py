@@ -46,6 +46,17 @@ SEABED_STIFFNESS = 3.0e6
 RELAX_SECONDS = 200.0
 """MoorDyn's start-up (Init) relaxes the lines towards their rest shape for at most this long (TmaxIC), in its own steps;
 it stops sooner once the fairleads' pull settles (0.2 s wall for moored-buoy, 0.5 s for rm3-moored)."""
+CROSSINGS = 0.46
+"""MoorDyn's step dtM at most this fraction of an axial wave's crossing of a segment, (L/N) sqrt(w/EA): MoorDyn's CFL
+(its `CFL` option: dtM over the segment's natural period 2 pi (L/N) sqrt(w/EA), Line::cfl2dt) of 0.073. Its default
+time scheme RK2 with its critically damped segments (BA = -1, as its docs advise) ran at 0.50 crossings and diverged at
+0.55 on both presets' lines (the 1 kg/m line and the 100 kg/m chain, their fairleads driven harder than their scenes
+drive them), where a free line's axial modes alone would allow 1.0: 0.46 keeps 8 % under the longest that ran. MoorDyn's
+default CFL 0.5 (pi crossings) diverges on these lines. The presets: moored-buoy 5 steps of 2.0 ms over its 0.01 s step
+(0.45 crossings), rm3-moored 19 of 2.6 ms over 0.05 s."""
+SEABED_RATE = 1.0
+"""dtM at most this over the seabed contact's angular frequency, sqrt(k d / m): half of RK2's bound (2) for a
+critically damped contact (MoorDyn's CFL leaves the seabed out)."""
 NS_PER_SEGMENT_STEP = 300.0
 """Wall time of one segment over one MoorDyn step, ns: measured 140-230 ns in its start-up's steps and 260-320 ns in a
 run's (RK2, with the coupling's calls) on this machine (2 cores, under load); the larger, so an estimate is an upper bound."""
@@ -138,23 +149,24 @@ class LineSet:
         return 2 * math.sqrt(SEABED_STIFFNESS * self.line_mass / self.line_diameter)
 
     def limits(self, rho: float) -> dict[str, float]:
-        """The times MoorDyn's explicit steps must resolve, s: an axial wave's crossing of a segment (MoorDyn's CFL rule:
-        the node's natural period, with the mass that moves along the line, its own plus CaAx's added water: none) and
-        the seabed contact's period over 2 pi."""
+        """The longest MoorDyn steps its scheme (RK2) stays stable with, s: CROSSINGS of an axial wave's crossing of a
+        segment (MoorDyn's CFL rule: the mass that moves along the line is its own, CaAx = 0) and SEABED_RATE over the
+        seabed contact's angular frequency."""
         along = self.line_mass + LINE_DRAG[3] * rho * math.pi * self.line_diameter**2 / 4
         return {
-            "axial": (self.line_length / self.segments) / math.sqrt(self.line_stiffness / along),
-            "seabed": math.sqrt(self.line_mass / (SEABED_STIFFNESS * self.line_diameter)),
+            "axial": CROSSINGS * (self.line_length / self.segments) / math.sqrt(self.line_stiffness / along),
+            "seabed": SEABED_RATE * math.sqrt(self.line_mass / (SEABED_STIFFNESS * self.line_diameter)),
         }
 
-    def sub_step(self, rho: float) -> float:
-        """MoorDyn's time step (its dtM): a quarter of the shorter of the two limits (its scheme's stability, with room;
-        MoorDyn's own CFL default is pi times the crossing)."""
-        return 0.25 * min(self.limits(rho).values())
+    def sub_step(self, rho: float, dt: float | None = None) -> float:
+        """MoorDyn's time step (its dtM): the shorter of the two limits; with the body's step dt, that step cut into the
+        fewest whole sub-steps within them (MoorDyn's Step takes dtM steps and then the remainder)."""
+        longest = min(self.limits(rho).values())
+        return longest if dt is None else dt / math.ceil(dt / longest - 1e-9)
 
-    def input_file(self, x0: np.ndarray, R0: np.ndarray, rho: float, g: float) -> str:
+    def input_file(self, x0: np.ndarray, R0: np.ndarray, rho: float, g: float, dt: float | None = None) -> str:
         """The MoorDyn v2 input file of the spread: anchors about the world's z axis, fairleads on a body at x0
-        with orientation R0 (input frame to world)."""
+        with orientation R0 (input frame to world); dt, the body's step, sets MoorDyn's (sub_step)."""
         rows = self.ends(x0, R0)
         for i, (anchor, fair) in enumerate(rows):
             if anchor[2] < -self.anchor_depth * (1 + 1e-9):
@@ -185,7 +197,8 @@ ID LineType AttachA AttachB UnstrLen NumSegs Outputs
 (#) (name) (#) (#) (m) (-) (-)
 {lines}
 ---------------------- OPTIONS -----------------------------------------
-{self.sub_step(rho):.6g} dtM
+{_dtm(self.sub_step(rho, dt))} dtM
+RK2 tScheme
 {SEABED_STIFFNESS:g} kbot
 {self.seabed_damping():.6g} cbot
 {self.anchor_depth:.9g} WtrDpth
@@ -197,6 +210,22 @@ ID LineType AttachA AttachB UnstrLen NumSegs Outputs
 0.0005 threshIC
 ------------------------- need this line --------------------------------------
 """
+
+
+def _dtm(step: float) -> str:
+    """dtM as written: a hair over the sub-step, so that MoorDyn's Step over the body's step takes exactly the whole
+    sub-steps (exactly dt / n, its remainder after n of them could be a rounding's worth: one more step)."""
+    return f"{step * (1 + 1e-7):.9g}"
+
+
+def _silenced(text: str) -> tuple[str, bool]:
+    """The input with MoorDyn's per-step progress ("t = ...", on the C stdout) and output files switched off (disableOutput
+    in its OPTIONS; the outputs would go to a folder removed at the end), and whether that could be done (a file without
+    an OPTIONS section: its steps are silenced one by one instead, 7 us each)."""
+    header = re.search(r"(?im)^-+\s*options\b.*$", text)
+    if header is None:
+        return text, False
+    return f"{text[: header.end()]}\n1 disableOutput{text[header.end() :]}", True
 
 
 def start_seconds(dt: float, segments: int, relax: float = RELAX_SECONDS) -> float:
@@ -216,26 +245,30 @@ def _two_digits(x: float, up: bool) -> str:
     return f"{(math.ceil if up else math.floor)(x / unit * (1 - 1e-12 if up else 1 + 1e-12)) * unit:.2g}"
 
 
-def check_start(lines: LineSet, rho: float) -> None:
-    """Refuse lines whose MoorDyn step would make its start-up longer than START_SECONDS (and the run as slow), before
-    MoorDyn is called: one line with the step they need, the time it would take and what to change."""
-    dt, limits, segments = lines.sub_step(rho), lines.limits(rho), lines.count() * lines.segments
-    seconds = start_seconds(dt, segments)
+def check_start(lines: LineSet, rho: float, dt: float | None = None) -> None:
+    """Refuse lines whose MoorDyn step (sub_step, within the body's step dt) would make its start-up longer than
+    START_SECONDS (and the run as slow), before MoorDyn is called: one line with the step they need, the time it would
+    take and what to change."""
+    limits, segments = lines.limits(rho), lines.count() * lines.segments
+    step = lines.sub_step(rho, dt if dt is not None and dt > 0 else None)
+    seconds = start_seconds(step, segments)
     if seconds <= START_SECONDS:
         return
-    floor = dt * seconds / START_SECONDS  # the shortest step the budget allows with these segments
+    floor = step * seconds / START_SECONDS  # the shortest step the budget allows with these segments
+    if dt is not None and dt > 0:  # in whole sub-steps of the body's step, longer than the floor itself (at the budget's edge)
+        floor = dt / max(1, math.ceil(dt / floor) - 1)
     if limits["axial"] <= limits["seabed"]:
-        why = f"a quarter of an axial wave's {limits['axial']:.3g} s crossing of a {lines.line_length / lines.segments:.3g} m segment"
+        why = f"{CROSSINGS:g} of an axial wave's {limits['axial'] / CROSSINGS:.3g} s crossing of a {lines.line_length / lines.segments:.3g} m segment"
     else:
-        why = f"a quarter of the seabed contact's period over 2 pi, {limits['seabed']:.3g} s for this line_mass and line_diameter"
-    if limits["axial"] <= limits["seabed"] and limits["seabed"] >= 4 * floor:  # the stiffness alone can bring the step up
-        stiffness = lines.line_stiffness * (limits["axial"] / (4 * floor)) ** 2
+        why = f"{SEABED_RATE:g} over the seabed contact's angular frequency, {limits['seabed']:.3g} s for this line_mass and line_diameter"
+    if limits["axial"] <= limits["seabed"] and limits["seabed"] >= floor:  # the stiffness alone can bring the step up
+        stiffness = lines.line_stiffness * (limits["axial"] / floor) ** 2
         change = f"lower [moorings] line_stiffness to {_two_digits(stiffness, up=False)} N or less, or use fewer segments"
     else:  # both limits grow as sqrt(line_mass)
-        heavier = _two_digits(lines.line_mass * (seconds / START_SECONDS) ** 2, up=True)
+        heavier = _two_digits(lines.line_mass * (floor / min(limits.values())) ** 2, up=True)
         change = f"use a heavier [moorings] line_mass ({heavier} kg/m or more) or a thinner line_diameter"
-    raise ConfigError(f"the mooring lines need MoorDyn steps of {dt:.3g} s ({why}): MoorDyn's start-up could take up to {_duration(seconds)} "
-                      f"({RELAX_SECONDS:g} s of relaxation, {RELAX_SECONDS / dt:.2g} steps of {segments} segments) and every simulated second "
+    raise ConfigError(f"the mooring lines need MoorDyn steps of {step:.3g} s ({why}): MoorDyn's start-up could take up to {_duration(seconds)} "
+                      f"({RELAX_SECONDS:g} s of relaxation, {RELAX_SECONDS / step:.2g} steps of {segments} segments) and every simulated second "
                       f"of the run {_duration(seconds / RELAX_SECONDS)}, "
                       f"over the {START_SECONDS:g} s allowed for the start-up (steps of {floor:.2g} s or longer); {change}")  # fmt: skip
 
@@ -325,6 +358,7 @@ class Moorings:
         self._md = md
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
         path = Path(self._folder.name) / "lines.txt"
+        text, self._silent = _silenced(text)
         path.write_text(text)
         with _quiet():
             self._system = md.Create(str(path))
@@ -351,6 +385,11 @@ class Moorings:
             self.close()
             raise ConfigError(f"MoorDyn could not find the lines' rest shape (error {status})")
         md.SetVerbosity(self._system, md.LEVEL_NONE)  # a step's failure is said in one line below, not in MoorDyn's two
+        try:  # the wrapper's own call, without moordyn.Step's copies of the arrays into lists
+            from cmoordyn import step
+        except ImportError:
+            step = md.Step
+        self._step = step
         self.t = float(t0)
         self.seconds = 0.0
         """Wall time spent in MoorDyn's steps so far, s (the benchmark's split)."""
@@ -390,7 +429,9 @@ class Moorings:
         q = np.asarray(scene.initial.orientation, float)
         from .rotation import quat_to_matrix
 
-        text = spread.input_file(np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g)
+        text = spread.input_file(
+            np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g, scene.step.dt
+        )
         return cls(text, x0, R0, u0, omega0)
 
     def _kinematics(self, x, lever, u, omega) -> tuple[np.ndarray, np.ndarray]:
@@ -400,28 +441,40 @@ class Moorings:
     def _wrench(self, forces: np.ndarray, R: np.ndarray) -> np.ndarray:
         return np.concatenate([forces.sum(axis=0), _moment(self.r_body @ R.T, forces)])
 
+    def pull(self, pos: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarray:
+        """Move the lines from self.t over dt with the fairleads at pos and moving at vel (flat, (3 k,), world); return
+        their pull at t + dt, (k, 3), now self's. The per-step call of a moored run: nothing else is built."""
+        started = time.perf_counter()
+        try:
+            if self._silent:
+                ahead = self._step(self._system, pos, vel, self.t, dt)
+            else:
+                with _quiet():
+                    ahead = self._step(self._system, pos, vel, self.t, dt)
+        except RuntimeError:  # MoorDyn found NaN in its nodes: its own step was too long for the lines
+            ahead = (math.nan,)
+        self.seconds += time.perf_counter() - started
+        if not math.isfinite(sum(ahead)):
+            from .errors import SimulationDiverged
+
+            raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments "
+                                     f"(a mooring file's dtM: at most {CROSSINGS:g} of an axial wave's crossing of a segment, sqrt(mass / EA) per metre)")  # fmt: skip
+        self._forces, self.t = np.array(ahead, float).reshape(-1, 3), self.t + dt
+        return self._forces
+
+    def settle(self, R: np.ndarray) -> None:
+        """`load`: the pull now on the body with orientation R (after steps taken with `pull`)."""
+        self.load = self._wrench(self._forces, R)
+
     def advance(self, x, R, u, omega, dt: float) -> np.ndarray:
         """Move the lines from self.t over dt with the fairleads at the body's pose and twist at self.t;
         return the wrench to hold over that step (the mean of the pull at both ends)."""
         lever = self.r_body @ R.T
-        pos, vel = self._kinematics(x, lever, u, omega)
-        started = time.perf_counter()
-        try:
-            with _quiet():
-                ahead = np.asarray(self._md.Step(self._system, pos, vel, self.t, dt), float).reshape(-1, 3)
-        except RuntimeError:  # MoorDyn found NaN in its nodes: its own step was too long for the lines
-            ahead = np.full((len(self._fairleads), 3), np.nan)
-        self.seconds += time.perf_counter() - started
-        if not np.all(np.isfinite(ahead)):
-            from .errors import SimulationDiverged
-
-            raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments "
-                                     "(a mooring file's dtM: at most a quarter of an axial wave's crossing of a segment, sqrt(mass / EA) per metre)")  # fmt: skip
-        now, later = self._forces.sum(axis=0), ahead.sum(axis=0)
-        turn_now, turn_later = _moment(lever, self._forces), _moment(lever, ahead)
-        self._forces, self.t = ahead, self.t + dt
+        now = self._forces
+        ahead = self.pull(*self._kinematics(x, lever, u, omega), dt)
+        later, turn_later = ahead.sum(axis=0), _moment(lever, ahead)
         self.load = np.concatenate([later, turn_later])
-        return np.concatenate([0.5 * (now + later), 0.5 * (turn_now + turn_later)])
+        return np.concatenate([0.5 * (now.sum(axis=0) + later), 0.5 * (_moment(lever, now) + turn_later)])
 
     def lines(self) -> list[np.ndarray]:
         """Each line's node positions, (segments + 1, 3), world frame, m: anchor end first."""

@@ -355,13 +355,22 @@ class Simulation:
         return float(self.scene.step.dt)
 
     def frame(self) -> Frame:
-        """Diagnostics of the current state (computed once per state and model)."""
+        """Diagnostics of the current state (computed once per state and model), with the mooring lines' nodes."""
+        frame = self._checked()
+        if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
+            frame = dataclasses.replace(frame, lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))
+            self._frame = frame
+        return frame
+
+    def _checked(self) -> Frame:
+        """The frame without the lines' nodes: what a step's blow-up check reads."""
         key = (self.state, self.model)
         if self._frame_key != key:
             frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
             if self.moorings is not None:
-                frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions(),
-                                            lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))  # fmt: skip
+                frame = dataclasses.replace(
+                    frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions()
+                )
             if self.joint is not None:
                 rate = self.joint.rate(self.body, self.state)
                 j = self.joint
@@ -473,7 +482,7 @@ class Simulation:
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
             self.largest_turn = max(self.largest_turn, turn)
         started = time.perf_counter()
-        frame = self.frame()
+        frame = self._checked()
         self.check_seconds = time.perf_counter() - started
         energy = frame.E_total
         if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
@@ -510,6 +519,8 @@ class Simulation:
         a jointed body stepped on its joint's coordinate (joints.py)."""
         from .joints import step as joint_step
 
+        if self.joint is None and self.compiled:
+            return self._advance_moored(n)
         advance = self._advance_compiled if self.compiled else self._advance_numpy
         held = self.model.held
         try:
@@ -530,7 +541,8 @@ class Simulation:
                 held[:] = self.moorings.load  # the pull now, as the frame shows it
         return self.state
 
-    def _advance_compiled(self, n: int) -> State:
+    def _packs(self) -> tuple:
+        """(kernels, the model packed for them, the sea, the radiation), each rebuilt only when what it packs changed."""
         from . import kernels
         from .kernels.layout import HELD
 
@@ -544,15 +556,49 @@ class Simulation:
             self._sea = ((model, self.expand_waves), kernels.sea_pack(model.water, body, self.expand_waves))
         if self._rad[0] != (model, self.dt):
             self._rad = ((model, self.dt), kernels.radiation_pack(model.radiation, body, self.dt))
-        y, done = self._packed[2].schemes.advance(
-            self.state.as_vector(), self.state.t, n, self.dt, self._packed[3], self._sea[1], self._rad[1]
-        )
+        return self._packed[2], self._packed[3], self._sea[1], self._rad[1]
+
+    def _state_of(self, y: np.ndarray, t: float) -> State:
         extra = (y[13:-1].copy(), float(y[-1])) if len(y) > 13 else ()  # radiation: the memory and E_rad
-        state = State(self.state.t + done * self.dt, y[0:3], y[3:7], y[7:10], y[10:13], *extra)
+        return State(t, y[0:3], y[3:7], y[7:10], y[10:13], *extra)
+
+    def _advance_compiled(self, n: int) -> State:
+        compiled, packed, sea, rad = self._packs()
+        y, done = compiled.schemes.advance(self.state.as_vector(), self.state.t, n, self.dt, packed, sea, rad)
+        state = self._state_of(y, self.state.t + done * self.dt)
         if done < n:
             self.state = state
             raise SimulationDiverged(self.diagnose(state.t + self.dt, "the state became non-finite"))
         return state
+
+    def _advance_moored(self, n: int) -> State:
+        """The compiled body and MoorDyn in turn, a step each: the kernels keep their carry and scratch from step to step
+        (schemes.step_held, which also takes the lines' pull into the held load and gives the fairleads' next kinematics),
+        so a step is one compiled call and one MoorDyn call. The same steps as the one-step-a-call loop, to round-off."""
+        from .kernels import entry_point
+
+        compiled, packed, sea, rad = self._packs()
+        lines, dt, t = self.moorings, self.dt, self.state.t
+        levers = lines.r_body
+        pos, vel = np.empty(levers.size), np.empty(levers.size)
+        y = self.state.as_vector()
+        s, keep = compiled.schemes.held_start(y, t, dt, packed, sea, rad, levers, pos, vel)
+        step = entry_point(
+            compiled.schemes.step_held, (y, t, dt, packed, sea, rad, s, keep, lines._forces, lines._forces, levers, pos, vel)
+        )
+        pull = lines.pull
+        try:
+            for _ in range(n):
+                now = lines._forces
+                y, ok = step(y, t, dt, packed, sea, rad, s, keep, now, pull(pos, vel, dt), levers, pos, vel)
+                if not ok:
+                    raise SimulationDiverged(self.diagnose(t + dt, "the state became non-finite"))
+                t += dt
+        finally:  # the state reached, and the pull now as the frame shows it
+            self.state = self._state_of(y, t)
+            lines.settle(keep[0])
+            self.model.held[:] = lines.load
+        return self.state
 
     def _rebase_energy(self) -> None:
         """Energy reference for blow-up detection: a rise of 10x the body's energy scale

@@ -159,7 +159,15 @@ def cached(spec: Spec) -> bool:
 
         return ready()
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
-    return ({"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}) <= found
+    wanted = {"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}
+    return (wanted | ({"schemes.step_held"} if spec.held and not spec.system else set())) <= found
+
+
+def entry_point(kernel, args: tuple):
+    """The compiled function behind `kernel` for these arguments' types, called without the dispatcher's typing of each
+    argument (6 us a call for the moored step's nested tuples); the kernel itself where it has none compiled yet."""
+    compiled = kernel.overloads.get(tuple(numba.typeof(a) for a in args))
+    return kernel if compiled is None else compiled.entry_point
 
 
 def warm_up(spec: Spec) -> float:

@@ -26,10 +26,10 @@ from .integrators import (
     with_memory,
 )
 from .jit import JIT, njit
-from .layout import Model, Scratch
+from .layout import HELD, Model, Scratch
 from .radiation import drift_memory, frames
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotation_quat
-from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, IMPLICIT, MOVING, SCHEME, SPLITTING, WAVES
+from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, HOLDING, IMPLICIT, MOVING, SCHEME, SPLITTING, WAVES
 from .state import angular_velocity
 from .surface import workspace
 
@@ -217,6 +217,56 @@ def advance(y0, t0, n_steps, dt, model, sea, rad):
     return y, n_steps
 
 
+@njit(inline="always", **JIT)
+def _fairleads(y, R, inertia, levers, pos, vel):
+    """The fairleads' positions and velocities, flat (3 k,), at the state y with rotation R: x + R r and u + omega x (R r)."""
+    w = angular_velocity(R, y[10:13], inertia)
+    for i in range(levers.shape[0]):
+        lever = R @ levers[i]
+        pos[3 * i : 3 * i + 3] = y[0:3] + lever
+        vel[3 * i : 3 * i + 3] = y[7:10] + np.cross(w, lever)
+
+
+@njit(**JIT)
+def held_start(y, t, dt, model, sea, rad, levers, pos, vel):
+    """What step_held keeps from step to step, at y's pose: the scratch and the carry (its wet flag as a (1,) array, its
+    mass frames apart), and the fairleads' kinematics for the first step into pos and vel."""
+    s = scratch(model.geom)
+    R, F, T, D, wet, K, lam, V, WS = start(y, t, dt, model, s, sea, rad)
+    _fairleads(y, R, model.inertia, levers, pos, vel)
+    return s, (R, F, T, D, np.array([wet]), K, lam, V, WS[0], WS[1])
+
+
+@njit(**JIT)
+def step_held(y, t, dt, model, sea, rad, s, keep, now, ahead, levers, pos, vel):
+    """One step with the held load (layout.HELD) the mean of the lines' pull at both ends of it: now and ahead (k, 3)
+    on the fairleads (body frame levers (k, 3)), their moment taken at the step's starting pose. `keep` (held_start)
+    is updated in place, and pos and vel get the fairleads' kinematics for the next step: a moored run calls this once
+    a step, with MoorDyn's step between calls, and nothing is rebuilt. Returns (y at t + dt, True), or (y, False)
+    where the step is not finite (nothing updated)."""
+    R, F, T, D, flag, K, lam, V, W, S = keep
+    held = np.zeros(6)
+    for i in range(levers.shape[0]):
+        pull = 0.5 * (now[i] + ahead[i])
+        held[:3] += pull
+        held[3:] += np.cross(R @ levers[i], pull)
+    c = model.coef
+    for i in range(6):  # the carried loads hold the last step's pull: swap it for this one's
+        if i < 3:
+            F[i] += held[i] - c[HELD + i]
+        else:
+            T[i - 3] += held[i] - c[HELD + i]
+        c[HELD + i] = held[i]
+    yn, carry = step(y, t, dt, (R, F, T, D, flag[0], K, lam, V, (W, S)), model, s, sea, rad)
+    if not _finite(yn):
+        return y, False
+    Rn, Fn, Tn, Dn, wetn, Kn, lamn, Vn, WSn = carry
+    R[:], F[:], T[:], D[:], K[:], lam[:], V[:], W[:], S[:] = Rn, Fn, Tn, Dn, Kn, lamn, Vn, WSn[0], WSn[1]
+    flag[0] = wetn
+    _fairleads(yn, Rn, model.inertia, levers, pos, vel)
+    return yn, True
+
+
 @njit(**JIT)
 def advance_many(Y, t0, n_steps, dt, geom, masses, inertias, coefs, sea, rad):
     """advance() for B bodies of one shape (rows of Y; their own mass, inertia and coefficients).
@@ -252,5 +302,9 @@ def warm_up() -> None:
         linearised_loads(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea)
         return
     advance(y, 0.0, 1, 0.01, model, sea, rad)
+    if HOLDING:  # a moored body's step (Simulation._advance_moored)
+        levers, pos, vel = np.zeros((1, 3)), np.zeros(3), np.zeros(3)
+        s, keep = held_start(y, 0.0, 0.01, model, sea, rad, levers, pos, vel)
+        step_held(y, 0.0, 0.01, model, sea, rad, s, keep, np.zeros((1, 3)), np.zeros((1, 3)), levers, pos, vel)
     observe(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea, np.empty(body.n_samples, dtype=np.bool_))
     exact_hydrostatic_energy(y[0:3].copy(), np.eye(3), body.packed, 1.0)  # the energy check of every frame

@@ -547,7 +547,7 @@ class SimLoop(Mailbox):
         unseen), so this runs once per batch, after the last command, and the GUI writes only a change."""
         if not keys:
             return
-        keys = keys | DERIVED
+        keys = keys | DERIVED | ({"samples"} if "points_per_edge" in keys else set())  # (a mesh refined by points per edge: its samples)
         with self._queue.mutex:
             pending = {name for name, _ in self._queue.queue}
         for key in keys - pending:

@@ -15,7 +15,7 @@ import sys
 import tempfile
 import time
 
-from ..config import ConfigError, available_scenes, one_body_scenes
+from ..config import ConfigError, available_scenes
 
 
 def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, str]:
@@ -29,8 +29,12 @@ def timed_compile(scene: str, cache: str) -> tuple[float, float, int, str]:
     from ..config import load_scene
     from ..simulation import Simulation
 
-    spec = Simulation(load_scene(scene), backend="numpy").spec
-    return timed([sys.executable, "-m", "sim.compiling", str(os.getpid()), spec_argument(spec)], cache)
+    run = Simulation(load_scene(scene), backend="numpy")
+    specs = run.specs if run.has_twin else []
+    run.close()
+    if not specs:  # nothing to compile (sim.compiling with no spec would compile every preset's)
+        return 0.0, 0.0, 0, ""
+    return timed([sys.executable, "-m", "sim.compiling", str(os.getpid()), *map(spec_argument, specs)], cache)
 
 
 def timed(command: list[str], cache: str) -> tuple[float, float, int, str]:
@@ -56,7 +60,7 @@ def how_it_ran(said: str) -> str:
 
 
 def startup(presets: tuple[str, ...], t_end: float) -> int:
-    names = presets or tuple(one_body_scenes())  # (several bodies have no compiled twin yet)
+    names = presets or tuple(available_scenes())
     unknown = [n for n in names if n not in available_scenes()]
     if unknown:
         raise ConfigError(f"--presets: {', '.join(map(repr, unknown))} not among the presets ({', '.join(available_scenes())})")

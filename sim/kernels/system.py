@@ -48,16 +48,41 @@ class Work(NamedTuple):
     nu: np.ndarray
     """(3, 6k) the twists in the fit's axes at both ends of a drift and their mean."""
     after: np.ndarray
+    phase: np.ndarray
+    """(k, c, 2) cos and sin of each component's phase at each body, from the linear loads (c = 0: not shared)."""
+    shift: np.ndarray
+    """(k, c, 2) cos and sin of k . x0_b: the diffraction's phase at x_b is the linear loads' shifted by it."""
 
 
 @njit(**JIT)
-def scratch(tree, mem, memory):
+def scratch(tree, mem, memory, c):
+    """The work buffers; c: the components whose phases the linear loads and the diffraction share (0: none; shifts_into)."""
     n, k = tree.n_dofs, tree.group.shape[0]
     m, k6 = 2 * n + 2, 6 * k if mem.on else 0
     return Work(work(tree, k6), np.zeros(n), np.zeros((n, n)), np.zeros((n, n + 1)), np.zeros((n, n)), np.zeros((m, m)), np.zeros((m, m)),
                 np.zeros((7, m, m)), np.zeros(n + 1), np.zeros((6, n)), np.zeros(n), np.zeros((n, n)), np.zeros((3, 6, n)),
                 np.zeros((4, 3, 3)), np.zeros((2, 6)), np.zeros(n), np.zeros(mem.H[0].shape[0] - 1), np.zeros(6 * k),
-                np.zeros((3, 6 * k)), np.zeros(memory.shape[0]))  # fmt: skip
+                np.zeros((3, 6 * k)), np.zeros(memory.shape[0]), np.zeros((k, c, 2)), np.zeros((k, c, 2)))  # fmt: skip
+
+
+@njit(**JIT)
+def shifts_into(lin, mem, shift):
+    """shift = cos and sin of k . x0_b (Work.shift)."""
+    for b in range(shift.shape[0]):
+        for i in range(shift.shape[1]):
+            psi = mem.k[i, 0] * lin.x0[b, 0] + mem.k[i, 1] * lin.x0[b, 1]
+            shift[b, i, 0], shift[b, i, 1] = math.cos(psi), math.sin(psi)
+
+
+@njit(**JIT)
+def shared_sea(lin, mem):
+    """Whether the linear loads and the diffraction sum the same components (the same sea): one cos and sin each."""
+    if not (lin.on and mem.on and mem.diffracting) or lin.omega.shape[0] != mem.omega.shape[0] or lin.ramp != mem.ramp:
+        return False
+    for i in range(lin.omega.shape[0]):
+        if lin.omega[i] != mem.omega[i] or lin.k[i, 0] != mem.k[i, 0] or lin.k[i, 1] != mem.k[i, 1]:
+            return False
+    return True
 
 
 @njit(**JIT)
@@ -185,13 +210,14 @@ def linear_loads(lin, x, R, t):
     """(f (k, 6), D (k, 6, 6)): each body's linear loads (LinearLoads.__call__): f0 - C xi + the Froude-Krylov force."""
     k = x.shape[0]
     f, D = np.empty((k, 6)), lin.D0.copy()
-    linear_into(lin, x, R, t, f, np.empty((2, 6)))
+    linear_into(lin, x, R, t, f, np.empty((2, 6)), np.empty((k, 0, 2)))
     return f, D
 
 
 @njit(**JIT)
-def linear_into(lin, x, R, t, f, vecs):
-    """f = linear_loads' (their D is lin.D0); vecs (2, 6) work."""
+def linear_into(lin, x, R, t, f, vecs, phase):
+    """f = linear_loads' (their D is lin.D0); vecs (2, 6) work; phase (k, c, 2): each cos and sin kept (c = 0: not)."""
+    keep = phase.shape[1] > 0
     r = ramp_factor(t, lin.ramp)
     xi, wave = vecs[0], vecs[1]
     for b in range(x.shape[0]):
@@ -201,6 +227,8 @@ def linear_into(lin, x, R, t, f, vecs):
         for i in range(lin.omega.shape[0]):
             psi = lin.k[i, 0] * (x[b, 0] - lin.x0[b, 0]) + lin.k[i, 1] * (x[b, 1] - lin.x0[b, 1]) - lin.omega[i] * t
             c, s = math.cos(psi), math.sin(psi)
+            if keep:
+                phase[b, i, 0], phase[b, i, 1] = c, s
             for j in range(6):
                 wave[j] += c * lin.X_re[b, i, j] - s * lin.X_im[b, i, j]
         for j in range(6):
@@ -214,13 +242,15 @@ def linear_into(lin, x, R, t, f, vecs):
 def radiation_load(mem, G, J, x, memory, t):
     """(n,) the memory's load and the diffraction force, generalised: J^T (-T H x + f_d(t, x_b))."""
     Q = np.zeros(G.shape[1])
-    radiation_into(mem, G, J, x, sparse_matvec(mem.H, memory), t, Q, np.zeros(6 * x.shape[0]))
+    none = np.zeros((x.shape[0], 0, 2))
+    radiation_into(mem, G, J, x, sparse_matvec(mem.H, memory), t, Q, np.zeros(6 * x.shape[0]), none, none)
     return Q
 
 
 @njit(**JIT)
-def radiation_into(mem, G, J, x, Hm, t, Q, f):
-    """Q = radiation_load's from the memory's output Hm = H x; f (6k) work."""
+def radiation_into(mem, G, J, x, Hm, t, Q, f, phase, shift):
+    """Q = radiation_load's from the memory's output Hm = H x; f (6k) work; phase and shift (Work's): the diffraction's
+    phases from the linear loads' (cos (a + b) = cos a cos b - sin a sin b), else from their own cos and sin."""
     Q[:] = 0.0
     for c in range(G.shape[1]):  # Q = G^T (-Hm)
         acc = 0.0
@@ -232,8 +262,12 @@ def radiation_into(mem, G, J, x, Hm, t, Q, f):
         f[:] = 0.0
         for i in range(mem.omega.shape[0]):
             for b in range(k):
-                psi = mem.k[i, 0] * x[b, 0] + mem.k[i, 1] * x[b, 1] - mem.omega[i] * t
-                c, s = math.cos(psi), math.sin(psi)
+                if shift.shape[1] > 0:
+                    a, d, ca, sa = phase[b, i, 0], phase[b, i, 1], shift[b, i, 0], shift[b, i, 1]
+                    c, s = a * ca - d * sa, d * ca + a * sa
+                else:
+                    psi = mem.k[i, 0] * x[b, 0] + mem.k[i, 1] * x[b, 1] - mem.omega[i] * t
+                    c, s = math.cos(psi), math.sin(psi)
                 for j in range(6 * b, 6 * b + 6):
                     f[j] += c * mem.A_re[i, j] - s * mem.A_im[i, j]
         r = ramp_factor(t, mem.ramp)
@@ -249,7 +283,7 @@ def radiation_into(mem, G, J, x, Hm, t, Q, f):
 def kick(tree, mem, config, t, theta, v, absorbed, memory, f, D_b, held, h):
     """(v, absorbed) after h under M v_dot = Q0 - D v (linearised at v), solved exactly (System.kick); f, D_b: each body's
     loads near its twist J_b v, held: the load another model holds on each body (k, 6)."""
-    w = scratch(tree, mem, memory)
+    w = scratch(tree, mem, memory, 0)
     if mem.on:
         sparse_into(mem.H, memory, w.Hm, False)
     v, absorbed = v.copy(), absorbed.copy()
@@ -277,7 +311,7 @@ def kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w):
         Q[i] -= tree.stiffness[gi] * theta[tree.coordinate[gi]]
         D[i, i] += tree.damping[gi]
     if mem.on:
-        radiation_into(mem, G, J, x, w.Hm, t, w.Qr, w.fd)
+        radiation_into(mem, G, J, x, w.Hm, t, w.Qr, w.fd, w.phase, w.shift)
         Q += w.Qr
     if tree.needs_bias:
         bias_into(tree, R, J, along, v, w.b, w.B, w.rows3, w.mats, w.vecs)
@@ -375,7 +409,8 @@ def advance(tree, lin, mem, t, x_free, q_free, theta, v, absorbed, memory, E_rad
     Returns the state and the steps taken. Works in place on copies of the state and on buffers made once: two
     configurations (a step's start and end), swapped each step."""
     x_free, q_free, theta, v, absorbed, memory = x_free.copy(), q_free.copy(), theta.copy(), v.copy(), absorbed.copy(), memory.copy()
-    w = scratch(tree, mem, memory)
+    w = scratch(tree, mem, memory, mem.omega.shape[0] if shared_sea(lin, mem) else 0)
+    shifts_into(lin, mem, w.shift)
     now, moved = new_config(tree, mem), new_config(tree, mem)
     configure_into(tree, mem, x_free, q_free, theta, now, w.kin, w.mats[0])
     if mem.on:
@@ -383,7 +418,7 @@ def advance(tree, lin, mem, t, x_free, q_free, theta, v, absorbed, memory, E_rad
     f, D_b = np.empty((now[0].shape[0], 6)), lin.D0.copy()
     taken = 0
     for _ in range(n):
-        linear_into(lin, now[0], now[1], t, f, w.vecs)
+        linear_into(lin, now[0], now[1], t, f, w.vecs, w.phase)
         kick_into(tree, mem, now, t, theta, v, absorbed, f, D_b, held, 0.5 * h, w)
         drift_into(tree, x_free, q_free, theta, v, h)
         configure_into(tree, mem, x_free, q_free, theta, moved, w.kin, w.mats[0])
@@ -391,7 +426,7 @@ def advance(tree, lin, mem, t, x_free, q_free, theta, v, absorbed, memory, E_rad
             E_rad = memory_into(mem, now[4], moved[4], v, memory, E_rad, h, w.Hm, w.nu, w.after)
         now, moved = moved, now
         t = t + h
-        linear_into(lin, now[0], now[1], t, f, w.vecs)
+        linear_into(lin, now[0], now[1], t, f, w.vecs, w.phase)
         kick_into(tree, mem, now, t, theta, v, absorbed, f, D_b, held, 0.5 * h, w)
         taken += 1
         if not finite(x_free, q_free, theta, v):

@@ -75,7 +75,7 @@ def test_each_stage_matches_the_reference(rm3_linear):
     assert np.abs(J[0][3:]).max() > 0.5  # the spar pitches: a turning Jacobian
     b, B = kinematics.bias(step.tree, R, J, along, s.v)
     b0, B0 = system.bias(s, s.v)
-    close(b, b0, 1e-9)  # central differences of J: round-off / 1e-5
+    close(b, b0, 1e-9)  # the reference's central differences of J (round-off / 1e-5) against their analytic limit
     close(B, B0, 1e-9)
     f, D = kernels.linear_loads(step.linear, x, R, s.t)
     for k, loads in enumerate(system.loads):

@@ -1,7 +1,9 @@
 """Compiled twin of system.py's kinematics (System.group_poses, _pose_of, drifted, mass_matrix, inertia, bias): the
 tree packed as system_layout.Tree, each body's pose and twist Jacobian, the mass matrix with the radiation's added
-mass, and the velocity-product load b(v) with its Jacobian, J_dot from the same central differences as the reference
-(so the two agree to round-off, not to the differences' 1e-10)."""
+mass, and the velocity-product load b(v) with its Jacobian. J_dot is analytic (`rates`: the forward kinematics
+differentiated along each turning unit velocity, omega x r terms down the tree), the limit of the reference's central
+differences (`rates_by_differences`, which it meets to their 1e-10). The `_into` functions write into buffers made once
+(`work`): at this size an allocation costs more than its arithmetic."""
 
 from __future__ import annotations
 

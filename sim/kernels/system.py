@@ -6,6 +6,8 @@ A configuration's kinematics (`configure`: poses, Jacobians, the mass matrix wit
 term's rates) is computed once and serves the kick at a step's end and the next step's first. The bodies' loads
 come from the linear pack (`advance`: n steps in one call) or from outside, one call a kick (`first_half` and
 `kick`: the bodies' own compiled or numpy loads, called from Python between them). Arrays follow system_layout.py.
+`advance` works in place on buffers made once a call (Work); the other entry points keep their signatures and make
+theirs a call.
 """
 
 from __future__ import annotations

@@ -75,7 +75,7 @@ def test_each_stage_matches_the_reference(rm3_linear):
     assert np.abs(J[0][3:]).max() > 0.5  # the spar pitches: a turning Jacobian
     b, B = kinematics.bias(step.tree, R, J, along, s.v)
     b0, B0 = system.bias(s, s.v)
-    close(b, b0, 1e-9)  # central differences of J: round-off / 1e-5
+    close(b, b0, 1e-9)  # the reference's central differences of J (round-off / 1e-5) against their analytic limit
     close(B, B0, 1e-9)
     f, D = kernels.linear_loads(step.linear, x, R, s.t)
     for k, loads in enumerate(system.loads):
@@ -95,6 +95,21 @@ def test_each_stage_matches_the_reference(rm3_linear):
     reference = rad.drift(system, kicked, after, dt)
     close(memory, reference.memory, 1e-13)
     assert E_rad == pytest.approx(reference.E_rad, rel=1e-12) and reference.E_rad > 0
+
+
+def test_the_velocity_product_rates_are_the_limit_of_the_central_differences(tmp_path, rm3_linear):
+    """dJ_b/dt along each turning unit velocity, from the forward kinematics differentiated (kinematics.rates), against the
+    central differences of the compiled kinematics (System.bias's) to 1e-8: the planar rm3 pitching, and a free barge
+    turning with a hinged flap and a slide on it."""
+    from sim.kernels import kinematics
+
+    system, s0, dt = rm3_linear
+    chain, c0 = build(scene_file(tmp_path, CHAIN))
+    for sys_, s, h in ((system, moved(system, s0), dt), (chain, moved(chain, c0, 100, 0.01), 0.01)):
+        tree = CompiledStep(sys_).tree
+        analytic = kinematics.rates(tree, s.x_free, s.q_free, s.theta)
+        close(analytic, kinematics.rates_by_differences(tree, s.x_free, s.q_free, s.theta), 1e-8)
+        assert np.abs(analytic[tree.turning]).max() > 0.1 and len(tree.turning) >= 2
 
 
 def trajectory_gap(system, s0, dt: float, n: int) -> tuple[float, float]:

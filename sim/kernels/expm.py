@@ -22,24 +22,31 @@ B13 = np.array([64764752532480000.0, 32382376266240000.0, 7771770303897600.0, 11
 
 
 @njit(**JIT)
-def matmul(A, B):
-    """A B for small dense matrices."""
+def matmul_into(A, B, out):
+    """out = A B for small dense matrices (out neither A nor B)."""
     n, m, p = A.shape[0], A.shape[1], B.shape[1]
-    out = np.zeros((n, p))
+    out[:] = 0.0
     for i in range(n):
         for k in range(m):
             a = A[i, k]
             if a != 0.0:
                 for j in range(p):
                     out[i, j] += a * B[k, j]
+
+
+@njit(**JIT)
+def matmul(A, B):
+    """A B for small dense matrices."""
+    out = np.empty((A.shape[0], B.shape[1]))
+    matmul_into(A, B, out)
     return out
 
 
 @njit(**JIT)
-def solve(A, B):
-    """X with A X = B ((n, n) and (n, p)): Gaussian elimination with partial pivoting (LAPACK's getrf/getrs, unblocked)."""
-    n, p = A.shape[0], B.shape[1]
-    LU, X = A.copy(), B.copy()
+def solve_into(LU, X):
+    """X <- A^-1 X ((n, n) and (n, p)), LU holding A and overwritten: Gaussian elimination with partial pivoting (LAPACK's
+    getrf/getrs, unblocked)."""
+    n, p = LU.shape[0], X.shape[1]
     for c in range(n):
         r, best = c, abs(LU[c, c])
         for i in range(c + 1, n):
@@ -64,39 +71,29 @@ def solve(A, B):
             for k in range(c + 1, n):
                 acc -= LU[c, k] * X[k, j]
             X[c, j] = acc / LU[c, c]
+
+
+@njit(**JIT)
+def solve(A, B):
+    """X with A X = B ((n, n) and (n, p))."""
+    X = B.copy()
+    solve_into(A.copy(), X)
     return X
 
 
 @njit(**JIT)
-def _odd_even(A, powers, b):
-    """(U, V) of the Pade approximant of degree len(b) - 1 <= 9: U = A sum b_odd A^(k-1), V = sum b_even A^k (powers: A^2, A^4, ...)."""
-    n = A.shape[0]
-    u, V = np.zeros((n, n)), np.zeros((n, n))
-    for i in range(n):
-        u[i, i], V[i, i] = b[1], b[0]
-    for k in range(powers.shape[0]):
-        u += b[2 * k + 3] * powers[k]
-        V += b[2 * k + 2] * powers[k]
-    return matmul(A, u), V
-
-
-@njit(**JIT)
-def _pade13(A, A2, A4, A6):
-    n = A.shape[0]
-    b = B13
-    inner_u = b[13] * A6 + b[11] * A4 + b[9] * A2
-    inner_v = b[12] * A6 + b[10] * A4 + b[8] * A2
-    u = matmul(A6, inner_u) + b[7] * A6 + b[5] * A4 + b[3] * A2
-    V = matmul(A6, inner_v) + b[6] * A6 + b[4] * A4 + b[2] * A2
-    for i in range(n):
-        u[i, i] += b[1]
-        V[i, i] += b[0]
-    return matmul(A, u), V
-
-
-@njit(**JIT)
 def expm(A):
-    """e^A of a small square matrix: the lowest Pade degree exact at A's 1-norm, else degree 13 on A / 2^s, squared s times."""
+    """e^A of a small square matrix (expm_into)."""
+    n = A.shape[0]
+    out = np.empty((n, n))
+    expm_into(A, out, np.empty((7, n, n)))
+    return out
+
+
+@njit(**JIT)
+def expm_into(A, out, W):
+    """out = e^A of a small square matrix, W (7, n, n) work: the lowest Pade degree exact at A's 1-norm, else degree 13 on
+    A / 2^s, squared s times."""
     n = A.shape[0]
     norm = 0.0
     for j in range(n):
@@ -104,22 +101,62 @@ def expm(A):
         for i in range(n):
             col += abs(A[i, j])
         norm = max(norm, col)
-    A2 = matmul(A, A)
+    A2, A4, A6, A8, u, V, T = W[0], W[1], W[2], W[3], W[4], W[5], W[6]
+    matmul_into(A, A, A2)
     if norm <= THETA[3]:
         count = 1 if norm <= THETA[0] else 2 if norm <= THETA[1] else 3 if norm <= THETA[2] else 4
         b = B3 if count == 1 else B5 if count == 2 else B7 if count == 3 else B9
-        powers = np.empty((count, n, n))
-        powers[0] = A2
-        for k in range(1, count):
-            powers[k] = matmul(powers[k - 1], A2)
-        U, V = _odd_even(A, powers, b)
-        return solve(V - U, U + V)
+        u[:] = 0.0
+        V[:] = 0.0
+        for i in range(n):
+            u[i, i], V[i, i] = b[1], b[0]
+        for k in range(count):  # U = A sum b_odd A^(2k), V = sum b_even A^(2k)
+            P = A2 if k == 0 else A4 if k == 1 else A6 if k == 2 else A8
+            if k > 0:
+                matmul_into(A2 if k == 1 else A4 if k == 2 else A6, A2, P)
+            for i in range(n):
+                for j in range(n):
+                    u[i, j] += b[2 * k + 3] * P[i, j]
+                    V[i, j] += b[2 * k + 2] * P[i, j]
+        matmul_into(A, u, T)
+        _pade_solve(T, V, out)
+        return
     s = max(0, int(math.ceil(math.log2(norm / THETA[4]))))
     scale = 0.5**s
-    As, A2s = A * scale, A2 * (scale * scale)
-    A4 = matmul(A2s, A2s)
-    U, V = _pade13(As, A2s, A4, matmul(A4, A2s))
-    E = solve(V - U, U + V)
+    for i in range(n):
+        for j in range(n):
+            A8[i, j] = A[i, j] * scale  # As
+            A2[i, j] *= scale * scale
+    matmul_into(A2, A2, A4)
+    matmul_into(A4, A2, A6)
+    b = B13
+    for i in range(n):  # inner terms into T (U's) and V (V's)
+        for j in range(n):
+            T[i, j] = b[13] * A6[i, j] + b[11] * A4[i, j] + b[9] * A2[i, j]
+            V[i, j] = b[12] * A6[i, j] + b[10] * A4[i, j] + b[8] * A2[i, j]
+    matmul_into(A6, T, u)
+    for i in range(n):
+        for j in range(n):
+            u[i, j] += b[7] * A6[i, j] + b[5] * A4[i, j] + b[3] * A2[i, j]
+    matmul_into(A6, V, T)
+    for i in range(n):
+        for j in range(n):
+            V[i, j] = T[i, j] + b[6] * A6[i, j] + b[4] * A4[i, j] + b[2] * A2[i, j]
+        u[i, i] += b[1]
+        V[i, i] += b[0]
+    matmul_into(A8, u, T)
+    _pade_solve(T, V, out)
     for _ in range(s):
-        E = matmul(E, E)
-    return E
+        matmul_into(out, out, T)
+        out[:] = T
+
+
+@njit(**JIT)
+def _pade_solve(U, V, out):
+    """out = (V - U)^-1 (U + V); U and V overwritten."""
+    n = U.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = U[i, j] + V[i, j]
+            V[i, j] = V[i, j] - U[i, j]
+    solve_into(V, out)

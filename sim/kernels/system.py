@@ -88,17 +88,6 @@ def shared_sea(lin, mem):
 
 
 @njit(**JIT)
-def matvec(M, x):
-    out = np.zeros(M.shape[0])
-    for i in range(M.shape[0]):
-        acc = 0.0
-        for j in range(M.shape[1]):
-            acc += M[i, j] * x[j]
-        out[i] = acc
-    return out
-
-
-@njit(**JIT)
 def sparse_matvec(rows, x):
     out = np.zeros(rows[0].shape[0] - 1)
     sparse_into(rows, x, out, False)

@@ -373,3 +373,38 @@ def test_compiled_radiation_with_a_turned_rest_pose(monkeypatch):
     straight.step(120)
     assert compiled.state.x_world[2] == pytest.approx(straight.state.x_world[2], abs=2e-4)
     assert np.linalg.norm(compiled.state.u_world) == pytest.approx(np.linalg.norm(straight.state.u_world), rel=0.02)
+
+
+def test_inliner_with_shared_scope_copies_inlines_correctly():
+    """jit.py's fix to numba's inliner (one memo for the blocks of one scope): a callee of many blocks inlined at
+    several sites of a caller, itself inlined, still computes what Python does (no variable of one site leaks into another)."""
+    from numba import njit
+
+    from sim.kernels import jit
+
+    assert jit.SCOPES_SHARED  # the numba pinned in pyproject.toml has the inliner the fix is for
+
+    def branchy(a, n):
+        total = 0.0
+        for i in range(n):
+            if a > i:
+                total += a * i
+            elif i % 2 == 0:
+                total -= i
+            else:
+                total += 1.0
+        return total
+
+    inlined = njit(inline="always")(branchy)
+
+    @njit(inline="always")
+    def twice(a, n):
+        return inlined(a, n) - 2.0 * inlined(a + 1.0, n + 1)
+
+    @njit
+    def caller(a, n):
+        return twice(a, n) + twice(-a, 2 * n)
+
+    assert inlined.targetoptions["inline"] == "always"
+    python = branchy(3.5, 7) - 2.0 * branchy(4.5, 8) + branchy(-3.5, 14) - 2.0 * branchy(-2.5, 15)
+    assert caller(3.5, 7) == python

@@ -176,7 +176,12 @@ def test_diffraction_is_on_with_bem_in_waves_and_can_be_switched_off():
     assert Simulation(load_scene("sphere"), backend="numpy").model.radiation.diffraction is None  # still water
     assert on.compiled == (on.backend == "numba") and not on.notes
     heave = {}
-    for name, sim in (("on", on), ("off", Simulation(with_overrides(base, waves__diffraction=False), backend="numpy"))):
+    # the heave on the numpy reference: the kernels of radiation in waves are checked against it under -m exhaustive
+    # (tests/test_kernels.py), and compile for two minutes on a cold cache
+    for name, sim in (
+        ("on", Simulation(base, backend="numpy")),
+        ("off", Simulation(with_overrides(base, waves__diffraction=False), backend="numpy")),
+    ):
         z = []
         for _ in range(240):
             sim.step(5)

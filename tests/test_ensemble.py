@@ -6,6 +6,7 @@ import pytest
 from sim import ConfigError, Simulation, load_scene, with_overrides
 from sim.commands import main
 from sim.ensemble import Ensemble
+from tests.covering import LINEAR, cases, still
 
 
 @pytest.mark.parametrize("backend", ["numba", "numpy"])
@@ -23,7 +24,9 @@ def test_each_body_of_an_ensemble_moves_as_it_would_alone(backend):
         assert state.t == pytest.approx(alone.state.t, rel=1e-14)
 
 
-@pytest.mark.parametrize("integrator", ["splitting", "implicit", "rk4"])
+@pytest.mark.parametrize(
+    "integrator", cases([("splitting",), ("implicit",), ("rk4",)], lambda i: still(i, "points", LINEAR))
+)  # the one alone without drag
 def test_bodies_with_and_without_drag_share_one_ensemble(integrator):
     """Per-body term coefficients: a body whose drag coefficient is 0 moves exactly as alone (where
     the term is left out), next to bodies with drag."""
@@ -40,7 +43,8 @@ def test_bodies_with_and_without_drag_share_one_ensemble(integrator):
 
 
 def test_a_diverging_body_stops_alone():
-    base = with_overrides(load_scene("damped"), step__integrator="euler", step__dt=0.01)
+    # with drag: euler's kernels with every term are in the default run's covering set (tests/covering.py)
+    base = with_overrides(load_scene("damped"), step__integrator="euler", step__dt=0.01, fluid__drag_coefficient=0.5)
     ensemble = Ensemble([with_overrides(base, fluid__damping=d) for d in (100.0, 1e6, 50.0)])
     ensemble.step(300)
     assert [why is None for why in ensemble.diverged] == [True, False, True]

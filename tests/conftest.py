@@ -81,6 +81,26 @@ def _compiled_kernels():
         warm_up(spec)  # from the disk cache
 
 
+@pytest.fixture(autouse=True)
+def _covered_kernels_only(request, monkeypatch):
+    """Outside -m exhaustive a test's simulations load only the covering set's kernels (tests/covering.py): any other
+    compiles for a minute on a cold cache, in the middle of the default run."""
+    if request.node.get_closest_marker("exhaustive"):
+        return
+    import sim.kernels
+    from tests.covering import covered
+
+    load = sim.kernels.specialised
+
+    def covered_only(spec):
+        if not covered(spec):
+            pytest.fail(f"the kernels for the {spec.describe()} are not in the default run's covering set (tests/covering.py): "
+                        "use covered ones, or mark the case exhaustive (covering.cases)")  # fmt: skip
+        return load(spec)
+
+    monkeypatch.setattr(sim.kernels, "specialised", covered_only)  # (tests calling specialised directly imported their own)
+
+
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
 def pytest_collection_modifyitems(items):
     """One real browser at a time (`--dist loadgroup` in the pytest options): two chromiums drawing with

@@ -5,7 +5,8 @@ compiles a covering set, once, before the tests start (conftest.py), and no test
 - each preset's own (what a user runs first);
 - every term with each scheme (points, still water) and with each force model (implicit, still water);
 - the cells model with its linear terms only (its physics tests settle cubes for minutes of simulated time: no
-  preset has cells);
+  preset has cells), and the panels model in waves with them (the cube's heave against the linear RAO: no preset has
+  panels in waves without radiation);
 - the loads of one of several bodies (the rm3 pair, `system`);
 - the force kernels only (seconds to compile, so left to the test) of each term alone (on points in still water and
   on panels in waves), and of every term on panels in waves.
@@ -46,7 +47,8 @@ def compiled_first() -> list[Spec]:
 
     specs = preset_specs()
     specs += [still(scheme, "points") for scheme in SCHEMES]
-    specs += [still("implicit", model) for model in ("panels", "cells")] + [still("implicit", "cells", LINEAR)]
+    specs += [still("implicit", model) for model in ("panels", "cells")]
+    specs += [still("implicit", "cells", LINEAR), waves("implicit", "panels", LINEAR)]
     specs += [Spec("implicit", "panels", LINEAR, True, False, system=True)]  # the rm3 pair's loads
     return list(dict.fromkeys(specs))
 

@@ -158,7 +158,8 @@ def test_energy_given_to_the_waves_balances_the_body_energy(cube, integrator, to
 
 
 def test_radiation_switches_on_and_off_and_a_sinking_body_is_refused():
-    sim = Simulation(with_overrides(load_scene("rest"), fluid__radiation="bem"))
+    # panels: the sphere preset's kernels (tests/covering.py)
+    sim = Simulation(with_overrides(load_scene("rest"), fluid__forces="panels", fluid__radiation="bem"))
     assert sim.compiled and len(sim.state.memory) == sim.model.radiation.states
     sim.update(fluid__radiation="none")
     assert sim.compiled and len(sim.state.memory) == 0 and sim.state.as_vector().shape == (13,)

@@ -3,7 +3,8 @@
 Each specialisation compiles for 15-60 s (two minutes for a sea or radiation on a busy machine), so the default run
 compiles a covering set, once, before the tests start (conftest.py), and no test compiles another:
 - each preset's own (what a user runs first);
-- every term with each scheme (points, still water) and with each force model (implicit, still water);
+- every term with each scheme (points, still water) and with each force model (implicit, still water); each scheme
+  with the linear terms too (the integrators' orders and energy, without drag);
 - the cells model with its linear terms only (its physics tests settle cubes for minutes of simulated time: no
   preset has cells), and the panels model in waves with them (the cube's heave against the linear RAO: no preset has
   panels in waves without radiation);
@@ -46,7 +47,7 @@ def compiled_first() -> list[Spec]:
     from sim.compiling import preset_specs
 
     specs = preset_specs()
-    specs += [still(scheme, "points") for scheme in SCHEMES]
+    specs += [still(scheme, "points", terms) for scheme in SCHEMES for terms in (EVERY, LINEAR)]  # (the integrators' own tests: no drag)
     specs += [still("implicit", model) for model in ("panels", "cells")]
     specs += [still("implicit", "cells", LINEAR), waves("implicit", "panels", LINEAR)]
     specs += [Spec("implicit", "panels", LINEAR, True, False, system=True)]  # the rm3 pair's loads

@@ -86,8 +86,7 @@ def test_overdamped_creep_has_the_physical_speed(d):
 def test_fast_spin_of_an_elongated_box_keeps_its_invariants():
     """100 rad/s about the long (stable, least-inertia) axis with a wobble, in free space."""
     scene = box_scene("splitting", 0.0005, damping=0.0, g=0.0, rho=0.0, z=5.0, omega=(100.0, 2.0, 1.0))
-    # a drag coefficient that acts on nothing (rho = 0): the kernels with every term, in the default run's covering set
-    scene = with_overrides(scene, body__extents=(2.0, 0.5, 0.25), fluid__drag_coefficient=0.5)
+    scene = with_overrides(scene, body__extents=(2.0, 0.5, 0.25))
     sim = Simulation(scene)
     L0, E0 = np.linalg.norm(sim.state.L_world), sim.frame().E_kin
     for _ in range(20):
@@ -126,8 +125,7 @@ def test_body_far_above_the_water_falls_freely():
 
 @pytest.mark.parametrize("name", ["euler", "splitting", "rk4"])
 def test_explicit_schemes_past_their_limit_stop_clearly(name):
-    # with drag: the explicit schemes' kernels with every term are in the default run's covering set (tests/covering.py)
-    scene = with_overrides(load_scene("damped"), fluid__damping=1e5, fluid__drag_coefficient=0.5, step__integrator=name, step__dt=0.01)
+    scene = with_overrides(load_scene("damped"), fluid__damping=1e5, step__integrator=name, step__dt=0.01)
     sim = Simulation(scene)
     with pytest.raises(SimulationDiverged, match=r"diverged at t = [0-9.]+ s: .*too large for this damping"):
         for _ in range(100):

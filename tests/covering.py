@@ -8,7 +8,7 @@ compiles a covering set, once, before the tests start (conftest.py), and no test
 - the cells model with its linear terms only (its physics tests settle cubes for minutes of simulated time: no
   preset has cells), and the panels model in waves with them (the cube's heave against the linear RAO: no preset has
   panels in waves without radiation);
-- the loads of one of several bodies (the rm3 pair, `system`);
+- the loads of one of several bodies (the rm3 pair, `system`), and the system step's when it is compiled;
 - the force kernels only (seconds to compile, so left to the test) of each term alone (on points in still water and
   on panels in waves), and of every term on panels in waves.
 The rest of the product of schemes x force models x waters x terms (x radiation) runs under `-m exhaustive` (.ci/run).
@@ -50,7 +50,8 @@ def compiled_first() -> list[Spec]:
     specs += [still(scheme, "points", terms) for scheme in SCHEMES for terms in (EVERY, LINEAR)]  # (the integrators' own tests: no drag)
     specs += [still("implicit", model) for model in ("panels", "cells")]
     specs += [still("implicit", "cells", LINEAR), waves("implicit", "panels", LINEAR)]
-    specs += [Spec("implicit", "panels", LINEAR, True, False, system=True)]  # the rm3 pair's loads
+    # the rm3 pair's loads (a compiled system step adds its own specialisations here)
+    specs += [Spec("implicit", "panels", LINEAR, True, False, system=True)]
     return list(dict.fromkeys(specs))
 
 

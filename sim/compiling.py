@@ -137,15 +137,16 @@ def load(spec) -> float:
 
 
 def preset_specs() -> list:
-    """The kernels.Spec of every preset scene with a compiled twin, as shipped."""
-    from .config import load_scene, one_body_scenes
+    """The kernels.Spec of every preset scene with a compiled twin, as shipped (a scene of several bodies: its bodies'
+    loads and the system step's)."""
+    from .config import available_scenes, load_scene
     from .simulation import Simulation
 
     specs = []
-    for name in one_body_scenes():
+    for name in available_scenes():
         sim = Simulation(load_scene(name), backend="numpy")
-        if sim.has_twin and sim.spec not in specs:  # (a jointed body runs on the reference)
-            specs.append(sim.spec)
+        if sim.has_twin:  # (a body on a joint alone runs on the reference)
+            specs += [spec for spec in sim.specs if spec not in specs]
     return specs
 
 

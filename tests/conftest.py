@@ -9,15 +9,16 @@ import pytest
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist starts its workers: their output is not shown
 def pytest_sessionstart(session):
-    """Compile (fresh clone) or load the presets' numba kernels once, before any test times anything, in two child
-    processes at once (this machine's two cores), saying so on the terminal line by line: a cold run is minutes of
-    compiling, and a silent one looks hung. Other specialisations compile where a test first needs them."""
+    """Compile (fresh clone) the numba kernels of the covering set (tests/covering.py: the presets' and a few more)
+    once, before any test times anything, in two child processes at once (this machine's two cores), saying so on the
+    terminal line by line: a cold run is minutes of compiling, and a silent one looks hung. Compiled here rather than
+    in the tests that first need them: two xdist workers would each compile the same one."""
     if hasattr(session.config, "workerinput"):
         return  # an xdist worker: the controller did it
-    _compile_presets(session.config.pluginmanager.get_plugin("terminalreporter"))
+    _compile_covering(session.config.pluginmanager.get_plugin("terminalreporter"))
 
 
-def _compile_presets(terminal=None) -> None:
+def _compile_covering(terminal=None) -> None:
     from sim.simulation import default_backend
 
     if default_backend() != "numba":
@@ -28,11 +29,12 @@ def _compile_presets(terminal=None) -> None:
     import sys
     import time
 
-    from sim.compiling import preset_specs, spec_argument
+    from sim.compiling import spec_argument
     from sim.kernels import KERNEL_CACHE, cached
+    from tests.covering import compiled_first
 
     say = terminal.write_line if terminal is not None else print
-    specs = preset_specs()
+    specs = compiled_first()
     os.makedirs(KERNEL_CACHE, exist_ok=True)
     with open(os.path.join(KERNEL_CACHE, ".tests.lock"), "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes: one compile for concurrent runs
@@ -40,7 +42,7 @@ def _compile_presets(terminal=None) -> None:
         if not todo:
             return
         started = time.monotonic()
-        say(f"floatsim: compiling the numba kernels of {len(todo)} preset specialisations in two processes, once per machine "
+        say(f"floatsim: compiling the numba kernels of {len(todo)} specialisations (the presets' and those the tests cover) in two processes, once per machine "
             f"(cached in {KERNEL_CACHE}; about 15-60 s each); the tests start after")  # fmt: skip
         children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]], stdout=subprocess.PIPE,
                                      text=True) for i in range(2) if todo[i::2]]  # fmt: skip
@@ -58,15 +60,15 @@ def _compile_presets(terminal=None) -> None:
                 done += line.startswith("floatsim: compiled")
                 say(f"[{done}/{len(todo)}] {line.rstrip()}")
         for child in children:
-            assert child.wait() == 0, "the presets' kernels did not compile"
-        say(f"floatsim: the presets' kernels are ready after {time.monotonic() - started:.0f} s; other specialisations compile "
-            "in the tests that first need them (such a test takes a minute more, once)")  # fmt: skip
+            assert child.wait() == 0, "the kernels did not compile"
+        say(f"floatsim: the kernels are ready after {time.monotonic() - started:.0f} s (others compile only under -m exhaustive, "
+            "in the tests that first need them)")  # fmt: skip
 
 
 @pytest.fixture(scope="session", autouse=True)
 def _compiled_kernels():
     """Load the presets' kernels into this process (a worker) from the disk cache before any test times anything
-    (compiled first if pytest_sessionstart did not run here: pytest started without this conftest's hooks)."""
+    (the covering set compiled first if pytest_sessionstart did not run here: pytest started without this conftest's hooks)."""
     from sim.simulation import default_backend
 
     if default_backend() != "numba":
@@ -74,9 +76,29 @@ def _compiled_kernels():
     from sim.compiling import preset_specs
     from sim.kernels import warm_up
 
-    _compile_presets()
+    _compile_covering()
     for spec in preset_specs():
         warm_up(spec)  # from the disk cache
+
+
+@pytest.fixture(autouse=True)
+def _covered_kernels_only(request, monkeypatch):
+    """Outside -m exhaustive a test's simulations load only the covering set's kernels (tests/covering.py): any other
+    compiles for a minute on a cold cache, in the middle of the default run."""
+    if request.node.get_closest_marker("exhaustive"):
+        return
+    import sim.kernels
+    from tests.covering import covered
+
+    load = sim.kernels.specialised
+
+    def covered_only(spec):
+        if not covered(spec):
+            pytest.fail(f"the kernels for the {spec.describe()} are not in the default run's covering set (tests/covering.py): "
+                        "use covered ones, or mark the case exhaustive (covering.cases)")  # fmt: skip
+        return load(spec)
+
+    monkeypatch.setattr(sim.kernels, "specialised", covered_only)  # (tests calling specialised directly imported their own)
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups

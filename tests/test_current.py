@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from sim import Simulation, load_scene, with_overrides
+from tests.covering import cases, still
+from tests.covering import waves as sea
 
 ROOT = Path(__file__).resolve().parents[1]
 U = np.array([0.6, -0.3, 0.0])
@@ -21,8 +23,19 @@ def carried(scene, current, backend):
     return Simulation(with_overrides(scene, water__current=tuple(current[:2]), initial__velocity=tuple(current)), backend=backend)
 
 
-@pytest.mark.parametrize("backend", ["numpy", "numba"])
-@pytest.mark.parametrize("waves", [{}, {"waves__kind": "regular", "waves__height": 0.4, "waves__period": 4.0, "waves__direction": 30.0}])
+SEAS = [{}, {"waves__kind": "regular", "waves__height": 0.4, "waves__period": 4.0, "waves__direction": 30.0}]
+
+
+def carried_kernels(waves: dict, backend: str):
+    """The moving body's kernels (in waves the current costs no code of its own: the storm preset's; numpy: none)."""
+    return (
+        still("implicit", "points")
+        if backend == "numpy"
+        else (sea("implicit", "points") if waves else still("implicit", "points", current=True))
+    )
+
+
+@pytest.mark.parametrize("waves, backend", cases([(w, b) for b in ("numpy", "numba") for w in SEAS], carried_kernels))
 def test_a_body_carried_by_the_current_is_the_body_in_water_at_rest_seen_moving(waves, backend):
     """Galilean invariance: with damping and drag, every position shifted by U t and every velocity by U, to round-off."""
     scene = with_overrides(load_scene("damped"), fluid__drag_coefficient=0.8, initial__position=(0.0, 0.0, -0.2), **waves)
@@ -40,9 +53,8 @@ def test_a_body_carried_by_the_current_is_the_body_in_water_at_rest_seen_moving(
     assert np.abs(resting.state.u_world).max() > 1e-3, "the body moves: the check is not trivial"
 
 
-@pytest.mark.parametrize(
-    "integrator, forces", [("implicit", "points"), ("implicit", "panels"), ("implicit", "cells"), ("splitting", "points")]
-)
+@pytest.mark.parametrize("integrator, forces", cases([("implicit", "points"), ("implicit", "panels"), ("implicit", "cells"), ("splitting", "points")],
+                                                     lambda integrator, forces: still(integrator, forces, current=True)))  # fmt: skip
 def test_kernels_match_the_reference_in_a_current(integrator, forces):
     scene = with_overrides(load_scene("damped"), fluid__forces=forces, fluid__drag_coefficient=0.8, step__integrator=integrator,
                            water__current=(0.5, 0.2), initial__orientation=(0.96, 0.2, 0.1, 0.17))  # fmt: skip

@@ -171,12 +171,14 @@ def test_diffraction_is_on_with_bem_in_waves_and_can_be_switched_off():
     the heave of the sphere at T = 2.5 s shrinks by the scattered wave."""
     waves = dict(waves__kind="regular", waves__height=0.02, waves__period=2.5, waves__ramp=0.0)  # (the issue measured it without a ramp)
     base = with_overrides(load_scene("sphere"), **waves, initial__position=(0.0, 0.0, 0.0))
-    on, off = Simulation(base), Simulation(with_overrides(base, waves__diffraction=False))
+    # on the numpy reference (a numba Simulation compiles its frame as it starts): the kernels of radiation in waves,
+    # two minutes to compile on a cold cache, are checked against it under -m exhaustive (tests/test_kernels.py)
+    on, off = Simulation(base, backend="numpy"), Simulation(with_overrides(base, waves__diffraction=False), backend="numpy")
     assert on.model.radiation.diffraction is not None and off.model.radiation.diffraction is None
     assert Simulation(load_scene("sphere"), backend="numpy").model.radiation.diffraction is None  # still water
-    assert on.compiled == (on.backend == "numba") and not on.notes
+    assert on.has_twin and not on.notes  # compiled like the rest on numba
     heave = {}
-    for name, sim in (("on", on), ("off", Simulation(with_overrides(base, waves__diffraction=False), backend="numpy"))):
+    for name, sim in (("on", on), ("off", off)):
         z = []
         for _ in range(240):
             sim.step(5)

@@ -11,6 +11,7 @@ from sim import Simulation, load_scene, with_overrides
 from sim.commands import main
 from sim.config import FluidConfig
 from sim.forces import drag
+from tests.covering import cases, still
 
 RHO, G = 1000.0, 9.81
 FIXED = ("euler", "splitting", "implicit", "rk4")
@@ -29,8 +30,13 @@ def drag_load(sim: Simulation, twist) -> np.ndarray:
     return np.concatenate([load.force, load.torque])
 
 
-@pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize("integrator", [*FIXED, pytest.param("rk45", marks=pytest.mark.slow)])  # rk45: 6-9 s
+@pytest.mark.parametrize(
+    "integrator, forces",
+    [
+        *cases([(i, f) for f in ("points", "panels") for i in FIXED], still),
+        *(pytest.param("rk45", f, marks=pytest.mark.slow) for f in ("points", "panels")),
+    ],
+)  # rk45: 6-9 s
 def test_heavy_cube_sinks_at_the_terminal_speed(forces, integrator):
     """Face down, fully submerged: (1/2) rho C_d s^2 v^2 = (M - rho V) g, so v = sqrt(2 (M - rho V) g / (rho C_d s^2)).
     euler, rk4 and the implicit scheme (drag linearised about the current speed) keep it as their exact
@@ -93,8 +99,9 @@ def test_drag_never_does_positive_work(forces):
             assert load @ twist < 0 or np.abs(load).max() == 0
 
 
-@pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize("integrator", ["splitting", "implicit", "rk4"])
+@pytest.mark.parametrize(
+    "integrator, forces", cases([(i, f) for f in ("points", "panels") for i in ("splitting", "implicit", "rk4")], still)
+)
 def test_energy_never_rises_with_drag(forces, integrator):
     """The damped scene (through the water line, spinning) with drag added: energy only falls, step after step."""
     sim = Simulation(with_overrides(load_scene("damped"), fluid__drag_coefficient=1.0, fluid__forces=forces, step__integrator=integrator))

@@ -6,6 +6,7 @@ import pytest
 from sim import ConfigError, Simulation, load_scene, with_overrides
 from sim.commands import main
 from sim.ensemble import Ensemble
+from tests.covering import LINEAR, cases, still
 
 
 @pytest.mark.parametrize("backend", ["numba", "numpy"])
@@ -23,7 +24,9 @@ def test_each_body_of_an_ensemble_moves_as_it_would_alone(backend):
         assert state.t == pytest.approx(alone.state.t, rel=1e-14)
 
 
-@pytest.mark.parametrize("integrator", ["splitting", "implicit", "rk4"])
+@pytest.mark.parametrize(
+    "integrator", cases([("splitting",), ("implicit",), ("rk4",)], lambda i: still(i, "points", LINEAR))
+)  # the one alone without drag
 def test_bodies_with_and_without_drag_share_one_ensemble(integrator):
     """Per-body term coefficients: a body whose drag coefficient is 0 moves exactly as alone (where
     the term is left out), next to bodies with drag."""

@@ -13,13 +13,20 @@ from sim.kernels import NO_RADIATION, SCHEMES, Spec, pack, sea_pack, spec_of, sp
 from sim.kernels.layout import Model as Packed
 from sim.kernels.layout import Scratch
 from sim.water import jonswap_waves, regular_waves
+from tests.covering import EVERY, LINEAR, cases, still
+
+WATER_KIND = {"still": False, "regular": True, "jonswap": True, "spread": True}
+"""Whether each of the stage tests' waters (WATERS below) is a sea, for the kernels' spec."""
 
 CASES = [(scene, changes, integrator, forces) for scene, changes in [("damped", {}), ("spin", {}), ("drop", {"body__density": 300.0}), ("damped", {"fluid__damping": 1e6})]
          for integrator in ["euler", "splitting", "implicit", "rk4"] for forces in ["points", "cells", "panels"]
          if integrator == "implicit" or "fluid__damping" not in changes]  # explicit ones diverge there (tested below)  # fmt: skip
+"""Still water, no drag: the implicit cases run by default (the presets' kernels and cells'), the others under -m exhaustive."""
 
 
-@pytest.mark.parametrize("scene, changes, integrator, forces", CASES)
+@pytest.mark.parametrize(
+    "scene, changes, integrator, forces", cases(CASES, lambda scene, changes, integrator, forces: still(integrator, forces, LINEAR))
+)
 def test_compiled_path_matches_numpy_reference(scene, changes, integrator, forces):
     config = with_overrides(load_scene(scene), step__integrator=integrator, fluid__forces=forces, **changes)
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
@@ -130,7 +137,9 @@ def test_stage_wet_integrals(body_name, forces):
 
 
 @pytest.mark.parametrize("body_name", BODIES)
-@pytest.mark.parametrize("forces, water", FORCES_WATERS)
+@pytest.mark.parametrize(
+    "forces, water", cases(FORCES_WATERS, lambda forces, water: Spec("implicit", forces, EVERY, WATER_KIND[water], False), forces_only=True)
+)
 def test_stage_loads_and_linearisation(body_name, forces, water):
     """Every term's total force and torque at a pose, time and twist, and the implicit scheme's
     linearised loads (f, D), kernel against reference, in still water and in waves."""
@@ -166,11 +175,14 @@ STEP_CASES = [(scheme, forces, water) for scheme in SCHEMES for forces, water in
 """The implicit step with every force model in every water; the other schemes with points in every water and
 panels in still water. Each scheme meets each water and drag, and each force model meets each water and drag,
 here; each scheme meets each force model in the trajectories above and below (with drag for points and panels).
-A specialisation compiles for half a minute on a cold cache: the full product would add six."""
+A specialisation compiles for half a minute on a cold cache: the full product would add six. By default each
+scheme with points in still water, and the implicit one with each force model and points in waves (tests/covering.py)."""
 
 
 @pytest.mark.parametrize("body_name", BODIES)
-@pytest.mark.parametrize("scheme, forces, water", STEP_CASES)
+@pytest.mark.parametrize(
+    "scheme, forces, water", cases(STEP_CASES, lambda scheme, forces, water: Spec(scheme, forces, EVERY, WATER_KIND[water], False))
+)
 def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
     model = model_of(body_name, forces, water=water)
     _, coef = pack(model)
@@ -191,7 +203,9 @@ def test_stage_one_step_of_each_scheme(body_name, forces, scheme, water):
 
 
 @pytest.mark.parametrize("body_name", BODIES)
-@pytest.mark.parametrize("forces, water", FORCES_WATERS)
+@pytest.mark.parametrize(
+    "forces, water", cases(FORCES_WATERS, lambda forces, water: Spec("implicit", forces, EVERY, WATER_KIND[water], False))
+)
 def test_stage_frame_with_every_term(body_name, forces, water):
     model = model_of(body_name, forces, water=water)
     _, coef = pack(model)
@@ -217,8 +231,7 @@ def test_stage_frame_with_every_term(body_name, forces, water):
         )  # cells: any part wet
 
 
-@pytest.mark.parametrize("integrator", ["euler", "splitting", "implicit", "rk4"])
-@pytest.mark.parametrize("forces", ["points", "panels"])
+@pytest.mark.parametrize("integrator, forces", cases([(i, f) for f in ("points", "panels") for i in SCHEMES], lambda i, f: still(i, f)))
 def test_compiled_path_matches_numpy_with_drag(integrator, forces):
     config = with_overrides(load_scene("damped"), step__integrator=integrator, fluid__forces=forces, fluid__drag_coefficient=1.5)
     reference, compiled = Simulation(config, backend="numpy"), Simulation(config, backend="numba")
@@ -246,10 +259,9 @@ def test_fixed_step_integrator_without_a_kernel_falls_back_to_numpy_with_a_note(
 # ---- waves: the compiled sea against the reference --------------------------------------------------
 
 
-@pytest.mark.parametrize("forces", ["points", "panels"])
-@pytest.mark.parametrize(
-    "scene, changes", [("waves", {}), ("storm", {}), ("storm", {"waves__spreading": 10.0, "waves__depth": 30.0, "waves__components": 16})]
-)
+@pytest.mark.parametrize("scene, changes, forces", cases([(scene, changes, forces) for forces in ("points", "panels") for scene, changes in
+                                                           [("waves", {}), ("storm", {}), ("storm", {"waves__spreading": 10.0, "waves__depth": 30.0, "waves__components": 16})]],
+                                                          lambda scene, changes, forces: Spec("implicit", forces, EVERY if scene == "storm" else LINEAR, True, False)))  # fmt: skip
 def test_compiled_path_matches_numpy_in_waves(scene, changes, forces):
     """Trajectories in a regular swell (direct sum), the storm (local expansion, with drag) and a
     short-crested finite-depth sea (direct sum), across the end of a short ramp: kernel and reference agree to round-off."""
@@ -314,10 +326,15 @@ RADIATION_CASES = [(integrator, ("points", "panels")[(i + j) % 2], changes) for 
                    for j, changes in enumerate(RADIATION_CHANGES)]  # fmt: skip
 """Every scheme with every change, and each of them, scheme or change, with both force models: every pair of
 the three factors (the radiation code meets the scheme and the water, not the force model's quadrature), in 12
-specialisations (each compiles for half a minute on a cold cache) instead of the 24 of the full product."""
+specialisations (each compiles for half a minute on a cold cache) instead of the 24 of the full product; by default
+only the implicit one alone on panels (the sphere preset's kernels), the others under -m exhaustive."""
 
 
-@pytest.mark.parametrize("integrator, forces, changes", RADIATION_CASES)
+def radiation_spec(integrator: str, forces: str, changes: dict) -> Spec:
+    return Spec(integrator, forces, EVERY if "fluid__drag_coefficient" in changes else LINEAR, "waves__kind" in changes, True)
+
+
+@pytest.mark.parametrize("integrator, forces, changes", cases(RADIATION_CASES, radiation_spec))
 def test_compiled_radiation_matches_numpy(integrator, forces, changes):
     """Added mass in the kicks and the exact linear flow, the memory and E_rad, alone, with damping and
     drag (relinearised) and in waves (with the diffraction force): kernel and reference to round-off, memory states included."""
@@ -354,7 +371,8 @@ def test_compiled_radiation_with_a_turned_rest_pose(monkeypatch):
     turned = dataclasses.replace(upright, added_mass=T @ upright.added_mass @ T.T, damping=T @ upright.damping @ T.T,
                                  added_mass_inf=T @ upright.added_mass_inf @ T.T)  # fmt: skip
     monkeypatch.setattr(bem, "radiation_coefficients", lambda *args, **kw: turned)
-    base = with_overrides(load_scene("rest"), fluid__radiation="bem", step__integrator="implicit", fluid__damping=10.0,
+    # panels: the sphere preset's kernels (tests/covering.py); the turn is in the radiation, not the force model
+    base = with_overrides(load_scene("rest"), fluid__forces="panels", fluid__radiation="bem", step__integrator="implicit", fluid__damping=10.0,
                           initial__position=(0.0, 0.0, -0.35), initial__velocity=(0.2, 0.0, 0.0))  # fmt: skip
     yawed = with_overrides(base, initial__orientation=(np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)))
     reference, compiled = Simulation(yawed, backend="numpy"), Simulation(yawed, backend="numba")

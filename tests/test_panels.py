@@ -103,6 +103,8 @@ def test_rest_scene_with_panels_stays_put():
     assert np.linalg.norm(sim.frame().force_world) < 1e-9 * sim.body.mass * 9.81
 
 
+@pytest.mark.exhaustive  # the splitting's kernels on panels without drag are not the default run's (tests/covering.py)
+@pytest.mark.xdist_group("kernels-splitting_panels_t7_still")
 def test_panel_energy_is_conserved_to_the_integrator_order():
     """Exact conservative forces: with d = 0 the splitting's energy error has no model drift left,
     and it falls ~4x when dt halves, through the water line and while tumbling."""

@@ -111,6 +111,8 @@ def specialised(spec: Spec) -> types.ModuleType:
         if spec in _instances:
             return _instances[spec]
         name = f"{__name__}_{spec.key}"
+        if os.environ.get(COMPILE_LOG) and not cached(spec):
+            _log_compile(spec)
         package = types.ModuleType(name, f"floatsim kernels for {spec.describe()}")
         package.__path__, package.__package__, package.SPEC = [str(_HERE)], name, spec
         sys.modules[name] = package
@@ -133,6 +135,19 @@ def specialised(spec: Spec) -> types.ModuleType:
             numba.config.CACHE_DIR = users
         _instances[spec] = package
         return package
+
+
+COMPILE_LOG = "FLOATSIM_COMPILE_LOG"
+"""A file to which `specialised` appends a line for each spec it compiles rather than loads, with the test
+running it (PYTEST_CURRENT_TEST): how the test suite's covering set of specialisations is checked."""
+
+
+def _log_compile(spec: Spec, note: str = "compiling") -> None:
+    import time
+
+    test = os.environ.get("PYTEST_CURRENT_TEST", "-").removesuffix(" (call)").removesuffix(" (setup)")
+    with open(os.environ[COMPILE_LOG], "a") as log:  # one short write per line: concurrent processes do not interleave
+        log.write(f"{time.time():.1f}\t{os.getpid()}\t{spec.key}\t{note}\t{test}\n")
 
 
 def _spec_cache(spec: Spec) -> str:
@@ -179,8 +194,12 @@ def warm_up(spec: Spec) -> float:
 
         return warm()
     start = time.perf_counter()
+    fresh = os.environ.get(COMPILE_LOG) and not cached(spec)
     specialised(spec).schemes.warm_up()
-    return time.perf_counter() - start
+    seconds = time.perf_counter() - start
+    if fresh:
+        _log_compile(spec, f"warmed up in {seconds:.1f} s")
+    return seconds
 
 
 __all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_STEP", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",

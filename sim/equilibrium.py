@@ -42,12 +42,13 @@ def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
     z = rest_height(body, scene.fluid, R)
     if not moored(scene):
         return np.array([x, y, z])
-    from .moorings import rest_pull
+    from .moorings import check_lines, rest_pull
     from .rotation import quat_to_matrix
 
     R_input = R @ quat_to_matrix(body.q_input_body).T  # the frame the lines' fairleads are given in, to world
     level = not scene.moorings.line_file
     start = np.array([x, y, z])
+    check_lines(scene, np.asarray(scene.initial.position, float), R_input)  # a mistake is said now, not after a solve
     try:
         for _ in range(30):
             at = np.array([x, y, z])
@@ -61,7 +62,7 @@ def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
             z += step
             if abs(step) + abs(x - at[0]) + abs(y - at[1]) < 1e-10 * body.radius:
                 break
-    except ValueError:  # lines that cannot reach, or a catenary with no solution: the lines' own checks say why, later
+    except ValueError:  # a catenary with no solution: the lines' own checks at the start say why, later
         return start
     return np.array([x, y, z])
 

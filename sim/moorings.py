@@ -348,6 +348,24 @@ def lines_of(section) -> LineSet | None:
     return LineSet(**{f: getattr(section, f) for f in LineSet.__dataclass_fields__})
 
 
+def line_file(scene) -> Path:
+    """The scene's MoorDyn file ([moorings] line_file), found beside the scene file or from the working directory."""
+    given = Path(scene.moorings.line_file)
+    path = next((p for p in (Path(scene.base_dir) / given, given) if p.is_file()), None)
+    if path is None:
+        raise ConfigError(f"mooring file not found: {scene.moorings.line_file}")
+    return path
+
+
+def check_lines(scene, x0: np.ndarray, R0: np.ndarray) -> None:
+    """The lines' own checks with the body at x0, R0 (input frame to world): a file that is there, anchors on the seabed
+    that the lines reach. A ConfigError for the first that fails; cheap, so made before any solve that needs the lines."""
+    if scene.moorings.line_file:
+        line_file(scene)
+    elif (spread := lines_of(scene.moorings)) is not None:
+        spread.input_file(np.asarray(x0, float), R0, scene.fluid.rho, scene.fluid.g)
+
+
 class Moorings:
     """The scene's mooring lines in MoorDyn, coupled to one body. `load` is the wrench to hold over the
     next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
@@ -418,11 +436,7 @@ class Moorings:
     def of_scene(cls, scene, x0, R0, u0, omega0) -> Moorings | None:
         m = scene.moorings
         if m.line_file:
-            given = Path(m.line_file)
-            path = next((p for p in (Path(scene.base_dir) / given, given) if p.is_file()), None)
-            if path is None:
-                raise ConfigError(f"mooring file not found: {m.line_file}")
-            return cls(path.read_text(), x0, R0, u0, omega0)
+            return cls(line_file(scene).read_text(), x0, R0, u0, omega0)
         spread = lines_of(m)
         if spread is None:
             return None

@@ -188,8 +188,9 @@ def test_the_frame_carries_the_lines_and_the_pull_is_in_the_force():
 
 
 def test_a_moordyn_file_gives_the_same_lines_as_the_spread(tmp_path):
-    """[moorings] line_file: the spread's own MoorDyn input, written out, gives the same pull."""
-    scene = load_scene("moored-buoy")
+    """[moorings] line_file: the spread's own MoorDyn input, written out, gives the same pull (the lines alone: no BEM
+    solve for a grid of their own)."""
+    scene = with_overrides(load_scene("moored-buoy"), fluid__radiation="none")
     spread = lines_of(scene.moorings)
     path = tmp_path / "lines.txt"
     path.write_text(spread.input_file(np.array(scene.initial.position), np.eye(3), RHO, G, scene.step.dt))
@@ -275,6 +276,8 @@ def test_anchors_and_fairleads_given_point_by_point_are_the_spread_they_describe
     anchors = [[float(v) for v in a] for a, _ in ends]
     fairleads = [[float(v) for v in f] for _, f in ends]
     text = (ROOT / "assets/scenes/moored-buoy.toml").read_text().replace("lines = 3\n", f"anchors = {anchors}\nfairleads = {fairleads}\n")
+    text = text.replace('radiation = "bem"', 'radiation = "none"')  # the lines alone: no BEM solve of a grid of their own
+    base = with_overrides(base, fluid__radiation="none")
     scene_file = tmp_path / "points.toml"
     scene_file.write_text(text)
     given = load_scene(str(scene_file))

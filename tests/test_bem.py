@@ -48,6 +48,7 @@ def test_hemisphere_matches_hulme_solved_afresh(monkeypatch, tmp_path):
     np.testing.assert_allclose(lam, LAMBDA, rtol=0.03, atol=LAMBDA_ATOL)
 
 
+@pytest.mark.slow  # a live solve: 20 s where Capytaine has not tabulated its Green function yet (a fresh machine)
 def test_a_coarse_solve_is_physical_and_cached(monkeypatch, tmp_path):
     """A 170-panel hemisphere solved live: A symmetric, B positive semi-definite (the body only loses
     energy to the waves), heave near Hulme; the second call comes from the cache, keyed by rho too."""

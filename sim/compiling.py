@@ -151,11 +151,14 @@ def preset_specs() -> list:
 
 
 def _main(parent: int, specs: list[str]) -> int:
-    """Compile the kernels of each spec given (spec_argument), or of every preset scene."""
+    """Compile the kernels of each spec given (spec_argument), or of every preset scene; `-`: of each spec read from
+    stdin, a line each, until it closes (so that a parent hands the next to whichever child is free)."""
     from .sweeps.backends import _die_with
 
     _die_with(parent)  # a viewer stopped by SIGKILL leaves no compiler behind
-    for spec in [parse_spec(word) for word in specs] or preset_specs():
+    words = (line.strip() for line in sys.stdin) if specs == ["-"] else iter(specs or [spec_argument(s) for s in preset_specs()])
+    for word in words:
+        spec = parse_spec(word)
         seconds = load(spec)
         print(f"floatsim: compiled the kernels for the {spec.describe()} in {seconds:.1f} s", flush=True)
     return 0

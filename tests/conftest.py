@@ -29,9 +29,9 @@ def _compile_covering(terminal=None) -> None:
     import sys
     import time
 
-    from sim.compiling import spec_argument
+    from sim.compiling import parse_spec, spec_argument
     from sim.kernels import KERNEL_CACHE, cached
-    from tests.covering import compiled_first
+    from tests.covering import compiled_first, expected_seconds
 
     say = terminal.write_line if terminal is not None else print
     specs = compiled_first()
@@ -44,11 +44,15 @@ def _compile_covering(terminal=None) -> None:
         started = time.monotonic()
         say(f"floatsim: compiling the numba kernels of {len(todo)} specialisations (the presets' and those the tests cover) in two processes, once per machine "
             f"(cached in {KERNEL_CACHE}; about 15-60 s each); the tests start after")  # fmt: skip
-        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), *todo[i::2]], stdout=subprocess.PIPE,
-                                     text=True) for i in range(2) if todo[i::2]]  # fmt: skip
+        # each child takes the next spec as it finishes one, the longest first: two cores busy to the end
+        todo.sort(key=lambda word: -expected_seconds(parse_spec(word)))
+        queue = list(todo)
+        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), "-"], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, text=True) for _ in range(min(2, len(todo)))]  # fmt: skip
         watch = selectors.DefaultSelector()
         for child in children:
-            watch.register(child.stdout, selectors.EVENT_READ)
+            watch.register(child.stdout, selectors.EVENT_READ, child)
+            _hand(child, queue)
         done, open_pipes = 0, len(children)
         while open_pipes:
             for key, _ in watch.select():
@@ -57,12 +61,23 @@ def _compile_covering(terminal=None) -> None:
                     watch.unregister(key.fileobj)
                     open_pipes -= 1
                     continue
-                done += line.startswith("floatsim: compiled")
+                if line.startswith("floatsim: compiled"):
+                    done += 1
+                    _hand(key.data, queue)
                 say(f"[{done}/{len(todo)}] {line.rstrip()}")
         for child in children:
             assert child.wait() == 0, "the kernels did not compile"
         say(f"floatsim: the kernels are ready after {time.monotonic() - started:.0f} s (others compile only under -m exhaustive, "
             "in the tests that first need them)")  # fmt: skip
+
+
+def _hand(child, queue: list) -> None:
+    """Give the compiling child the next spec of the queue, or close its input when none is left (it then exits)."""
+    if queue:
+        child.stdin.write(queue.pop(0) + "\n")
+        child.stdin.flush()
+    else:
+        child.stdin.close()
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -52,6 +52,15 @@ def compiled_first() -> list[Spec]:
     return list(dict.fromkeys(specs))
 
 
+def expected_seconds(spec: Spec) -> float:
+    """About how long `spec` compiles on a cold cache here (the longest are handed out first)."""
+    if spec.scheme == "system-step" or spec.held:
+        return 65.0
+    if spec.scheme != "implicit" or spec.system:
+        return 12.0
+    return 20.0 + 10.0 * (spec.model != "points") + 8.0 * ("drag" in spec.terms) + 8.0 * spec.radiating
+
+
 def covered(spec: Spec, forces_only: bool = False) -> bool:
     """Whether the default run has the kernels of `spec` (forces_only: only its force kernels are called, seconds to compile)."""
     return spec in compiled_first() or (forces_only and spec in FORCES_ONLY)
@@ -66,8 +75,12 @@ def exhaustive(spec: Spec) -> list:
 def cases(params, spec_of_case, forces_only: bool = False) -> list:
     """pytest.param of each case (a tuple of arguments); those whose kernels (`spec_of_case(*case)`) the covering set
     lacks are marked `exhaustive`: they run in .ci/run, not in the default run."""
-    return [
-        pytest.param(*case, marks=[] if covered(spec, forces_only) else exhaustive(spec))
-        for case in params
-        for spec in [spec_of_case(*case)]
-    ]
+    return [pytest.param(*case, marks=_marks(spec, forces_only)) for case in params for spec in [spec_of_case(*case)]]
+
+
+def _marks(spec: Spec, forces_only: bool) -> list:
+    if not covered(spec, forces_only):
+        return exhaustive(spec)
+    if spec not in compiled_first():  # force kernels a test compiles: its cases on one worker, which compiles them once
+        return [pytest.mark.xdist_group(f"kernels-{spec.key}")]
+    return []

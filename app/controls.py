@@ -98,7 +98,7 @@ class Controls(Bound):
                 with gui.add_folder(title):
                     if title == "Body":
                         self.focus = gui.add_dropdown("Body", bodies, initial_value=settings.focus, visible=len(bodies) > 1,
-                                                      hint="The body these controls, Joint and Start show and change, and the camera follows")  # fmt: skip
+                                                      hint="The body these controls, Water's damping and drag, Joint and Start show and change, and the camera follows")  # fmt: skip
                     for p in params:
                         self._handles[p.key] = _control(gui, p, settings.value(p.key))
         for key in (*CONTROLLED, "speed", "scene"):

@@ -25,7 +25,7 @@ import sim
 from sim.bem import no_solves
 from sim.body import printable
 from sim.compiling import Compiler, Loader, kernels_ready
-from sim.config import ENTRY_KEYS, ENTRY_SECTIONS, IN_EFFECT, MESH_FORCES, PARAMS, in_effect, load_scene
+from sim.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, body_own, entry_value, in_effect, load_scene
 from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.rotation import quat_to_matrix
@@ -77,8 +77,7 @@ class Settings:
 
     def __getattr__(self, key: str):
         if key in ENTRY_KEYS and self.config.bodies:  # a body's own parameter: the chosen body's
-            entry = next(e for e in self.config.bodies if e.name == self.focus)
-            return getattr(getattr(entry, ENTRY_KEYS[key]), key)
+            return entry_value(self.config, next(e for e in self.config.bodies if e.name == self.focus), key)
         if key in _QUALNAME:
             return in_effect(self.config, _QUALNAME[key])
         raise AttributeError(key)
@@ -578,7 +577,7 @@ class SimLoop(Mailbox):
         if note:
             self._raise_notice(note)
         old_body, old_integrator = self.sim.bodies[self._focus], self.sim.integrator
-        named = self.sim.body_names[self._focus] if param.section in ENTRY_SECTIONS else param.section  # a body's own: the chosen one's
+        named = self.sim.body_names[self._focus] if body_own(param) else param.section  # a body's own: the chosen one's
         change = {f"{named}__{param.key}": used}
         if param.key == "points_per_edge" and self.settings.value("shape") == "mesh":
             change = {f"{named}__samples": 6 * used * used}  # a mesh is refined to about as many samples as a cube of N per edge

@@ -15,7 +15,7 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import ENTRY_SECTIONS, in_effect, load_scene, with_overrides
+from sim.config import body_own, in_effect, load_scene, with_overrides
 from sim.errors import ConfigError
 
 from .loop import CONTROLLED, DERIVED, SPEED, Settings
@@ -116,7 +116,7 @@ def link_query(settings: Settings) -> str:
     the link carries the scene-wide parameters, not yet each body's own). A value
     other parameters decide (`IN_EFFECT`) is compared with what the link's scene would have in effect."""
     preset = _preset(settings.scene)
-    keys = [k for k in CONTROLLED if not (settings.config.bodies and CONTROLLED[k].section in ENTRY_SECTIONS)]  # a body's own: not yet
+    keys = [k for k in CONTROLLED if not (settings.config.bodies and body_own(CONTROLLED[k]))]  # a body's own: not yet
     written = {key: _shown(settings, key) for key in set(keys) - DERIVED}
     written = {key: v for key, v in written.items() if preset is None or v != in_effect(preset, _qualname(key))}
     target = preset

@@ -187,7 +187,11 @@ SECTION_TYPES = {
 
 
 ENTRY_SECTIONS = ("body", "initial", "constraint")
-"""The tables a [[bodies]] entry gives flat (their keys are unique), beside its name, parent and force model."""
+"""The tables a [[bodies]] entry gives flat (their keys are unique), beside its name, parent, force model and loads."""
+BODY_LOADS = tuple(dataclasses.replace(p, default=None, kind="optional") for term in TERMS for p in term.params)
+"""The force terms' parameters ([fluid] damping, drag_coefficient, and any term's registered in forces.TERMS): a
+[[bodies]] entry may give its own, flat, for its body alone (None: the scene's [fluid] value)."""
+BodyLoadsConfig = _section("BodyLoadsConfig", BODY_LOADS)
 
 
 @dataclass(frozen=True)
@@ -204,6 +208,13 @@ class BodyEntry:
     `axis` in world axes at the start, `pivot` from its starting centre of mass."""
     forces: str | None = None
     """Its own force model (None: the scene's [fluid] forces)."""
+    fluid: BodyLoadsConfig = field(default_factory=BodyLoadsConfig)
+    """Its own values of the force terms' parameters (BODY_LOADS; each None: the scene's [fluid] value)."""
+
+    def fluid_of(self, fluid: FluidConfig) -> FluidConfig:
+        """The scene's [fluid] table as this body feels it: its own force model and terms' parameters in."""
+        own = {k: v for k, v in dataclasses.asdict(self.fluid).items() if v is not None}
+        return dataclasses.replace(fluid, forces=self.forces or fluid.forces, **own)
 
 
 @dataclass(frozen=True)
@@ -291,10 +302,10 @@ def _from_dict(data: dict, where: str) -> SceneConfig:
 
 
 def _body_entry(data: dict, where: str) -> BodyEntry:
-    """A [[bodies]] table: name, parent, forces and the keys of [body], [initial] and [constraint], flat."""
-    owner = {p.key: p.section for name in ENTRY_SECTIONS for p in SECTIONS[name]}
+    """A [[bodies]] table: name, parent, forces and the keys of [body], [initial], [constraint] and the terms', flat."""
+    owner = ENTRY_KEYS
     own = {"name", "parent", "forces"}
-    tables: dict[str, dict] = {name: {} for name in ENTRY_SECTIONS}
+    tables: dict[str, dict] = {name: {} for name in (*ENTRY_SECTIONS, "fluid")}
     for k, v in data.items():
         if k not in owner and k not in own:
             raise ConfigError(f"{where}: unknown key '{k}' (known: {', '.join(sorted(own | set(owner)))})")
@@ -305,7 +316,7 @@ def _body_entry(data: dict, where: str) -> BodyEntry:
     if tables["body"].get("shape") == "mesh" and "forces" not in data:
         data = {**data, "forces": MESH_FORCES}
     return BodyEntry(data["name"], data.get("parent", "world"), *(SECTION_TYPES[name](**tables[name]) for name in ENTRY_SECTIONS),
-                     data.get("forces"))  # fmt: skip
+                     data.get("forces"), BodyLoadsConfig(**tables["fluid"]))  # fmt: skip
 
 
 def _check_body(b, i, c, where: str = "") -> None:
@@ -342,10 +353,14 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
         if e.forces is not None and e.forces not in FORCE_MODELS:
             raise ConfigError(f"{where}: forces must be one of {', '.join(FORCE_MODELS)}, got {e.forces!r}")
         try:
-            tables = {name: dataclasses.replace(getattr(e, name), **{p.key: p.check(getattr(getattr(e, name), p.key)) for p in SECTIONS[name]})
-                      for name in ENTRY_SECTIONS}  # fmt: skip
+            tables = {name: dataclasses.replace(getattr(e, name), **{p.key: p.check(getattr(getattr(e, name), p.key)) for p in params})
+                      for name, params in [*((n, SECTIONS[n]) for n in ENTRY_SECTIONS), ("fluid", BODY_LOADS)]}  # fmt: skip
         except ConfigError as err:
             raise ConfigError(f"{where}: {err}") from None
+        if scene.fluid.hydro == "linear" and (tables["fluid"].drag_coefficient or 0.0) > 0:
+            raise ConfigError(
+                f'{where}: quadratic drag needs the instantaneous wet surface: with [fluid] hydro = "linear" set its drag_coefficient = 0'
+            )
         _check_body(tables["body"], tables["initial"], tables["constraint"], f"{where}: ")
         if tables["constraint"].joint == "free" and e.parent != "world":
             raise ConfigError(f"{where}: a free body has no parent (give it a joint: fixed, prismatic or revolute)")
@@ -462,8 +477,21 @@ def _check_steepness(w, g: float) -> None:
                           f"(wavelength {wavelength:.3g} m at period {period:g} s); use a smaller height or a longer period")  # fmt: skip
 
 
-ENTRY_KEYS = {p.key: p.section for name in ENTRY_SECTIONS for p in SECTIONS[name]}
-"""A body's own parameters (its shape, pose and joint) by key, and the table each belongs to."""
+ENTRY_KEYS = {p.key: p.section for params in [*(SECTIONS[name] for name in ENTRY_SECTIONS), BODY_LOADS] for p in params}
+"""A body's own parameters (its shape, pose, joint and terms' parameters) by key, and the table each belongs to (a term's:
+'fluid', the scene-wide default's table)."""
+
+
+def entry_value(scene: SceneConfig, entry: BodyEntry, key: str):
+    """The value of a body's own parameter `key` (ENTRY_KEYS) in effect for the [[bodies]] `entry`: a term's parameter the
+    body does not give is the scene's [fluid] one."""
+    value = getattr(getattr(entry, ENTRY_KEYS[key]), key)
+    return getattr(scene.fluid, key) if value is None and ENTRY_KEYS[key] == "fluid" else value
+
+
+def body_own(param: Param) -> bool:
+    """Whether `param` is one each body has (named BODY__key: its shape, pose, joint, terms' parameters)."""
+    return ENTRY_KEYS.get(param.key) == param.section
 
 
 def body_names(scene: SceneConfig) -> list[str]:

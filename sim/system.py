@@ -503,7 +503,7 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     names = [e.name for e in scene.bodies]
     starts, models = [], []
     for e in scene.bodies:
-        fluid = replace(scene.fluid, forces=e.forces or scene.fluid.forces)
+        fluid = e.fluid_of(scene.fluid)  # its own force model and terms' parameters
         body = replace(make_body(e.body, scene.base_dir, fluid.forces == "panels"), name=e.name)
         models.append(Model(body, water, fluid))
         starts.append(initial_state(body, replace(scene, initial=e.initial)))

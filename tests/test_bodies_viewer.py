@@ -171,8 +171,9 @@ def test_a_recording_of_several_bodies_replays_every_pose_and_writes_the_run_csv
 
 
 def test_the_chosen_body_s_controls_change_that_body_alone_from_the_page():
-    """Body -> float from a page, then its Density and Take-off damping from the page: the run's float has them (its mass
-    density x volume, its take-off's damper absorbing), the spar keeps its own; choosing the spar again shows its values."""
+    """Body -> float from a page, then its Density, Take-off damping and Drag C_d from the page: the run's float has them
+    (its mass density x volume, its take-off's damper absorbing, its own drag), the spar keeps its own; choosing the spar
+    again shows its values."""
     with viewer() as app:
         spar = app.sync().settings.config.bodies[0]
 
@@ -185,6 +186,7 @@ def test_the_chosen_body_s_controls_change_that_body_alone_from_the_page():
                 await page.read(0.5)
                 await page.update("Density", 700.0)
                 await page.update("PTO damping", 2.0e6)
+                await page.update("Drag C_d", 1.5)
                 await page.read(1.0)
 
         asyncio.run(drive())
@@ -193,12 +195,15 @@ def test_the_chosen_body_s_controls_change_that_body_alone_from_the_page():
         assert snap.settings.focus == "float" and snap.settings.density == pytest.approx(700.0)
         assert float_.body.mass == pytest.approx(700.0 * float_.body.volume)
         assert snap.settings.config.bodies[0] == spar  # the spar untouched
+        drag = {m.name: m.model.fluid.drag_coefficient for m in app.loop.sim.system.members}
+        assert drag == {"float": 1.5, "spar": 0.0}  # a term's parameter is the chosen body's own too
         assert next(g for g in app.loop.sim.system.joints if g.name == "float").damping == 2.0e6
         absorbed = wait_for(app, lambda s: s.run.joints[1][4] > 0.0, what="the float's take-off absorbing").run.joints[1][4]
         assert absorbed > 0.0
         app.controls.focus.value = "spar"
         snap = wait_for(app, lambda s: s.settings.focus == "spar", what="the spar chosen")
         assert app.controls.density.value == pytest.approx(snap.settings.density) and snap.settings.density != pytest.approx(700.0)
+        assert app.controls.drag_coefficient.value == 0.0  # the spar's drag, the scene's
 
 
 def test_a_mesh_loaded_for_the_chosen_body_takes_its_place_on_its_joint():

@@ -91,3 +91,44 @@ def test_an_unchanged_update_changes_nothing():
     system = run.system
     run.update(float__pto_damping=run.scene.bodies[1].constraint.pto_damping)
     assert run.system is system and dataclasses.replace(run.scene) == load_scene("rm3")
+
+
+TWO_CUBES = """
+    [fluid]
+    forces = "panels"
+    damping = {scene_damping}
+    [[bodies]]
+    name = "a"
+    shape = "cube"
+    density = 500.0
+    position = [-2.0, 0.0, 0.1]
+    {a_own}
+    [[bodies]]
+    name = "b"
+    shape = "cube"
+    density = 500.0
+    position = [2.0, 0.0, 0.1]
+    {b_own}
+"""
+
+
+def test_a_body_s_own_damping_is_its_alone(tmp_path):
+    """A [[bodies]] entry's own term parameter (damping = 2000 for cube a) acts on that body alone and is exactly the
+    scene's [fluid] value for it: the run equals one whose [fluid] damping is 2000 with cube b's own 0; a's heave dies
+    out while b, undamped, keeps bobbing. Named by the body everywhere: update(b__damping=...) and its one-line errors."""
+    own = scene_file(tmp_path, TWO_CUBES.format(scene_damping=0.0, a_own="damping = 2000.0", b_own=""), "own.toml")
+    wide = scene_file(tmp_path, TWO_CUBES.format(scene_damping=2000.0, a_own="", b_own="damping = 0.0"), "wide.toml")
+    assert [e.fluid_of(own.fluid).damping for e in own.bodies] == [2000.0, 0.0]
+    runs = [Simulation(scene, backend="numpy") for scene in (own, wide)]
+    heave = []
+    for _ in range(120):  # 3 s: a's heave decays as exp(-d A t / 2 m) = exp(-2 t)
+        for run in runs:
+            run.step(5)
+        heave.append(poses(runs[0])[:, 2])
+        assert np.abs(poses(runs[0]) - poses(runs[1])).max() < 1e-12
+    late = np.ptp(np.array(heave[-60:]), axis=0)  # the heave range of a and b over the last 1.5 s (a period)
+    assert late[0] < 0.2 * late[1] and late[1] > 0.05, late
+    runs[0].update(b__damping=200.0)
+    assert [m.model.fluid.damping for m in runs[0].system.members] == [2000.0, 200.0]
+    with pytest.raises(ConfigError, match=r"\[\[bodies\]\] b: damping must be >= 0"):
+        runs[0].update(b__damping=-1.0)

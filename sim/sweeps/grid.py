@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import ENTRY_SECTIONS, PARAMS, SceneConfig, load_scene, read_toml, with_overrides
+from ..config import PARAMS, SceneConfig, body_own, load_scene, read_toml, with_overrides
 from ..errors import ConfigError
 from ..limits import MAX_CASES
 
@@ -34,9 +34,10 @@ VARIABLE = {p.key: p for p in PARAMS.values() if p.section in ("body", "fluid", 
             and p.key not in ("shape", "mass", "t_end")}  # fmt: skip
 """Scene parameters a sweep can vary, by key."""
 assert not set(START) & set(VARIABLE), "a start parameter shadows a scene parameter"
-BODY_VARIABLE = {p.key: p for p in PARAMS.values() if p.section in ENTRY_SECTIONS and p.kind in ("float", "int", "optional", "choice")}
+BODY_VARIABLE = {p.key: p for p in PARAMS.values() if body_own(p) and p.kind in ("float", "int", "optional", "choice")}
 """What a sweep can vary of a body, named BODY.KEY: BODY one of a scene's [[bodies]] (float.pto_damping: a power matrix), or
-`body`, the one body of a one-body scene (body.pto_damping, body.density); KEY any number or choice of its shape, pose or joint."""
+`body`, the one body of a one-body scene (body.pto_damping, body.density); KEY any number or choice of its shape, pose, joint or
+terms' parameters (float.drag_coefficient)."""
 SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.mesh_unit", "body.samples", "fluid.rho",
           "fluid.g", "fluid.forces", "step.integrator", "step.dt")  # fmt: skip
 

@@ -15,7 +15,7 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import body_own, in_effect, load_scene, with_overrides
+from sim.config import body_own, entry_value, in_effect, load_scene, with_overrides
 from sim.errors import ConfigError
 
 from .loop import CONTROLLED, DERIVED, SPEED, Settings
@@ -55,8 +55,9 @@ _PROBE_JS = """(function(){
 def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[str, object]], list[str]]:
     """The loop commands a link's query asks for (scene first) and what in it was refused: unknown keys,
     values that are not numbers or choices or lie outside the control's range, and repeats of a key
-    (the first one counts). Nothing refused reaches the run."""
-    commands, problems, seen = [], [], set()
+    (the first one counts). A body's own parameter in a scene of several is BODY.key (float.density=700): the commands
+    choose that body, then set it. Nothing refused reaches the run."""
+    commands, problems, seen, bodies = [], [], set(), ()
     pairs = parse_qsl(query.lstrip("?"), keep_blank_values=True)
     for key, text in sorted(pairs, key=lambda kv: kv[0] != "scene"):  # stable: the first of a repeated key stays first
         if key in VISER_PARAMS or key == "token":  # viser's own, and the viewer's access token (app/main.py)
@@ -68,18 +69,25 @@ def parse_link(query: str, scene_options: tuple[str, ...]) -> tuple[list[tuple[s
         if key == "scene":
             if text in scene_options:
                 commands.append(("scene", text))
+                bodies = tuple(e.name for e in preset.bodies) if (preset := _preset(text)) is not None else ()
             else:
                 problems.append(f"scene {text[:30]!r} is not a preset")
             continue
-        param = SPEED if key == "speed" else CONTROLLED.get(key)
-        if param is None:
+        body, _, name = key.rpartition(".")
+        param = SPEED if key == "speed" else CONTROLLED.get(name)
+        if param is None or (body and not body_own(param)):
             problems.append(f"unknown parameter {key[:30]!r}")
+            continue
+        if body not in ("", *bodies) or (bodies and not body and body_own(param)):
+            problems.append(
+                f"{key[:30]!r}: a body's own parameter is BODY.{name}, BODY one of the scene's bodies ({', '.join(bodies) or 'none'})"
+            )
             continue
         value, why = _link_value(param, text)
         if why:
             problems.append(why)
         else:
-            commands.append((key, value))
+            commands += [("focus", body), (name, value)] if body else [(name, value)]
     return commands, problems
 
 
@@ -113,10 +121,10 @@ def _preset(name: str):
 def link_query(settings: Settings) -> str:
     """The query that reproduces the running setup: the preset and every controlled parameter that
     differs from it (a loaded mesh lives on this server only: it is not part of the link; in a scene of several bodies
-    the link carries the scene-wide parameters, not yet each body's own). A value
-    other parameters decide (`IN_EFFECT`) is compared with what the link's scene would have in effect."""
+    each body's own as BODY.key). A value other parameters decide (`IN_EFFECT`) is compared with what the link's scene
+    would have in effect."""
     preset = _preset(settings.scene)
-    keys = [k for k in CONTROLLED if not (settings.config.bodies and body_own(CONTROLLED[k]))]  # a body's own: not yet
+    keys = [k for k in CONTROLLED if not (settings.config.bodies and body_own(CONTROLLED[k]))]  # a body's own: _body_pairs
     written = {key: _shown(settings, key) for key in set(keys) - DERIVED}
     written = {key: v for key, v in written.items() if preset is None or v != in_effect(preset, _qualname(key))}
     target = preset
@@ -127,9 +135,27 @@ def link_query(settings: Settings) -> str:
     derived = {key: settings.value(key) for key in DERIVED if key in keys}
     differ = written | {key: v for key, v in derived.items() if target is None or v != in_effect(target, _qualname(key))}
     pairs = [("scene", settings.scene)] + [(key, _text(CONTROLLED[key], differ[key])) for key in CONTROLLED if key in differ]
+    pairs += _body_pairs(settings.config, preset)
     if settings.speed != 1.0:
         pairs.append(("speed", f"{settings.speed:g}"))
     return "?" + urlencode(pairs, safe=",")
+
+
+def _body_pairs(config, preset) -> list[tuple[str, str]]:
+    """(BODY.key, text) of each body's own controlled parameter that differs from the preset's (a density only where the
+    body gives one, not a mass)."""
+    if not config.bodies:
+        return []
+    given = {e.name: e for e in preset.bodies} if preset is not None else {}
+    pairs = []
+    for entry in config.bodies:
+        for key, param in CONTROLLED.items():
+            if not body_own(param) or (key == "density" and entry.body.mass is not None):
+                continue
+            value, old = entry_value(config, entry, key), given.get(entry.name)
+            if old is None or value != entry_value(preset, old, key):
+                pairs.append((f"{entry.name}.{key}", _text(param, value)))
+    return pairs
 
 
 def _qualname(key: str) -> str:

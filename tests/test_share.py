@@ -211,6 +211,33 @@ def test_links_carry_the_preset_and_what_differs_from_it():
     assert problems == ["'scene' given more than once (the first kept)", "unknown parameter 'bogus'", "dt = 'abc' is not a number"]
 
 
+def test_a_link_carries_each_body_s_own_parameters_by_name():
+    """rm3 with the float made lighter and given drag: the link names them float.density and float.drag_coefficient, a
+    fresh viewer opening it runs the same bodies (the spar untouched) and writes the same link; a body's parameter
+    without a body, or of a body the scene lacks, is refused."""
+    from app.loop import SimLoop
+
+    def fresh() -> SimLoop:
+        return SimLoop(load_scene("rm3"), "rm3", scene_options=("rm3",), kernels=False)
+
+    loop = fresh()
+    for name, value in (("focus", "float"), ("density", 700.0), ("drag_coefficient", 1.5), ("focus", "spar")):
+        loop._apply(name, value)
+    query = link_query(loop.settings)
+    assert query == "?scene=rm3&float.density=700&float.drag_coefficient=1.5"
+    commands, problems = parse_link(query, ("rm3",))
+    assert not problems and commands[1:] == [("focus", "float"), ("density", 700.0), ("focus", "float"), ("drag_coefficient", 1.5)]
+    opened = fresh()
+    for name, value in commands[1:]:
+        opened._apply(name, value)
+    assert opened.settings.config.bodies == loop.settings.config.bodies and link_query(opened.settings) == query
+    assert opened.settings.config.bodies[0] == load_scene("rm3").bodies[0]  # the spar as shipped
+    _, problems = parse_link("?scene=rm3&density=700&buoy.density=700&float.rho=1", ("rm3",))
+    assert problems == ["'density': a body's own parameter is BODY.density, BODY one of the scene's bodies (spar, float)",
+                        "'buoy.density': a body's own parameter is BODY.density, BODY one of the scene's bodies (spar, float)",
+                        "unknown parameter 'float.rho'"]  # fmt: skip
+
+
 def test_links_compare_the_value_in_effect_not_the_one_written():
     """The sphere's diffraction switch is unset: off in still water, on in waves (radiation from the BEM). A link
     names it only where the run's switch differs from what the link's own scene would have in effect, and a

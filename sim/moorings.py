@@ -370,8 +370,11 @@ class Moorings:
     """The scene's mooring lines in MoorDyn, coupled to one body. `load` is the wrench to hold over the
     next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
 
-    def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0):
-        """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0."""
+    def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0,
+                 at: np.ndarray | None = None):  # fmt: skip
+        """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0. `at`: the
+        lines settle with the body's centre of mass there instead (the fairleads still those of x0: a file's are where
+        the body starts), as the rest pose's stiffness asks."""
         md = moordyn()
         self._md = md
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
@@ -397,6 +400,7 @@ class Moorings:
         except ConfigError:
             self.close()
             raise
+        x0 = x0 if at is None else np.asarray(at, float)
         x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0)
         status = _settle(md, self._system, x, v)
         if status:
@@ -433,10 +437,12 @@ class Moorings:
                               "raise dtM or lower TmaxIC in the mooring file, or use fewer segments")  # fmt: skip
 
     @classmethod
-    def of_scene(cls, scene, x0, R0, u0, omega0) -> Moorings | None:
+    def of_scene(cls, scene, x0, R0, u0, omega0, at=None) -> Moorings | None:
+        """The scene's lines with the body at x0, R0 moving at u0, omega0 (`at`: settled with it there, a file's
+        fairleads still those at x0)."""
         m = scene.moorings
         if m.line_file:
-            return cls(line_file(scene).read_text(), x0, R0, u0, omega0)
+            return cls(line_file(scene).read_text(), x0, R0, u0, omega0, at=at)
         spread = lines_of(m)
         if spread is None:
             return None
@@ -446,7 +452,7 @@ class Moorings:
         text = spread.input_file(
             np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g, scene.step.dt
         )
-        return cls(text, x0, R0, u0, omega0)
+        return cls(text, x0, R0, u0, omega0, at=at)
 
     def _kinematics(self, x, lever, u, omega) -> tuple[np.ndarray, np.ndarray]:
         """The fairleads' positions and velocities, flat, from the body's pose and twist and their (k, 3) world levers."""
@@ -543,7 +549,8 @@ def rest_pull(scene, x: np.ndarray, R: np.ndarray) -> np.ndarray:
             H, V = catenary(span, float(fair[2] - anchor[2]), spread.line_length, w, spread.line_stiffness)
             total += [H * gap[0] / span, H * gap[1] / span, -V]
         return total
-    lines = Moorings.of_scene(scene, np.asarray(x, float), R, np.zeros(3), np.zeros(3))
+    start = np.asarray(scene.initial.position, float)  # (a file's fairleads are where the body starts: held at x, they move)
+    lines = Moorings.of_scene(scene, start, R, np.zeros(3), np.zeros(3), at=np.asarray(x, float))
     if lines is None:
         return np.zeros(3)
     with lines:

@@ -431,3 +431,24 @@ def test_a_moordyn_file_whose_step_is_too_long_for_its_lines_stops_in_one_line(t
     flags = ("--lines", "1", "--segments", "10", "--line-mass", "0.01", "--line-stiffness", "3e6")
     done, rows = run_cli(tmp_path, "--scene", "moored-buoy", *flags, *still)
     assert done.returncode == 0 and np.isfinite(rows["T_fair_max"]).all() and rows["T_fair_max"].max() > 1.0, done.stderr
+
+
+def test_a_moordyn_file_holds_the_body_as_stiffly_as_the_spread_it_writes(tmp_path):
+    """The rest pose's horizontal stiffness from a MoorDyn file (the lines settled with the body held off its start,
+    their fairleads moved with it) is the spread's elastic catenaries' within MoorDyn's discretisation (12 % here), so a
+    BEM solve's grid reaches down past the same surge frequency (to the quarter octave) whichever way the lines are given."""
+    import math
+
+    from sim.equilibrium import pull_stiffness
+    from sim.radiation import lowest_frequency
+
+    scene = with_overrides(load_scene("moored-buoy"), fluid__radiation="none")
+    path = tmp_path / "lines.txt"
+    path.write_text(lines_of(scene.moorings).input_file(np.array(scene.initial.position), np.eye(3), RHO, G, scene.step.dt))
+    given = with_overrides(scene, moorings__lines=0, moorings__line_file=str(path))
+    at = np.array([*scene.initial.position[:2], -0.44])
+    spread, file = (pull_stiffness(s, at, np.eye(3)) for s in (scene, given))
+    assert spread[0, 0] > 10.0 and abs(file[0, 0] / spread[0, 0] - 1) < 0.12 and abs(file[1, 1] / spread[1, 1] - 1) < 0.12
+    mass = 900.0  # the buoy's (1 m cube, 900 kg/m^3)
+    lows = [lowest_frequency(s, mass, at, np.eye(3)) for s in (scene, given)]
+    assert None not in lows and abs(math.log2(lows[1] / lows[0])) <= 0.25, lows

@@ -157,7 +157,8 @@ class Snapshot(Posed):
 
     @property
     def damping(self) -> float:
-        return self.settings.config.fluid.damping
+        """The chosen body's damping coefficient (its own where its [[bodies]] entry gives one)."""
+        return self.settings.damping
 
 
 class Mailbox:

@@ -100,8 +100,8 @@ def _compiled_kernels():
 def _covered_kernels_only(request, monkeypatch):
     """Outside -m exhaustive a test's simulations load only the covering set's kernels (tests/covering.py): any other
     compiles for a minute on a cold cache, in the middle of the default run."""
-    if request.node.get_closest_marker("exhaustive"):
-        return
+    if request.node.get_closest_marker("exhaustive") or request.node.get_closest_marker("slow"):
+        return  # (the slow tests, run after the exhaustive ones, may load any: each is minutes anyway)
     import sim.kernels
     from tests.covering import covered
 

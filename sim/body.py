@@ -72,7 +72,15 @@ class Body:
         """The arrays the compiled kernels take: samples (r, n, area) and mesh (vertices, faces, normals)."""
         c = np.ascontiguousarray
         return (c(self.r_body), c(self.n_body), c(self.area), c(self.mesh_vertices, dtype=float),
-                c(self.mesh_faces, dtype=np.int64), c(self.face_normals), self.sample_moments, self.cell_corners, self.cell_reach)  # fmt: skip
+                c(self.mesh_faces, dtype=np.int64), c(self.face_normals), self.sample_moments, self.cell_corners, self.cell_reach,
+                *self.face_tree)  # fmt: skip
+
+    @cached_property
+    def face_tree(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The mesh's triangles as a tree of nested compact parts (clusters.bisection_tree): order, spans, spheres."""
+        from .clusters import bisection_tree
+
+        return bisection_tree(self.mesh_vertices[self.mesh_faces])
 
     @cached_property
     def cell_corners(self) -> np.ndarray:

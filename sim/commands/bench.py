@@ -210,7 +210,8 @@ def bench(args: BenchArgs) -> int:
         print()
         print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
               "its time goes; loads: the bodies' (numpy, compiled or linear), step: the kinematics, kicks, radiation memory and take-offs "
-              "(numpy, or the compiled system step: kernels/system.py); vs numpy: against the case's all-numpy row in this run")  # fmt: skip
+              "(numpy, or the compiled system step: kernels/system.py); vs numpy: against the case's all-numpy row in this run; direct sum: "
+              "every component summed at every node instead of each part's series (the exact wet surface's cost before issue 41)")  # fmt: skip
         _table(
             (
                 "case",
@@ -220,6 +221,7 @@ def bench(args: BenchArgs) -> int:
                 "x real time",
                 "vs numpy",
                 "hydrodynamics us",
+                "ns per triangle x component",
                 "radiation us",
                 "MoorDyn us",
                 "joints and stepping us",
@@ -309,20 +311,26 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     for label, scene in cases:
         linear = scene.fluid.hydro == "linear"
         reference = None
-        for loads_on, step_on in ((False, False),) + (((True, True),) if linear else ((True, False), (True, True))):
+        variants = ((True, True, True),) if linear else ((True, False, True), (True, True, False), (True, True, True))
+        for loads_on, step_on, expand in ((False, False, True),) + variants:
             run = Simulation(scene, backend="numpy")
             if loads_on:
                 run.use_backend("numba")  # the bodies' compiled loads and the compiled step
                 run.stepper = run.stepper if step_on else None
+                run.system.use_kernels(True, expand=expand)
             t, h, r, m = _system_split(run, args.repeats)
             run.close()
             reference = reference or t
             loads = ("linear, exact step" if run.exact else "linear") if linear else "compiled" if run.compiled else "numpy"
+            loads += "" if expand or not run.compiled else " (direct sum)"
             step = "exact" if run.exact else "compiled" if run.stepper is not None else "numpy"
             inside = run.stepper is not None  # the radiation runs inside the compiled step (and the linear loads too)
+            components = len(getattr(run.water, "omega", ()))  # the hydrodynamics' cost per triangle and wave component
+            cost = h / (sum(len(b.mesh_faces) for b in run.bodies) * components) if components and not linear else 0.0
             rows.append((label, loads, step, f"{t * 1e6:.0f}", f"{run.dt / t:.1f}", f"{reference / t:.1f}x",
-                         "in step" if inside and linear else f"{h * 1e6:.0f}", "in step" if inside else f"{r * 1e6:.0f}",
-                         f"{m * 1e6:.0f}" if run.moorings else "-", f"{(t - h - r - m) * 1e6:.0f}"))  # fmt: skip
+                         "in step" if inside and linear else f"{h * 1e6:.0f}", f"{cost * 1e9:.1f}" if cost else "-",
+                         "in step" if inside else f"{r * 1e6:.0f}", f"{m * 1e6:.0f}" if run.moorings else "-",
+                         f"{(t - h - r - m) * 1e6:.0f}"))  # fmt: skip
             if run.exact:
                 break
     return rows

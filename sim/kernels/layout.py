@@ -5,7 +5,8 @@ L_world (10:13, kg m^2/s). Twist (6,): (u_world, omega_world).
 
 Geometry tuple `Body.packed`: (r_body (n, 3) m, n_body (n, 3), area (n,) m^2, mesh_vertices (v, 3) m,
 mesh_faces (f, 3) int64, face_normals (f, 3), sample_moments (n, MOMENTS), cell_corners (n, 4, 3) m,
-cell_reach (n,) m), all body frame, C order.
+cell_reach (n,) m, and the mesh's triangles as a tree of parts (clusters.bisection_tree): face_order (f,) int64,
+face_spans (parts, 4) int64, face_spheres (parts, 4) m), all body frame, C order.
 Sample moments, per sample (sums over the wet set give every still-water integral, since z is linear
 in r): a | a r (3) | a r r^T as xx xy xz yy yz zz (6) | a n (3) | a n r^T row-major (9) | a c (3) |
 a c r^T row-major (9), with c = r x n.

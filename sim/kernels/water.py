@@ -29,6 +29,9 @@ A, OMEGA, KX, KY, K, PHASE, COS, SIN = range(8)
 TOL = 1e-13
 """Bound on the expansion's truncation error, relative to the sum of the amplitudes."""
 PMAX = 40
+KR = 4.0
+"""Where `clusters` cuts a body's tree in an expandable sea: at parts no wider than KR / k_max (k_max the largest
+wavenumber), so that each part's series needs a modest degree."""
 
 
 @njit(**JIT)
@@ -61,6 +64,218 @@ def ramp_factor(t, ramp):
     if ramp <= 0.0 or t >= ramp:
         return 1.0
     return 0.0 if t <= 0.0 else 0.5 - 0.5 * math.cos(math.pi * t / ramp)
+
+
+@njit(**JIT)
+def expandable(sea):
+    """Whether the sea's field is one complex power series about a centre (long-crested, deep, 4 or more components)."""
+    return sea[2] and sea[0].shape[0] >= 4 and math.isinf(sea[1])
+
+
+@njit(**JIT)
+def _offsets(sea, t):
+    """Each component's phase offset phi_j - (omega_j + k_j . U) t at time t (U the current, which carries the waves)."""
+    comps, current = sea[0], sea[4]
+    offset = np.empty(comps.shape[0])
+    for j in range(comps.shape[0]):
+        offset[j] = comps[j, PHASE] - (comps[j, OMEGA] + comps[j, KX] * current[0] + comps[j, KY] * current[1]) * t
+    return offset
+
+
+BLOCK = 256
+"""Points a series pass takes at a time (their arrays stay in the first-level cache)."""
+BANDS = 8
+"""Wavenumber bands of the degree's bound: band b holds the components with k_max 2^-(b+1) < k <= k_max 2^-b (the
+last, all below), each bounded by its top wavenumber."""
+
+
+@njit(**JIT)
+def _bands(comps, k_max):
+    """Each component's band (BANDS) and each band's top wavenumber."""
+    band = np.empty(comps.shape[0], dtype=np.int64)
+    for j in range(comps.shape[0]):
+        k = comps[j, K]
+        band[j] = BANDS - 1 if k <= 0.0 else min(BANDS - 1, int(math.floor(math.log2(k_max / k))))
+    top = np.empty(BANDS)
+    for b in range(BANDS):
+        top[b] = k_max * 2.0**-b
+    return band, top
+
+
+@njit(**JIT)
+def _banded_degree(weight, top, rho, limit):
+    """The smallest degree P whose truncation bound sum_b W_b (k_b rho)^(P+1) / (P+1)! e^(k_b rho) is below limit
+    (-1: none up to PMAX), W_b the band's summed weights and k_b its top wavenumber: each band its own bound, so a deep
+    centre, where the short waves have faded, needs a low degree."""
+    term = np.empty(BANDS)
+    for b in range(BANDS):
+        term[b] = weight[b] * math.exp(top[b] * rho)
+    for p in range(PMAX + 1):
+        total = 0.0
+        for b in range(BANDS):
+            term[b] *= top[b] * rho / (p + 1)
+            total += term[b]
+        if total <= limit:
+            return p
+    return -1
+
+
+@njit(**JIT)
+def _cut(x, R, spans, spheres, reach, size):
+    """The parts of a body's tree (clusters.py) at a pose, the elevation everywhere within +-reach: (node, status, world
+    centre) of each. A part lies wholly above every crest (dropped), or is cut from the tree where it is a leaf or,
+    with size > 0, no wider than size; with size 0, where it lies wholly below every trough (status 2: no clipping to
+    do, no vertex elevations) rather than across the water line (1)."""
+    m = spans.shape[0]
+    stack = np.empty(m, dtype=np.int64)
+    node = np.empty(m, dtype=np.int64)
+    status = np.empty(m, dtype=np.int64)
+    centre = np.empty((m, 3))
+    top, parts = 1, 0
+    stack[0] = 0
+    while top > 0:
+        top -= 1
+        nd = stack[top]
+        c0, c1, c2 = spheres[nd, 0], spheres[nd, 1], spheres[nd, 2]
+        cz = x[2] + R[2, 0] * c0 + R[2, 1] * c1 + R[2, 2] * c2
+        rho = spheres[nd, 3]
+        if cz - rho > reach:
+            continue
+        wet = cz + rho < -reach
+        if spans[nd, 2] >= 0 and (rho > size if size > 0.0 else not wet):
+            stack[top], stack[top + 1] = spans[nd, 3], spans[nd, 2]  # the left child next: the tree's order kept
+            top += 2
+            continue
+        node[parts], status[parts] = nd, 2 if wet else 1
+        for i in range(3):
+            centre[parts, i] = x[i] + R[i, 0] * c0 + R[i, 1] * c1 + R[i, 2] * c2
+        parts += 1
+    return node[:parts], status[:parts], centre[:parts]
+
+
+@njit(**JIT)
+def clusters(sea, t, x, R, spans, spheres, need_flow):
+    """The body's tree of triangles (clusters.py) cut at this pose (_cut), and a local expansion about each part.
+
+    In an expandable sea the parts are no wider than KR / k_max, and each gets the sharper bounds of its own
+    elevation and the sea's slope: dry (dropped), wet (status 2) or crossing (1), and its series' degrees from the
+    weighted bound. Returns (node, status, P, Pe (elevation degree), centre x, y, z0, Me, Mp, Mv (parts, P+1) complex,
+    offset, ramp factor, k_max); P = -1 where a part takes the direct sum (every part, in other seas)."""
+    comps = sea[0]
+    n = comps.shape[0]
+    offset = _offsets(sea, t)
+    r = ramp_factor(t, sea[5])
+    expand = expandable(sea)
+    amp = amp_w = k_max = slope = 0.0
+    for j in range(n):
+        amp += comps[j, A]
+        amp_w += comps[j, A] * comps[j, OMEGA]
+        slope += r * comps[j, A] * comps[j, K]
+        k_max = max(k_max, comps[j, K])
+    node, status, centre = _cut(x, R, spans, spheres, r * amp, KR / k_max if expand else 0.0)
+    parts = node.shape[0]
+    P = np.full(parts, -1, dtype=np.int64)
+    Pe = np.full(parts, -1, dtype=np.int64)
+    z0 = np.zeros(parts)
+    E = np.empty((n, parts), dtype=np.complex128)
+    kept = parts
+    if expand:
+        kept = _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E)
+    Me, Mp, Mv = _cluster_moments(comps, E[:, :kept], z0[:kept], P[:kept], Pe[:kept], k_max, need_flow)
+    return (node[:kept], status[:kept], P[:kept], Pe[:kept], centre[:kept, 0].copy(), centre[:kept, 1].copy(), z0[:kept], Me, Mp, Mv,
+            offset, r, k_max)  # fmt: skip
+
+
+@njit(**JIT)
+def _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E):
+    """Each part's components at its centre (E), sharper status, series centre depth z0 and degrees P (pressure, flow)
+    and Pe (elevation), the parts above the water dropped: compacted in place; returns how many are kept."""
+    n = comps.shape[0]
+    # A point (s, z) within rho of a centre (s_c, z_c) has its stretched depth z* = z - eta(s) within |dz| + slope |ds| of
+    # z_c - eta(s_c), so (ds, dz*) lies within rho sqrt(lambda), lambda the largest eigenvalue of [[1 + slope^2, slope],
+    # [slope, 1]]; clamping z* to the surface (as the pressure does) only brings it nearer a centre at or below it.
+    stretch = math.sqrt(1.0 + 0.5 * slope * slope + slope * math.sqrt(1.0 + 0.25 * slope * slope))
+    band, tops = _bands(comps, k_max)
+    weight = np.zeros((3, BANDS))  # per band: amplitude; at the centre's depth; times omega
+    for j in range(n):
+        weight[0, band[j]] += r * comps[j, A]
+    kept = 0  # kept <= c
+    for c in range(node.shape[0]):
+        rho = spheres[node[c], 3]
+        eta_c = 0.0
+        for j in range(n):
+            psi = comps[j, KX] * centre[c, 0] + comps[j, KY] * centre[c, 1] + offset[j]
+            E[j, kept] = r * comps[j, A] * complex(math.cos(psi), math.sin(psi))
+            eta_c += E[j, kept].real
+        cz = centre[c, 2]
+        if cz - rho > eta_c + slope * rho:  # above the water over its whole extent
+            continue
+        node[kept], status[kept] = node[c], 2 if cz + rho < eta_c - slope * rho else status[c]
+        centre[kept] = centre[c]
+        # the smaller of two bounds on |w - w0|: the stretch's, or the box of z* clamped to the surface
+        z0[kept], rho_w = min(cz - eta_c, 0.0), rho * stretch
+        z_hi = min(0.0, cz + rho - eta_c + slope * rho)
+        z_lo = min(cz - rho - eta_c - slope * rho, z_hi)
+        if math.hypot(rho, 0.5 * (z_hi - z_lo)) < rho_w:
+            z0[kept], rho_w = 0.5 * (z_lo + z_hi), math.hypot(rho, 0.5 * (z_hi - z_lo))
+        weight[1:] = 0.0
+        for j in range(n):
+            a = r * comps[j, A] * math.exp(comps[j, K] * z0[kept])
+            weight[1, band[j]] += a
+            weight[2, band[j]] += a * comps[j, OMEGA]
+        Pe[kept] = _banded_degree(weight[0], tops, rho, TOL * amp)
+        P[kept] = _banded_degree(weight[1], tops, rho_w, TOL * amp)
+        if need_flow and P[kept] >= 0:
+            P[kept] = max(P[kept], _banded_degree(weight[2], tops, rho_w, TOL * amp_w))
+        if Pe[kept] < 0 or P[kept] < 0:
+            P[kept] = Pe[kept] = -1
+        kept += 1
+    return kept
+
+
+@njit(**JIT)
+def _cluster_moments(comps, E, z0, P, Pe, k_scale, need_flow):
+    """Every part's moments at once: M[c, p] = sum_j E_jc w_jc (k_j / k_scale)^p / p!, the weights w 1 (elevation),
+    e^(k_j z0_c) (pressure), omega_j e^(k_j z0_c) (flow): one matrix product with the table of (k_j / k_scale)^p / p!."""
+    n, parts = E.shape
+    top = 0  # (a table of one row when every part takes the direct sum)
+    for c in range(parts):
+        top = max(top, P[c], Pe[c])
+    table = np.empty((top + 1, n))
+    for j in range(n):
+        term, q = 1.0, comps[j, K] / k_scale
+        for p in range(top + 1):
+            table[p, j] = term
+            term *= q / (p + 1)
+    series = 3 if need_flow else 2
+    F = np.zeros((n, 2 * series * parts))
+    for c in range(parts):
+        if P[c] < 0:
+            continue
+        for j in range(n):
+            e = E[j, c]
+            d = e * math.exp(comps[j, K] * z0[c])
+            col = 2 * series * c
+            F[j, col], F[j, col + 1], F[j, col + 2], F[j, col + 3] = e.real, e.imag, d.real, d.imag
+            if need_flow:
+                F[j, col + 4], F[j, col + 5] = comps[j, OMEGA] * d.real, comps[j, OMEGA] * d.imag
+    out = np.zeros((3, parts, top + 1), dtype=np.complex128)
+    if parts == 0:
+        return out[0], out[1], out[2]
+    M = np.dot(table, F)
+    for c in range(parts):
+        for s in range(series):
+            for p in range(top + 1):
+                out[s, c, p] = complex(M[p, 2 * series * c + 2 * s], M[p, 2 * series * c + 2 * s + 1])
+    return out[0], out[1], out[2]
+
+
+@njit(**JIT)
+def cluster_ex(cut, c):
+    """The expansion of part c of `clusters` as `prepare` gives one (for elevations and fields)."""
+    P, Pe = cut[2][c], cut[3][c]
+    return (P, cut[10], cut[4][c], cut[5][c], cut[6][c], cut[12], cut[7][c, : Pe + 1].copy(), cut[8][c, : P + 1].copy(),
+            cut[9][c, : P + 1].copy(), cut[11])  # fmt: skip
 
 
 @njit(**JIT)
@@ -106,25 +321,94 @@ def prepare(sea, t, x):
     return (P, offset, x[0], x[1], z0, k_max, Me, Mp, Mv, r)
 
 
-@njit(inline="always", **JIT)
-def _horner(M, w):
-    acc = M[M.shape[0] - 1]
-    for n in range(M.shape[0] - 2, -1, -1):
-        acc = acc * w + M[n]
-    return acc
+@njit(**JIT)
+def _series_elevations(sea, ex, points, m, out):
+    """out[i] = eta at points[i], i < m, from the expansion: sum_n Re(i^n Me_n) s^n, a real polynomial in the scaled
+    distance s along the waves (returned), for a block of points a degree at a time (loops the compiler vectorises)."""
+    cb, sb = sea[0][0, COS], sea[0][0, SIN]
+    cx, cy, k_scale, Me = ex[2], ex[3], ex[5], ex[6]
+    s = np.empty(m)
+    for i in range(m):
+        s[i] = k_scale * (cb * (points[i, 0] - cx) + sb * (points[i, 1] - cy))
+    c = np.empty(Me.shape[0])
+    for n in range(Me.shape[0]):  # Re(i^n M): i^n cycles through 1, i, -1, -i
+        c[n] = (Me[n].real, -Me[n].imag, -Me[n].real, Me[n].imag)[n % 4]
+    for start in range(0, m, BLOCK):
+        end = min(m, start + BLOCK)
+        _polynomial(c, s[start:end], out[start:end])
+    return s
+
+
+@njit(**JIT)
+def _polynomial(c, s, out):
+    """out = sum_n c_n s^n (a block of points, one degree at a time)."""
+    top = c.shape[0] - 1
+    for i in range(s.shape[0]):
+        out[i] = c[top]
+    for n in range(top - 1, -1, -1):
+        cn = c[n]
+        for i in range(s.shape[0]):
+            out[i] = out[i] * s[i] + cn
+
+
+@njit(**JIT)
+def _series_at(M, wr, wi, m, ar, ai):
+    """(ar + i ai)[i] = sum_n M_n (wr + i wi)[i]^n, i < m: Horner's rule, a block of points a degree at a time."""
+    for start in range(0, m, BLOCK):
+        end = min(m, start + BLOCK)
+        _horner_block(M, wr[start:end], wi[start:end], ar[start:end], ai[start:end])
+
+
+@njit(**JIT)
+def _horner_block(M, wr, wi, ar, ai):
+    top = M.shape[0] - 1
+    for i in range(ar.shape[0]):
+        ar[i], ai[i] = M[top].real, M[top].imag
+    for n in range(top - 1, -1, -1):
+        mr, mi = M[n].real, M[n].imag
+        for i in range(ar.shape[0]):
+            re = ar[i] * wr[i] - ai[i] * wi[i] + mr
+            ai[i] = ar[i] * wi[i] + ai[i] * wr[i] + mi
+            ar[i] = re
+
+
+@njit(**JIT)
+def _series_fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
+    """fields from the expansion (deep water), in passes over all m points at once: the elevation (unless known),
+    the stretched depth, then the pressure's series (and the flow's)."""
+    U = sea[4]
+    cb, sb = sea[0][0, COS], sea[0][0, SIN]
+    z0, k_scale, Mp, Mv = ex[4], ex[5], ex[7], ex[8]
+    if known:
+        wi = np.empty(m)
+        for i in range(m):
+            wi[i] = k_scale * (cb * (points[i, 0] - ex[2]) + sb * (points[i, 1] - ex[3]))
+    else:
+        wi = _series_elevations(sea, ex, points, m, eta)
+    wr = np.empty(m)
+    for i in range(m):
+        wr[i] = k_scale * (min(points[i, 2] - eta[i], 0.0) - z0)
+    ar, ai = np.empty(m), np.empty(m)
+    _series_at(Mp, wr, wi, m, ar, ai)
+    for i in range(m):
+        out[i, 0] = rho * g * (ar[i] - points[i, 2])
+    if need_flow:
+        _series_at(Mv, wr, wi, m, ar, ai)
+    for i in range(m):
+        vr, vi = (ar[i], ai[i]) if need_flow else (0.0, 0.0)
+        out[i, 1], out[i, 2], out[i, 3] = vr * cb + U[0], vr * sb + U[1], vi
 
 
 @njit(**JIT)
 def elevations(sea, ex, points, m, out):
     """out[i] = eta at the horizontal position of points[i], i < m."""
     comps = sea[0]
-    P, offset, cx, cy, k_scale, Me, r = ex[0], ex[1], ex[2], ex[3], ex[5], ex[6], ex[9]
-    c, s = comps[0, COS], comps[0, SIN]
+    P, offset, r = ex[0], ex[1], ex[9]
+    if P >= 0:
+        _series_elevations(sea, ex, points, m, out)
+        return
     for i in range(m):
         X, Y = points[i, 0], points[i, 1]
-        if P >= 0:
-            out[i] = _horner(Me, complex(0.0, k_scale * (c * (X - cx) + s * (Y - cy)))).real
-            continue
         eta = 0.0
         for j in range(comps.shape[0]):
             eta += comps[j, A] * math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
@@ -137,49 +421,40 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
     stretching, the current added to the flow. known: eta[i] holds the elevation there; else it is computed
     here and stored (on the direct sum sharing each component's cosine between elevation and pressure)."""
     comps, depth, U = sea[0], sea[1], sea[4]
-    P, offset, cx, cy, z0, k_scale, Me, Mp, Mv, r = ex[0], ex[1], ex[2], ex[3], ex[4], ex[5], ex[6], ex[7], ex[8], ex[9]
+    P, offset, r = ex[0], ex[1], ex[9]
+    if P >= 0:
+        _series_fields(sea, ex, points, eta, m, rho, g, need_flow, out, known)
+        return
     deep = math.isinf(depth)
-    cb, sb = comps[0, COS], comps[0, SIN]
     n = comps.shape[0]
-    cosines = np.empty(n if P < 0 else 0)
+    cosines = np.empty(n)
     for i in range(m):
         X, Y, Z = points[i, 0], points[i, 1], points[i, 2]
-        s = cb * (X - cx) + sb * (Y - cy)
         if not known:
-            if P >= 0:
-                eta[i] = _horner(Me, complex(0.0, k_scale * s)).real
-            else:
-                e = 0.0
-                for j in range(n):
-                    cosines[j] = math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
-                    e += comps[j, A] * cosines[j]
-                eta[i] = r * e
+            e = 0.0
+            for j in range(n):
+                cosines[j] = math.cos(comps[j, KX] * X + comps[j, KY] * Y + offset[j])
+                e += comps[j, A] * cosines[j]
+            eta[i] = r * e
         zs = Z - eta[i] if deep else (Z - eta[i]) * depth / (depth + eta[i])
         zc = min(zs, 0.0)
         p = ux = uy = uz = 0.0
-        if P >= 0:
-            w = complex(k_scale * (zc - z0), k_scale * s)
-            p = _horner(Mp, w).real
+        for j in range(n):
+            a, k = comps[j, A], comps[j, K]
+            psi = comps[j, KX] * X + comps[j, KY] * Y + offset[j]
+            c = math.cos(psi) if known else cosines[j]
+            e = math.exp(k * zc)
+            if deep:
+                dp = dh = dv = e
+            else:
+                far = math.exp(-k * (2 * depth) - k * zc)
+                h2 = math.exp(-2 * k * depth)
+                dp, dh, dv = (e + far) / (1 + h2), (e + far) / (1 - h2), (e - far) / (1 - h2)
+            p += a * dp * c
             if need_flow:
-                v = _horner(Mv, w)
-                ux, uy, uz = v.real * cb, v.real * sb, v.imag
-        else:
-            for j in range(n):
-                a, k = comps[j, A], comps[j, K]
-                psi = comps[j, KX] * X + comps[j, KY] * Y + offset[j]
-                c = math.cos(psi) if known else cosines[j]
-                e = math.exp(k * zc)
-                if deep:
-                    dp = dh = dv = e
-                else:
-                    far = math.exp(-k * (2 * depth) - k * zc)
-                    h2 = math.exp(-2 * k * depth)
-                    dp, dh, dv = (e + far) / (1 + h2), (e + far) / (1 - h2), (e - far) / (1 - h2)
-                p += a * dp * c
-                if need_flow:
-                    aw = a * comps[j, OMEGA]
-                    ux += dh * c * aw * comps[j, COS]
-                    uy += dh * c * aw * comps[j, SIN]
-                    uz += dv * math.sin(psi) * aw
-            p, ux, uy, uz = r * p, r * ux, r * uy, r * uz  # (the expansion's moments carry the ramp already)
+                aw = a * comps[j, OMEGA]
+                ux += dh * c * aw * comps[j, COS]
+                uy += dh * c * aw * comps[j, SIN]
+                uz += dv * math.sin(psi) * aw
+        p, ux, uy, uz = r * p, r * ux, r * uy, r * uz
         out[i, 0], out[i, 1], out[i, 2], out[i, 3] = rho * g * (p - Z), ux + U[0], uy + U[1], uz

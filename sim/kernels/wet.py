@@ -14,7 +14,7 @@ from .layout import RHO, G, Wet
 from .rotation import mv, rotate_tensor
 from .spec import CELLS, CURRENT, DAMPING, DRAG, MODEL, PANELS, POINTS, PRESSURE, TWIST_TERMS, USED, WAVES
 from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, clip, vertex_levers, wet_cells, wet_panels, wet_points, wet_triangles, world_normal
-from .water import elevations, fields, prepare
+from .water import cluster_ex, clusters, elevations, fields, prepare
 
 
 @njit(**JIT)
@@ -37,12 +37,11 @@ def wet_surface(x, R, t, model, s, sea):
     when the water changes."""
     geom, coef = model.geom, model.coef
     if WAVES:
-        ex = prepare(sea, t, x)
         load = np.zeros((2, 6))
         if MODEL == POINTS:
-            A, S, rr = wave_points(x, R, sea, ex, geom, coef, s.flags, s.acc, s.ws, load)
+            A, S, rr = wave_points(x, R, sea, prepare(sea, t, x), geom, coef, s.flags, s.acc, s.ws, load)
         else:
-            A, S, rr = wave_panels(x, R, sea, ex, geom, coef, s.ws, load)
+            A, S, rr = wave_panels(x, R, t, sea, geom, coef, s.ws, load)
         return Wet(load[0].copy(), A, S, rr, load[1].copy())
     zn, zt, A, S, rr = wet_integrals(x, R, geom, (USED & DAMPING) != 0, s.flags, s.acc, s.ws)  # rr: damping's alone
     rg = coef[RHO] * coef[G]
@@ -62,24 +61,65 @@ def wet_surface(x, R, t, model, s, sea):
 
 
 @njit(inline="always", **JIT)
-def _node_load(lx, ly, lz, nx, ny, nz, a, p, d, ux, uy, uz, load):
-    """Add one wet node's pressure force -p a n to load[0] and d a u_water (d = 1 where damping needs
-    the water's motion, else 0) to load[1] (each force and torque, (6,))."""
-    for row, fx, fy, fz in ((0, -p * a * nx, -p * a * ny, -p * a * nz), (1, d * a * ux, d * a * uy, d * a * uz)):
-        load[row, 0] += fx
-        load[row, 1] += fy
-        load[row, 2] += fz
-        load[row, 3] += ly * fz - lz * fy
-        load[row, 4] += lz * fx - lx * fz
-        load[row, 5] += lx * fy - ly * fx
+def _add_moments(t, area, sums):
+    """Add a flat triangle's (levers t (3, 3)) area, integral of r dA and of r r^T dA (exact) to sums (13,)."""
+    s0, s1, s2 = t[0, 0] + t[1, 0] + t[2, 0], t[0, 1] + t[1, 1] + t[2, 1], t[0, 2] + t[1, 2] + t[2, 2]
+    sums[0] += area
+    sums[1] += area * s0 / 3.0
+    sums[2] += area * s1 / 3.0
+    sums[3] += area * s2 / 3.0
+    w = area / 12.0
+    xx = w * (t[0, 0] * t[0, 0] + t[1, 0] * t[1, 0] + t[2, 0] * t[2, 0] + s0 * s0)
+    xy = w * (t[0, 0] * t[0, 1] + t[1, 0] * t[1, 1] + t[2, 0] * t[2, 1] + s0 * s1)
+    xz = w * (t[0, 0] * t[0, 2] + t[1, 0] * t[1, 2] + t[2, 0] * t[2, 2] + s0 * s2)
+    yy = w * (t[0, 1] * t[0, 1] + t[1, 1] * t[1, 1] + t[2, 1] * t[2, 1] + s1 * s1)
+    yz = w * (t[0, 1] * t[0, 2] + t[1, 1] * t[1, 2] + t[2, 1] * t[2, 2] + s1 * s2)
+    zz = w * (t[0, 2] * t[0, 2] + t[1, 2] * t[1, 2] + t[2, 2] * t[2, 2] + s2 * s2)
+    sums[4] += xx
+    sums[5] += xy
+    sums[6] += xz
+    sums[7] += xy
+    sums[8] += yy
+    sums[9] += yz
+    sums[10] += xz
+    sums[11] += yz
+    sums[12] += zz
 
 
 @njit(inline="always", **JIT)
-def _diagnostics(diag, a, z, nz):
-    """Add a wet node's share of the frame's integrals: area, volume (z nu_z, divergence theorem) and z^2 nu_z."""
-    diag[0] += a
-    diag[1] += a * z * nz
-    diag[2] += a * z * z * nz
+def _triangle_load(x, nodes, out, first, area, nx, ny, nz, pressure_on, d, load, diag):
+    """Add one flat triangle's Dunavant sums from its nodes first..first+5: the pressure's force -area (sum w p) n and
+    torque -area (sum w p l) x n, l the lever (n is the same at every node); where d = 1 the water's velocity's
+    integral and torque (damping); the frame's integrals (area, z nu_z and z^2 nu_z) to diag."""
+    sp = spx = spy = spz = sz = szz = 0.0
+    u0 = u1 = u2 = t0 = t1 = t2 = 0.0
+    for q in range(6):
+        w = DUNAVANT4_WEIGHTS[q]
+        i = first + q
+        lx, ly, lz = nodes[i, 0] - x[0], nodes[i, 1] - x[1], nodes[i, 2] - x[2]
+        if pressure_on:
+            wp = w * out[i, 0]
+            sp += wp
+            spx, spy, spz = spx + wp * lx, spy + wp * ly, spz + wp * lz
+        sz += w * nodes[i, 2]
+        szz += w * nodes[i, 2] * nodes[i, 2]
+        if d != 0.0:
+            ux, uy, uz = w * out[i, 1], w * out[i, 2], w * out[i, 3]
+            u0, u1, u2 = u0 + ux, u1 + uy, u2 + uz
+            t0, t1, t2 = t0 + ly * uz - lz * uy, t1 + lz * ux - lx * uz, t2 + lx * uy - ly * ux
+    f = -area * sp
+    load[0, 0] += f * nx
+    load[0, 1] += f * ny
+    load[0, 2] += f * nz
+    load[0, 3] -= area * (spy * nz - spz * ny)
+    load[0, 4] -= area * (spz * nx - spx * nz)
+    load[0, 5] -= area * (spx * ny - spy * nx)
+    if d != 0.0:
+        for c, v in enumerate((u0, u1, u2, t0, t1, t2)):
+            load[1, c] += area * v
+    diag[0] += area
+    diag[1] += area * sz * nz
+    diag[2] += area * szz * nz
 
 
 @njit(**JIT)
@@ -151,37 +191,87 @@ def wave_points(x, R, sea, ex, geom, coef, flags, acc, ws, load):
 
 
 @njit(**JIT)
-def wave_panels(x, R, sea, ex, geom, coef, ws, load):
+def wave_panels(x, R, t, sea, geom, coef, ws, load):
     """The pressure and the water's velocity (for damping) on the mesh clipped at the wave surface (the
     plane through the surface points above each triangle's vertices), by Dunavant's rule, integrated into
     load (2, 6); the wet triangles with the water's velocity at their vertices into ws when drag needs
-    them. Returns the wet area and its moments (A, S, rr), exact for the clipped triangles."""
-    verts, faces, fnormals = geom[3], geom[4], geom[5]
+    them. Returns the wet area and its moments (A, S, rr), exact for the clipped triangles.
+
+    The triangles are taken a part of the body's tree at a time (water.clusters), each part with the water's series
+    about its own centre: parts above the crests are skipped, parts below the troughs need no vertex elevations."""
+    verts, faces, order, spans = geom[3], geom[4], geom[9], geom[10]
+    need_flow = (USED & TWIST_TERMS) != 0
+    cut = clusters(sea, t, x, R, spans, geom[11], need_flow)
+    lev = vertex_levers(R, verts)
+    nv, nf = verts.shape[0], faces.shape[0]
+    hv = np.empty(nv)
+    known = np.zeros(nv, dtype=np.bool_)
+    scratch = (np.empty((nv, 3)), np.empty(nv), np.empty(nv, dtype=np.int64), np.empty((2 * nf, 3, 3)), np.empty((2 * nf, 3)))
+    sums = np.zeros(13)  # A, S (3), rr (9)
+    ws[5][:] = 0.0
+    wet_count = 0
+    for c in range(cut[0].shape[0]):
+        ex = cluster_ex(cut, c)
+        nd = cut[0][c]
+        if cut[1][c] == 1:  # the water line may cross it: the surface above its vertices not asked yet
+            _vertex_heights(x, sea, ex, lev, faces, order[spans[nd, 0] : spans[nd, 1]], hv, known, scratch)
+        wet_count = _part_panels(x, R, sea, ex, geom, coef, order[spans[nd, 0] : spans[nd, 1]], cut[1][c] == 2, lev, hv, scratch, ws, load,
+                                 sums, wet_count)  # fmt: skip
+    if USED & DRAG:
+        ws[3][0] = wet_count
+    rr = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            rr[i, j] = sums[4 + 3 * i + j]
+    return sums[0], sums[1:4].copy(), rr
+
+
+@njit(**JIT)
+def _vertex_heights(x, sea, ex, lev, faces, faces_of_part, hv, known, scratch):
+    """hv[v] = z - eta at each vertex of these faces not asked before (known)."""
+    pts, eta, ids = scratch[0], scratch[1], scratch[2]
+    q = 0
+    for f in faces_of_part:
+        for v in range(3):
+            vi = faces[f, v]
+            if not known[vi]:
+                known[vi] = True
+                ids[q] = vi
+                for i in range(3):
+                    pts[q, i] = x[i] + lev[vi, i]
+                q += 1
+    elevations(sea, ex, pts, q, eta)
+    for i in range(q):
+        hv[ids[i]] = pts[i, 2] - eta[i]
+
+
+@njit(**JIT)
+def _part_panels(x, R, sea, ex, geom, coef, faces_of_part, all_wet, lev, hv, scratch, ws, load, sums, wet_count):
+    """One part's triangles clipped (whole where all_wet), their Dunavant nodes' pressure and flow integrated into
+    load, their integrals added to sums (A, S, rr row-major) and the frame's to ws[5]; the wet triangles and the
+    water's velocity at their corners appended to ws[1], ws[2] from wet_count when drag needs them. Returns the new count."""
+    faces, fnormals = geom[4], geom[5]
     rho, g = coef[RHO], coef[G]
     d = 1.0 if USED & DAMPING else 0.0  # the integral of u_water dA, for damping
     pressure_on = (USED & PRESSURE) != 0
-    lev = vertex_levers(R, verts)
-    nv = verts.shape[0]
-    pv = np.empty((nv, 3))
-    for v in range(nv):
-        for i in range(3):
-            pv[v, i] = x[i] + lev[v, i]
-    hv = np.empty(nv)
-    elevations(sea, ex, pv, nv, hv)
-    for v in range(nv):
-        hv[v] = pv[v, 2] - hv[v]
-    P = np.zeros((3, 3))
+    subs, normals = scratch[3], scratch[4]
+    P = np.empty((3, 3))
     h = np.empty(3)
-    nf = faces.shape[0]
-    subs = np.empty((2 * nf, 3, 3))
-    normals = np.empty((2 * nf, 3))
     m = 0
-    for f in range(nf):
-        for v in range(3):
+    for f in faces_of_part:
+        a, b, e = faces[f, 0], faces[f, 1], faces[f, 2]
+        if all_wet or (hv[a] < 0.0 and hv[b] < 0.0 and hv[e] < 0.0):  # whole: no clipping
             for i in range(3):
-                P[v, i] = lev[faces[f, v], i]
-            h[v] = hv[faces[f, v]]
-        c = clip(P, h, subs[m:])
+                subs[m, 0, i], subs[m, 1, i], subs[m, 2, i] = lev[a, i], lev[b, i], lev[e, i]
+            c = 1
+        elif hv[a] >= 0.0 and hv[b] >= 0.0 and hv[e] >= 0.0:
+            continue
+        else:
+            for v in range(3):
+                for i in range(3):
+                    P[v, i] = lev[faces[f, v], i]
+                h[v] = hv[faces[f, v]]
+            c = clip(P, h, subs[m:])
         nx, ny, nz = world_normal(R, fnormals, f)
         for k in range(m, m + c):
             normals[k, 0], normals[k, 1], normals[k, 2] = nx, ny, nz
@@ -194,30 +284,14 @@ def wave_panels(x, R, sea, ex, geom, coef, ws, load):
             for i in range(3):
                 nodes[6 * k + q, i] = x[i] + b[0] * t[0, i] + b[1] * t[1, i] + b[2] * t[2, i]
     out = _water_at(sea, ex, nodes, 6 * m, rho, g, (USED & TWIST_TERMS) != 0)
-    A = 0.0
-    S = np.zeros(3)
-    rr = np.zeros((3, 3))
-    ws[5][:] = 0.0
     for k in range(m):
         t = subs[k]
         nx, ny, nz = normals[k, 0], normals[k, 1], normals[k, 2]
         e10, e11, e12 = t[1, 0] - t[0, 0], t[1, 1] - t[0, 1], t[1, 2] - t[0, 2]
         e20, e21, e22 = t[2, 0] - t[0, 0], t[2, 1] - t[0, 1], t[2, 2] - t[0, 2]
         area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
-        A += area
-        s0, s1, s2 = t[0, 0] + t[1, 0] + t[2, 0], t[0, 1] + t[1, 1] + t[2, 1], t[0, 2] + t[1, 2] + t[2, 2]
-        S[0] += area * s0 / 3.0
-        S[1] += area * s1 / 3.0
-        S[2] += area * s2 / 3.0
-        for i in range(3):
-            for j in range(3):
-                rr[i, j] += area / 12.0 * (t[0, i] * t[0, j] + t[1, i] * t[1, j] + t[2, i] * t[2, j] + (s0, s1, s2)[i] * (s0, s1, s2)[j])
-        for q in range(6):
-            o = out[6 * k + q]
-            nd = nodes[6 * k + q]
-            _diagnostics(ws[5], area * DUNAVANT4_WEIGHTS[q], nd[2], nz)
-            _node_load(nd[0] - x[0], nd[1] - x[1], nd[2] - x[2], nx, ny, nz, area * DUNAVANT4_WEIGHTS[q], o[0] if pressure_on else 0.0, d,
-                       o[1], o[2], o[3], load)  # fmt: skip
+        _add_moments(t, area, sums)
+        _triangle_load(x, nodes, out, 6 * k, area, nx, ny, nz, pressure_on, d, load, ws[5])
     if USED & DRAG:  # the wet triangles and the water's velocity at their vertices
         corners = np.empty((3 * m, 3))
         for k in range(m):
@@ -229,8 +303,7 @@ def wave_panels(x, R, sea, ex, geom, coef, ws, load):
         for k in range(m):
             for v in range(3):
                 for i in range(3):
-                    tris[k, v, i] = subs[k, v, i]
-                    tris[k, v, 3 + i] = flow[3 * k + v, 1 + i]
-            tnormals[k] = normals[k]
-        ws[3][0] = m
-    return A, S, rr
+                    tris[wet_count + k, v, i] = subs[k, v, i]
+                    tris[wet_count + k, v, 3 + i] = flow[3 * k + v, 1 + i]
+            tnormals[wet_count + k] = normals[k]
+    return wet_count + m

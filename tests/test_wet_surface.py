@@ -12,6 +12,7 @@ from sim.kernels import sea_pack
 from sim.kernels import water as kw
 from sim.simulation import Simulation
 
+
 @pytest.fixture(autouse=True)
 def _shipped_only(monkeypatch, tmp_path):
     """rm3's coefficients come from the shipped file: no user cache, no solve."""

@@ -56,8 +56,9 @@ def damping(model, wet):
 
 
 @njit(**JIT)
-def _drag_node(lx, ly, lz, nx, ny, nz, a, vn, half_rc, F, T, D, need_D):
-    """Add one node's drag -(1/2) rho C_d a vn^2 n (vn > 0) to F, T, and its Jacobian to D."""
+def _drag_node(lx, ly, lz, nx, ny, nz, a, vn, half_rc, F, T, D, need_D, g):
+    """Add one node's drag -(1/2) rho C_d a vn^2 n (vn > 0) to F, T, and its Jacobian c g g^T (g = (n, l x n)) to
+    D's upper triangle (_mirrored fills the lower one once); g: scratch (6,)."""
     f = -half_rc * a * vn * vn
     fx, fy, fz = f * nx, f * ny, f * nz
     F[0] += fx
@@ -68,10 +69,20 @@ def _drag_node(lx, ly, lz, nx, ny, nz, a, vn, half_rc, F, T, D, need_D):
     T[2] += lx * fy - ly * fx
     if need_D:
         c = 2.0 * half_rc * a * vn
-        g = (nx, ny, nz, ly * nz - lz * ny, lz * nx - lx * nz, lx * ny - ly * nx)
+        g[0], g[1], g[2], g[3], g[4], g[5] = nx, ny, nz, ly * nz - lz * ny, lz * nx - lx * nz, lx * ny - ly * nx
         for i in range(6):
-            for j in range(6):
-                D[i, j] += c * g[i] * g[j]
+            ci = c * g[i]
+            for j in range(i, 6):
+                D[i, j] += ci * g[j]
+
+
+@njit(**JIT)
+def _mirrored(D):
+    """D with its lower triangle set from its upper one."""
+    for i in range(6):
+        for j in range(i):
+            D[i, j] = D[j, i]
+    return D
 
 
 @njit(**JIT)
@@ -88,6 +99,7 @@ def drag(x, R, u, w, model, s, need_D):
     F = np.zeros(3)
     T = np.zeros(3)
     D = np.zeros((6, 6))
+    g = np.empty(6)
     if MODEL != PANELS:
         flow, nodes = ws[0], ws[6]
         for k in range(r.shape[0]):
@@ -97,7 +109,7 @@ def drag(x, R, u, w, model, s, need_D):
                 vn = ((u[0] + w[1] * lz - w[2] * ly - flow[k, 0]) * nx + (u[1] + w[2] * lx - w[0] * lz - flow[k, 1]) * ny
                       + (u[2] + w[0] * ly - w[1] * lx - flow[k, 2]) * nz)  # fmt: skip
                 if vn > 0.0:
-                    _drag_node(lx, ly, lz, nx, ny, nz, nodes[k, 0], vn, half_rc, F, T, D, need_D)
+                    _drag_node(lx, ly, lz, nx, ny, nz, nodes[k, 0], vn, half_rc, F, T, D, need_D, g)
                 continue
             if not flags[k]:
                 continue
@@ -111,8 +123,8 @@ def drag(x, R, u, w, model, s, need_D):
             vn = ((u[0] + w[1] * lz - w[2] * ly - flow[k, 0]) * nx + (u[1] + w[2] * lx - w[0] * lz - flow[k, 1]) * ny
                   + (u[2] + w[0] * ly - w[1] * lx - flow[k, 2]) * nz)  # fmt: skip
             if vn > 0.0:
-                _drag_node(lx, ly, lz, nx, ny, nz, area[k], vn, half_rc, F, T, D, need_D)
-        return F, T, D
+                _drag_node(lx, ly, lz, nx, ny, nz, area[k], vn, half_rc, F, T, D, need_D, g)
+        return F, T, _mirrored(D)
     tris, tnormals = ws[1], ws[2]
     vn = np.empty(3)
     ahead = np.empty((2, 3, 6))
@@ -138,5 +150,5 @@ def drag(x, R, u, w, model, s, need_D):
                 vq = ((u[0] + w[1] * lz - w[2] * ly - node[3]) * nx + (u[1] + w[2] * lx - w[0] * lz - node[4]) * ny
                       + (u[2] + w[0] * ly - w[1] * lx - node[5]) * nz)  # fmt: skip
                 if vq > 0.0:
-                    _drag_node(lx, ly, lz, nx, ny, nz, tri_area * DUNAVANT4_WEIGHTS[q], vq, half_rc, F, T, D, need_D)
-    return F, T, D
+                    _drag_node(lx, ly, lz, nx, ny, nz, tri_area * DUNAVANT4_WEIGHTS[q], vq, half_rc, F, T, D, need_D, g)
+    return F, T, _mirrored(D)

@@ -68,8 +68,8 @@ def ramp_factor(t, ramp):
 
 @njit(**JIT)
 def expandable(sea):
-    """Whether the sea's field is one complex power series about a centre (long-crested, deep, 4 or more components)."""
-    return sea[2] and sea[0].shape[0] >= 4 and math.isinf(sea[1])
+    """Whether the sea's field is one complex power series about a centre (long-crested, deep, any components)."""
+    return sea[2] and sea[0].shape[0] >= 1 and math.isinf(sea[1])
 
 
 @njit(**JIT)
@@ -285,13 +285,11 @@ def prepare(sea, t, x):
     expansion serves) its centre, scale and moments."""
     comps, depth, long_crested, radius, current, ramp = sea
     n = comps.shape[0]
-    offset = np.empty(n)
-    for j in range(n):
-        offset[j] = comps[j, PHASE] - (comps[j, OMEGA] + comps[j, KX] * current[0] + comps[j, KY] * current[1]) * t
+    offset = _offsets(sea, t)
     r = ramp_factor(t, ramp)
     empty = np.zeros(0, dtype=np.complex128)
     none = (-1, offset, 0.0, 0.0, 0.0, 1.0, empty, empty, empty, r)
-    if not long_crested or n < 4 or not math.isinf(depth):
+    if not expandable(sea):
         return none
     E = np.empty(n, dtype=np.complex128)
     eta_c = slope = k_max = 0.0

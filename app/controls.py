@@ -140,6 +140,36 @@ class Controls(Bound):
         self.notice.visible = bool(text)
 
 
+def current_values_for_new_pages(server: viser.ViserServer) -> None:
+    """A new page gets every shared control with the value it has now, in the message that creates the control.
+
+    viser 1.1.1 replays its buffered messages to a new page in windows of at most 128. A control's creation
+    message keeps the value the control was made with, and each later change is a separate update, later in
+    the buffer. (The props, such as visible, options and max, are one object shared with the handle, so they
+    stay current.) A backlog longer than one window, as in rm3-moored with its bodies and lines, sends the
+    controls in the first window and their values in a later one. Under load that later window came more
+    than 0.3 s after the first, and for that time the page showed the values the preset started with. The
+    hostile campaign found this: a new page showed the spar's Samples 600 and Density 933 while the run used
+    6 and 500. The server's handles and its buffered updates were right; only the page was behind.
+    So before each new page's replay starts, each creation message is given the control's current value.
+    viser runs these callbacks on its event loop before it starts the page's producers. The updates that
+    follow hold the same value, and pages already connected have read these messages and are not sent
+    them again."""
+    buffer = server._websock_server._broadcast_buffer  # viser internals (pinned 1.1.1), as in app/gate.py
+    handles = server.gui._gui_input_handle_from_uuid
+
+    def refresh(_connection) -> None:
+        with buffer.buffer_lock:  # the simulation thread pushes while we read
+            for message in buffer.message_from_id.values():
+                if message.lifecycle_phase != "create" or not hasattr(message, "value"):
+                    continue
+                handle = handles.get(message.uuid)
+                if handle is not None and not handle._impl.is_button:
+                    message.value = handle._impl.value
+
+    server._websock_server.on_client_connect(refresh)
+
+
 def _control(gui, p: Param, value):
     """The control a declaration asks for: a dropdown for a choice, two or three numbers for a vector, else a
     slider whose range also holds `value` (a scene may start outside the usual range)."""

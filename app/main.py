@@ -18,7 +18,7 @@ from .about import About
 from .access import own_origin_only, viewer_address
 from .args import ViewArgs
 from .camera import CameraView
-from .controls import Controls, Layers
+from .controls import Controls, Layers, current_values_for_new_pages
 from .gate import Gate
 from .loop import SimLoop, Snapshot
 from .readouts import Readouts
@@ -64,6 +64,7 @@ class ViewerApp:
         self.connections = 0
         """Browsers that connected so far (the first one restarts the scene: a newcomer sees it from the start)."""
         server.on_client_connect(self._connected)
+        current_values_for_new_pages(server)  # a new page's first window shows every control as it is now, not as it was made
         loop.attach(self._publish, self.controls.show_setting)
         loop.start()
 

@@ -74,6 +74,49 @@ def test_every_page_shows_what_the_run_uses_after_bad_values():
         assert app.refusals.count >= 5  # three from the unconnected page, two dropdown values not among the choices
 
 
+def test_a_new_page_is_shown_every_control_as_it_is_in_the_message_that_makes_it():
+    """viser replays a new page's backlog in windows. A control's creation message comes early and its later
+    values come as updates further on. Under load the later window came over 0.3 s after the controls, and
+    for that time a new page showed the values the scene started with. The hostile campaign on rm3-moored
+    found this: a mesh body's Samples 600 and Density 933 while the run used 6 and 500. Now every control
+    comes with the value it has now, whether the run or a page set it. Small windows here make sure the
+    updates are in other windows than the controls, whatever the backlog's size."""
+    from app.hostile import _fields
+    from app.page import decode
+
+    with viewer() as app:
+        app.controls.dt.value = 0.01
+        app.controls.speed.value = 2.0
+
+        async def from_a_page():  # viser echoes a page's value to the other pages only: an update, not the control's creation
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Mesh unit" in p.controls)
+                await page.camera()
+                await page.read(0.5)
+                await page.update("Density", 500.0)
+                await page.read(0.5)
+
+        asyncio.run(from_a_page())
+        snap = wait_for(app, lambda s: s.density == 500.0 and s.settings.value("dt") == 0.01 and s.settings.speed == 2.0, what="the values")
+        app.server._websock_server._broadcast_buffer.max_window_size = 16
+        handles = _fields(app)
+
+        async def made_with() -> dict:
+            made = {}
+            async with Page.open(app.port) as page:
+                while not {h.label for h in handles.values()} <= made.keys():
+                    for m in decode(await asyncio.wait_for(page.ws.recv(), timeout=5.0)):
+                        if m.get("type") != "GuiUpdateMessage" and "value" in m and isinstance(m.get("props"), dict):
+                            made[m["props"].get("label")] = m["value"]
+            return made
+
+        made = asyncio.run(made_with())
+        used = (snap.density, snap.settings.value("dt"), snap.settings.speed)
+        assert (made["Density (kg/m³)"], made["Time step (s)"], made["Speed (×)"]) == (500.0, 0.01, 2.0) == used
+        shown = {key: tuple(made[h.label]) if isinstance(made[h.label], list) else made[h.label] for key, h in handles.items()}
+        assert shown == {key: h.value for key, h in handles.items()}  # every control, as the server has it
+
+
 @pytest.mark.slow
 def test_with_a_token_only_the_page_opened_with_it_drives_the_run():
     with viewer(token="s3 cret&x") as app:  # a token that needs quoting in the banner's link

@@ -98,7 +98,7 @@ def missing_terms(model) -> tuple[str, ...]:
     return tuple(name for name in model.term_names if name not in COMPILED_TERMS)
 
 
-SHARED = ("jit", "layout", "rotation", "state", "surface", "water", "modes", "radiation", "expm", "kinematics", "system")
+SHARED = ("jit", "layout", "rotation", "state", "surface", "directional", "water", "modes", "radiation", "expm", "kinematics", "system")
 """The kernel modules that read no spec (spec.py): one compiled copy serves every specialisation."""
 _instances: dict[Spec, types.ModuleType] = {}
 _lock = threading.Lock()

@@ -12,7 +12,7 @@ in r): a | a r (3) | a r r^T as xx xy xz yy yz zz (6) | a n (3) | a n r^T row-ma
 a c r^T row-major (9), with c = r x n.
 
 Sea `sea_pack(water, body)`: (components (n, 8): a, omega, k_x, k_y, k, phase, cos and sin of the
-direction; depth (inf: deep); long-crested (one direction for all); the body's radius about its
+direction; depth (inf: deep); whether the kernels may sum it as a series (kernels/water.py); the body's radius about its
 centre of mass, m; the uniform current (3,) (u, v, 0), m/s; the ramp's duration, s (water.Waves.ramp)).
 Still water has no components.
 
@@ -30,6 +30,8 @@ import numpy as np
 
 from ..forces import TERMS
 
+A, OMEGA, KX, KY, K, PHASE, COS, SIN = range(8)
+"""Columns of the sea's components array (sea_pack)."""
 STATE_SIZE = 13
 MOMENTS = 34
 RHO, G = 0, 1
@@ -87,7 +89,7 @@ def _sea(water, radius: float, expand: bool) -> tuple[np.ndarray, float, bool, f
     comps = np.column_stack(
         [water.amplitude, water.omega, water.k * np.cos(beta), water.k * np.sin(beta), water.k, water.phase, np.cos(beta), np.sin(beta)]
     )
-    return np.ascontiguousarray(comps), float(water.depth), expand and bool(np.all(beta == beta[0])), radius, current, float(water.ramp)
+    return np.ascontiguousarray(comps), float(water.depth), bool(expand), radius, current, float(water.ramp)
 
 
 NO_RADIATION = None

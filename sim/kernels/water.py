@@ -22,40 +22,18 @@ import math
 
 import numpy as np
 
+from .directional import directional_elevations, directional_fields, directional_moments
 from .jit import JIT, njit
+from .layout import COS, KX, KY, OMEGA, PHASE, SIN, A, K  # noqa: F401  (the components' columns)
 
-A, OMEGA, KX, KY, K, PHASE, COS, SIN = range(8)
-"""Columns of the components array."""
 TOL = 1e-13
 """Bound on the expansion's truncation error, relative to the sum of the amplitudes."""
 PMAX = 40
 KR = 4.0
+KR_SPREAD = 2.0
+"""The same in a short-crested sea, whose series costs about P^3 / 6 terms a point."""
 """Where `clusters` cuts a body's tree in an expandable sea: at parts no wider than KR / k_max (k_max the largest
 wavenumber), so that each part's series needs a modest degree."""
-
-
-@njit(**JIT)
-def _degree(rho):
-    """The smallest degree P whose truncation bound rho^(P+1) / (P+1)! e^rho is below TOL (-1: none up to PMAX)."""
-    term = math.exp(rho)
-    for p in range(PMAX + 1):
-        term *= rho / (p + 1)
-        if term <= TOL:
-            return p
-    return -1
-
-
-@njit(**JIT)
-def _moments(comps, weight, P, k_scale):
-    """M_n = sum_j weight_j k_j^n / n!, n = 0..P (scaled by k_scale^n, so every moment is O(1))."""
-    M = np.zeros(P + 1, dtype=np.complex128)
-    for j in range(comps.shape[0]):
-        term = weight[j]
-        q = comps[j, K] / k_scale
-        for n in range(P + 1):
-            M[n] += term
-            term *= q / (n + 1)
-    return M
 
 
 @njit(**JIT)
@@ -68,8 +46,24 @@ def ramp_factor(t, ramp):
 
 @njit(**JIT)
 def expandable(sea):
-    """Whether the sea's field is one complex power series about a centre (long-crested, deep, any components)."""
+    """Whether the sea's field may be summed as a power series about a centre (deep water, the series allowed)."""
     return sea[2] and sea[0].shape[0] >= 1 and math.isinf(sea[1])
+
+
+@njit(**JIT)
+def long_crested(comps):
+    """Whether every component runs the same way (then the series is in one complex variable)."""
+    for j in range(1, comps.shape[0]):
+        if comps[j, COS] != comps[0, COS] or comps[j, SIN] != comps[0, SIN]:
+            return False
+    return True
+
+
+@njit(**JIT)
+def _pays(P, n):
+    """Whether a short-crested series of degree P (about P^3 / 6 terms a point) costs less than the direct sum over n
+    components."""
+    return (P + 1) * (P + 2) * (P + 3) <= 12 * n
 
 
 @njit(**JIT)
@@ -172,29 +166,36 @@ def clusters(sea, t, x, R, spans, spheres, need_flow):
         amp_w += comps[j, A] * comps[j, OMEGA]
         slope += r * comps[j, A] * comps[j, K]
         k_max = max(k_max, comps[j, K])
-    node, status, centre = _cut(x, R, spans, spheres, r * amp, KR / k_max if expand else 0.0)
-    parts = node.shape[0]
+    spread = not long_crested(comps)
+    node, status, centre = _cut(x, R, spans, spheres, r * amp, (KR_SPREAD if spread else KR) / k_max if expand else 0.0)
+    return _with_series(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, expand, spread, True)
+
+
+@njit(**JIT)
+def _with_series(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, expand, spread, drop):
+    """The parts' tuple of `clusters` (their series where expand, parts above the water dropped where drop)."""
+    n, parts = comps.shape[0], node.shape[0]
     P = np.full(parts, -1, dtype=np.int64)
     Pe = np.full(parts, -1, dtype=np.int64)
     z0 = np.zeros(parts)
     E = np.empty((n, parts), dtype=np.complex128)
     kept = parts
     if expand:
-        kept = _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E)
-    Me, Mp, Mv = _cluster_moments(comps, E[:, :kept], z0[:kept], P[:kept], Pe[:kept], k_max, need_flow)
+        kept = _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E, spread, drop)
+    Me, Mp, Mv = _cluster_moments(comps, E[:, :kept], z0[:kept], P[:kept], Pe[:kept], k_max, need_flow, spread)
     return (node[:kept], status[:kept], P[:kept], Pe[:kept], centre[:kept, 0].copy(), centre[:kept, 1].copy(), z0[:kept], Me, Mp, Mv,
-            offset, r, k_max)  # fmt: skip
+            offset, r, k_max, spread)  # fmt: skip
 
 
 @njit(**JIT)
-def _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E):
+def _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, P, Pe, z0, E, spread, drop):
     """Each part's components at its centre (E), sharper status, series centre depth z0 and degrees P (pressure, flow)
-    and Pe (elevation), the parts above the water dropped: compacted in place; returns how many are kept."""
+    and Pe (elevation; P in a short-crested sea), the parts above the water dropped (where drop): compacted in place;
+    returns how many are kept. A short-crested series that would cost more than the direct sum is not taken (P = -1)."""
     n = comps.shape[0]
-    # A point (s, z) within rho of a centre (s_c, z_c) has its stretched depth z* = z - eta(s) within |dz| + slope |ds| of
-    # z_c - eta(s_c), so (ds, dz*) lies within rho sqrt(lambda), lambda the largest eigenvalue of [[1 + slope^2, slope],
-    # [slope, 1]]; clamping z* to the surface (as the pressure does) only brings it nearer a centre at or below it.
-    stretch = math.sqrt(1.0 + 0.5 * slope * slope + slope * math.sqrt(1.0 + 0.25 * slope * slope))
+    curvature = 0.0  # |d2 eta / dh2| <= sum r a k^2 along any horizontal line
+    for j in range(n):
+        curvature += r * comps[j, A] * comps[j, K] * comps[j, K]
     band, tops = _bands(comps, k_max)
     weight = np.zeros((3, BANDS))  # per band: amplitude; at the centre's depth; times omega
     for j in range(n):
@@ -202,20 +203,29 @@ def _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, 
     kept = 0  # kept <= c
     for c in range(node.shape[0]):
         rho = spheres[node[c], 3]
-        eta_c = 0.0
+        eta_c = gx = gy = 0.0
         for j in range(n):
             psi = comps[j, KX] * centre[c, 0] + comps[j, KY] * centre[c, 1] + offset[j]
             E[j, kept] = r * comps[j, A] * complex(math.cos(psi), math.sin(psi))
             eta_c += E[j, kept].real
+            gx -= comps[j, KX] * E[j, kept].imag
+            gy -= comps[j, KY] * E[j, kept].imag
         cz = centre[c, 2]
-        if cz - rho > eta_c + slope * rho:  # above the water over its whole extent
+        # Over the part, |eta - eta_c| <= sigma |dh|: sigma the slope at the centre plus the curvature's bound times
+        # half the radius (Taylor), or the sea's slope bound, whichever is smaller. A point (h, z) within rho of the
+        # centre has its stretched depth z* = z - eta within |dz| + sigma |dh| of the centre's, so (dh, dz*) lies within
+        # rho sqrt(lambda), lambda the largest eigenvalue of [[1 + sigma^2, sigma], [sigma, 1]]; clamping z* to the
+        # surface (as the pressure does) only brings it nearer a centre at or below it.
+        sigma = min(slope, math.hypot(gx, gy) + 0.5 * curvature * rho)
+        stretch = math.sqrt(1.0 + 0.5 * sigma * sigma + sigma * math.sqrt(1.0 + 0.25 * sigma * sigma))
+        if drop and cz - rho > eta_c + sigma * rho:  # above the water over its whole extent
             continue
-        node[kept], status[kept] = node[c], 2 if cz + rho < eta_c - slope * rho else status[c]
+        node[kept], status[kept] = node[c], 2 if cz + rho < eta_c - sigma * rho else status[c]
         centre[kept] = centre[c]
         # the smaller of two bounds on |w - w0|: the stretch's, or the box of z* clamped to the surface
         z0[kept], rho_w = min(cz - eta_c, 0.0), rho * stretch
-        z_hi = min(0.0, cz + rho - eta_c + slope * rho)
-        z_lo = min(cz - rho - eta_c - slope * rho, z_hi)
+        z_hi = min(0.0, cz + rho - eta_c + sigma * rho)
+        z_lo = min(cz - rho - eta_c - sigma * rho, z_hi)
         if math.hypot(rho, 0.5 * (z_hi - z_lo)) < rho_w:
             z0[kept], rho_w = 0.5 * (z_lo + z_hi), math.hypot(rho, 0.5 * (z_hi - z_lo))
         weight[1:] = 0.0
@@ -227,20 +237,33 @@ def _expansions(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, 
         P[kept] = _banded_degree(weight[1], tops, rho_w, TOL * amp)
         if need_flow and P[kept] >= 0:
             P[kept] = max(P[kept], _banded_degree(weight[2], tops, rho_w, TOL * amp_w))
-        if Pe[kept] < 0 or P[kept] < 0:
+        if spread:
+            Pe[kept] = P[kept]
+        if Pe[kept] < 0 or P[kept] < 0 or (spread and not _pays(P[kept], n)):
             P[kept] = Pe[kept] = -1
         kept += 1
     return kept
 
 
 @njit(**JIT)
-def _cluster_moments(comps, E, z0, P, Pe, k_scale, need_flow):
+def _cluster_moments(comps, E, z0, P, Pe, k_scale, need_flow, spread):
     """Every part's moments at once: M[c, p] = sum_j E_jc w_jc (k_j / k_scale)^p / p!, the weights w 1 (elevation),
-    e^(k_j z0_c) (pressure), omega_j e^(k_j z0_c) (flow): one matrix product with the table of (k_j / k_scale)^p / p!."""
+    e^(k_j z0_c) (pressure), omega_j e^(k_j z0_c) (flow): one matrix product with the table of (k_j / k_scale)^p / p!.
+    Short-crested: each part's (kernels/directional.py), flattened."""
     n, parts = E.shape
     top = 0  # (a table of one row when every part takes the direct sum)
     for c in range(parts):
         top = max(top, P[c], Pe[c])
+    if spread:
+        size = (top + 1) * (2 * top + 1)
+        out = np.zeros((parts, 5 * size), dtype=np.complex128)
+        for c in range(parts):
+            if P[c] >= 0:
+                Me, Mp, Mv = directional_moments(comps, E[:, c].copy(), z0[c], P[c], k_scale, need_flow)
+                out[c, : Me.shape[0]] = Me
+                out[c, size : size + Mp.shape[0]] = Mp
+                out[c, 2 * size : 2 * size + Mv.shape[0]] = Mv
+        return out[:, :size], out[:, size : 2 * size], out[:, 2 * size :]
     table = np.empty((top + 1, n))
     for j in range(n):
         term, q = 1.0, comps[j, K] / k_scale
@@ -259,64 +282,45 @@ def _cluster_moments(comps, E, z0, P, Pe, k_scale, need_flow):
             F[j, col], F[j, col + 1], F[j, col + 2], F[j, col + 3] = e.real, e.imag, d.real, d.imag
             if need_flow:
                 F[j, col + 4], F[j, col + 5] = comps[j, OMEGA] * d.real, comps[j, OMEGA] * d.imag
-    out = np.zeros((3, parts, top + 1), dtype=np.complex128)
+    out = np.zeros((parts, 3 * (top + 1)), dtype=np.complex128)
     if parts == 0:
-        return out[0], out[1], out[2]
+        return out[:, : top + 1], out[:, top + 1 : 2 * (top + 1)], out[:, 2 * (top + 1) :]
     M = np.dot(table, F)
     for c in range(parts):
         for s in range(series):
             for p in range(top + 1):
-                out[s, c, p] = complex(M[p, 2 * series * c + 2 * s], M[p, 2 * series * c + 2 * s + 1])
-    return out[0], out[1], out[2]
+                out[c, s * (top + 1) + p] = complex(M[p, 2 * series * c + 2 * s], M[p, 2 * series * c + 2 * s + 1])
+    return out[:, : top + 1], out[:, top + 1 : 2 * (top + 1)], out[:, 2 * (top + 1) :]
 
 
 @njit(**JIT)
 def cluster_ex(cut, c):
     """The expansion of part c of `clusters` as `prepare` gives one (for elevations and fields)."""
-    P, Pe = cut[2][c], cut[3][c]
-    return (P, cut[10], cut[4][c], cut[5][c], cut[6][c], cut[12], cut[7][c, : Pe + 1].copy(), cut[8][c, : P + 1].copy(),
-            cut[9][c, : P + 1].copy(), cut[11])  # fmt: skip
+    P, Pe, spread = cut[2][c], cut[3][c], cut[13]
+    ne, n = (Pe + 1, P + 1) if not spread else ((P + 1) * (2 * P + 1), (P + 1) * (2 * P + 1))
+    return (P, cut[10], cut[4][c], cut[5][c], cut[6][c], cut[12], cut[7][c, :ne].copy(), cut[8][c, :n].copy(),
+            cut[9][c, : (3 if spread else 1) * n].copy(), cut[11], spread)  # fmt: skip
 
 
 @njit(**JIT)
 def prepare(sea, t, x):
-    """What `elevations` and `fields` need at time t for a body centred at x: each component's phase
-    offset phi_j - (omega_j + k_j . U) t (U the current, which carries the waves), the ramp's factor, and (when the
-    expansion serves) its centre, scale and moments."""
-    comps, depth, long_crested, radius, current, ramp = sea
+    """What `elevations` and `fields` need at time t for a body centred at x (reaching sea[3] from it): each component's
+    phase offset, the ramp's factor, and (when the series serves) its centre, scale, degree and moments: `clusters`
+    with the body as one part."""
+    comps = sea[0]
     n = comps.shape[0]
-    offset = _offsets(sea, t)
-    r = ramp_factor(t, ramp)
-    empty = np.zeros(0, dtype=np.complex128)
-    none = (-1, offset, 0.0, 0.0, 0.0, 1.0, empty, empty, empty, r)
-    if not expandable(sea):
-        return none
-    E = np.empty(n, dtype=np.complex128)
-    eta_c = slope = k_max = 0.0
+    r = ramp_factor(t, sea[5])
+    amp = amp_w = k_max = slope = 0.0
     for j in range(n):
-        a = r * comps[j, A]
-        psi = comps[j, KX] * x[0] + comps[j, KY] * x[1] + offset[j]
-        E[j] = a * complex(math.cos(psi), math.sin(psi))
-        eta_c += E[j].real
-        slope += a * comps[j, K]
+        amp += comps[j, A]
+        amp_w += comps[j, A] * comps[j, OMEGA]
+        slope += r * comps[j, A] * comps[j, K]
         k_max = max(k_max, comps[j, K])
-    # where the stretched depths z* = z - eta of the body's nodes can lie: z within radius of x[2],
-    # eta within slope * radius of eta_c; clamped to the surface like the pressure's
-    z_lo = x[2] - radius - eta_c - slope * radius
-    z_hi = min(0.0, x[2] + radius - eta_c + slope * radius)
-    z_lo = min(z_lo, z_hi)
-    z0, dz = 0.5 * (z_lo + z_hi), 0.5 * (z_hi - z_lo)
-    P = _degree(k_max * math.sqrt(radius * radius + dz * dz))
-    if P < 0:
-        return none
-    Me = _moments(comps, E, P, k_max)
-    for j in range(n):
-        E[j] *= math.exp(comps[j, K] * z0)
-    Mp = _moments(comps, E, P, k_max)
-    for j in range(n):
-        E[j] *= comps[j, OMEGA]
-    Mv = _moments(comps, E, P, k_max)
-    return (P, offset, x[0], x[1], z0, k_max, Me, Mp, Mv, r)
+    spheres = np.array([[0.0, 0.0, 0.0, sea[3]]])
+    one = np.zeros(1, dtype=np.int64)
+    cut = _with_series(comps, _offsets(sea, t), r, amp, amp_w, slope, k_max, spheres, True, one, one + 1, x.reshape(1, 3).copy(),
+                       expandable(sea), not long_crested(comps), False)  # fmt: skip
+    return cluster_ex(cut, 0)
 
 
 @njit(**JIT)
@@ -403,7 +407,10 @@ def elevations(sea, ex, points, m, out):
     comps = sea[0]
     P, offset, r = ex[0], ex[1], ex[9]
     if P >= 0:
-        _series_elevations(sea, ex, points, m, out)
+        if ex[10]:
+            directional_elevations(sea, ex, points, m, out)
+        else:
+            _series_elevations(sea, ex, points, m, out)
         return
     for i in range(m):
         X, Y = points[i, 0], points[i, 1]
@@ -421,7 +428,10 @@ def fields(sea, ex, points, eta, m, rho, g, need_flow, out, known):
     comps, depth, U = sea[0], sea[1], sea[4]
     P, offset, r = ex[0], ex[1], ex[9]
     if P >= 0:
-        _series_fields(sea, ex, points, eta, m, rho, g, need_flow, out, known)
+        if ex[10]:
+            directional_fields(sea, ex, points, eta, m, rho, g, need_flow, out, known)
+        else:
+            _series_fields(sea, ex, points, eta, m, rho, g, need_flow, out, known)
         return
     deep = math.isinf(depth)
     n = comps.shape[0]

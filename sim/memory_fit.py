@@ -545,10 +545,22 @@ def fit_memory(c, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -
         cached = user_cache() / "memory" / f"{key}.npz"
         memory = next((m for m in (_read(STORED / f"{key}.npz"), _read(cached)) if m is not None), None)
         if memory is None:
+            refuse_fit_here()
             memory = _fit(c, tol, max_order, length)
             _keep(memory, cached)
         _FITS[key] = memory
     return _FITS[key]
+
+
+def refuse_fit_here() -> None:
+    """Inside bem.no_solves (a live viewer's simulation thread), a fit neither shipped nor cached is refused as a solve
+    is (a ConfigError saying why): fitting takes seconds to a minute (rm3-moored's spar resampled: 16 s)."""
+    from .bem import _thread
+    from .errors import ConfigError
+
+    why = getattr(_thread, "no_solve", None)
+    if why:
+        raise ConfigError(f"it needs a new fit of the radiation memory, {why}")
 
 
 def _read(path: Path) -> RadiationMemory | None:

@@ -73,6 +73,23 @@ def test_fitted_memory_reproduces_added_mass_and_damping(cube):
     assert len(memory.compact()[0]) <= 10 * len(rows_cols)  # the fewest states of these poles (one body's kernels run one per entry)
 
 
+def test_a_fit_neither_shipped_nor_cached_is_refused_where_solves_are(cube, monkeypatch, tmp_path):
+    """Inside bem.no_solves (the live viewer's simulation thread) a memory fit not on disk is a one-line ConfigError
+    naming why, not seconds of fitting; outside the block the fit is made and cached, and then read inside it."""
+    from sim import memory_fit
+    from sim.errors import ConfigError
+
+    monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
+    monkeypatch.setattr(memory_fit, "_FITS", {})
+    with bem.no_solves("not here"), pytest.raises(ConfigError, match="new fit of the radiation memory, not here"):
+        fit_memory(cube, tol=0.03)  # a fit nobody stored
+    made = fit_memory(cube, tol=0.03)
+    monkeypatch.setattr(memory_fit, "_FITS", {})
+    with bem.no_solves("not here"):
+        read = fit_memory(cube, tol=0.03)  # from the cache
+    assert [e.pole for e in read.entries] == [e.pole for e in made.entries]
+
+
 def test_fitted_impulse_response_is_the_cosine_transform_of_damping(cube):
     """K(t) = H e^(F t) G against (2/pi) integral of B(omega) cos(omega t) d omega (heave)."""
     memory = fit_memory(cube)

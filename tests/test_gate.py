@@ -246,10 +246,7 @@ def test_no_setting_a_page_may_choose_keeps_the_run_from_answering():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene", ["damped", pytest.param("rm3-moored", marks=pytest.mark.xfail(strict=False, reason=(
-    "open finding (2026-11-27): a page's Samples at its maximum gives the spar 60 000 samples, whose radius keys a new "
-    "radiation memory fit (15 s) on the simulation thread; under load the campaign's sync then times out (exit 1). "
-    "The mismatch it found before is fixed (app/controls.py: current_values_for_new_pages)")))])  # fmt: skip
+@pytest.mark.parametrize("scene", ["damped", "rm3-moored"])
 def test_the_hostile_campaign_gets_nothing_through(scene):
     """`python -m app.hostile` as its user runs it, one round, on a one-body and a moored several-body preset: exit 0,
     and the summary's counts of what got through all zero."""

@@ -13,6 +13,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from .body import UNITS
 from .errors import ConfigError
 from .forces import TERMS
@@ -78,8 +80,8 @@ STEP = (
     Param("step", "atol", 1e-10, "Absolute tolerance of the adaptive methods", lo=0.0, lo_open=True, hi=1e3),
 )
 WAVES = (
-    Param("waves", "kind", "still", "The sea: still water, regular (Airy) waves, or an irregular JONSWAP sea", kind="choice",
-          choices=("still", "regular", "jonswap"), name="waves", flag_name="waves", label="Waves", gui=()),
+    Param("waves", "kind", "still", "The sea: still water, regular (Airy) waves, an irregular JONSWAP sea, or a measured record of "
+          "the elevation at a point (record)", kind="choice", choices=("still", "regular", "jonswap", "record"), name="waves", flag_name="waves", label="Waves", gui=()),
     Param("waves", "height", 1.0, "Regular waves: crest-to-trough height H", "m", lo=0.0, hi=30.0, name="wave height", flag_name="wave_height",
           label="Height", gui=(0.0, 4.0, 0.05)),
     Param("waves", "period", 8.0, "Regular waves: period T", "s", lo=0.0, lo_open=True, hi=60.0, live=(0.5, 60.0), name="wave period",
@@ -98,6 +100,13 @@ WAVES = (
           "ramp): every wave load and the drawn surface, so a body is not kicked by waves at full height (unset: 3.5 periods of the sea, "
           "the regular period or JONSWAP's Tp; 0: full height from the start)", "s", lo=0.0, hi=1e4, kind="optional", name="wave ramp",
           flag_name="wave_ramp"),
+    Param("waves", "record", "", "Measured sea: a CSV of time (s) and surface elevation (m) at record_point, equal steps, relative to "
+          "the scene file or the working directory; taken apart by FFT into components travelling in `direction` (docs/physics.md)",
+          kind="text", name="wave record", flag_name="wave_record"),
+    Param("waves", "record_point", (0.0, 0.0), "Measured sea: where the record was taken (x, y), world frame", "m", lo=-1e7, hi=1e7,
+          kind="vector", size=2, flag_name="wave_record_point"),
+    Param("waves", "cutoff_period", None, "Measured sea: the shortest period kept (unset: every component above 1e-6 of the largest, "
+          "at most 4096)", "s", lo=0.0, lo_open=True, hi=1e3, kind="optional", flag_name="wave_cutoff_period"),
     Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
           "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )
@@ -383,7 +392,10 @@ def validate(scene: SceneConfig) -> SceneConfig:
         section = getattr(scene, name)
         checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
     _check_body(checked["body"], checked["initial"], checked["constraint"])
-    _check_steepness(checked["waves"], checked["fluid"].g)
+    _check_steepness(checked["waves"], checked["fluid"].g, scene.base_dir)
+    if checked["waves"].kind == "record" and any(checked["water"].current):
+        raise ConfigError("a measured record with a current is not modelled (the record's frequencies would be met, not intrinsic): "
+                          "set [water] current = [0, 0]")  # fmt: skip
     if checked["fluid"].radiation != "none" and any(checked["water"].current):
         raise ConfigError(
             "a current with radiation is not modelled (the radiation memory assumes water at rest): "
@@ -436,7 +448,7 @@ def wave_ramp(scene: SceneConfig) -> float:
     """The wave ramp the run uses, s (water.ramp_seconds: 3.5 periods of the sea when unset)."""
     from .water import ramp_seconds
 
-    return ramp_seconds(scene.waves)
+    return ramp_seconds(scene.waves, scene.base_dir)
 
 
 IN_EFFECT = {"waves.diffraction": diffracting, "body.points_per_edge": points_per_edge, "waves.ramp": wave_ramp}
@@ -463,13 +475,24 @@ BREAKING_STEEPNESS = 1 / 7
 """H / wavelength above which a wave breaks (Michell 1893: 0.142 in deep water)."""
 
 
-def _check_steepness(w, g: float) -> None:
-    """Refuse a sea steeper than breaking: regular H / lambda, JONSWAP Hs / lambda_p."""
+def _check_steepness(w, g: float, base_dir: str = ".") -> None:
+    """Refuse a sea steeper than breaking: regular H / lambda, JONSWAP Hs / lambda_p, a record's 4 std(eta) / lambda_p
+    (a record read in millimetres as metres is caught here). A record that cannot be read is refused too."""
     from .water import wavenumber
 
-    if w.kind == "still" or g == 0:
+    if w.kind == "record":
+        from .records import measured, peak_period
+
+        dt, eta = measured(w, base_dir)
+        height, period, what = 4 * float(np.std(eta)), peak_period(dt, eta, w.cutoff_period), "the record's 4 std(eta) / peak wavelength"
+    elif w.kind == "still" or g == 0:
         return
-    height, period, what = (w.height, w.period, "wave height / wavelength") if w.kind == "regular" else (w.hs, w.tp, "Hs / peak wavelength")
+    else:
+        height, period, what = (
+            (w.height, w.period, "wave height / wavelength") if w.kind == "regular" else (w.hs, w.tp, "Hs / peak wavelength")
+        )
+    if g == 0:
+        return
     depth = math.inf if w.depth is None else w.depth
     wavelength = 2 * math.pi / float(wavenumber(2 * math.pi / period, g, depth))
     if height / wavelength > BREAKING_STEEPNESS:

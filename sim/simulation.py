@@ -283,7 +283,7 @@ class Simulation:
 
     def _model(self, body: Body) -> Model:
         fluid = self.scene.fluid
-        water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current)
+        water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current, self.scene.base_dir)
         radiation = None
         if fluid.radiation == "bem":
             from .radiation import make_radiation

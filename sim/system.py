@@ -499,7 +499,7 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     from .config import diffracting
     from .simulation import initial_state
 
-    water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current)
+    water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current, scene.base_dir)
     names = [e.name for e in scene.bodies]
     starts, models = [], []
     for e in scene.bodies:

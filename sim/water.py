@@ -200,12 +200,17 @@ RAMP_PERIODS = 3.5
 N + 1/2 periods switches a sinusoid on with no net impulse at its own frequency (docs/physics.md, the wave ramp)."""
 
 
-def ramp_seconds(waves) -> float:
-    """The ramp a scene's [waves] table asks for, s: its `ramp`, or RAMP_PERIODS periods of the sea when unset (0 in still water)."""
+def ramp_seconds(waves, base_dir: str = ".") -> float:
+    """The ramp a scene's [waves] table asks for, s: its `ramp`, or RAMP_PERIODS periods of the sea when unset (0 in
+    still water; a record: the period of its largest component)."""
     if waves.kind == "still":
         return 0.0
     if waves.ramp is not None:
         return float(waves.ramp)
+    if waves.kind == "record":
+        from .records import measured, peak_period
+
+        return RAMP_PERIODS * peak_period(*measured(waves, base_dir), waves.cutoff_period)
     return RAMP_PERIODS * float(waves.period if waves.kind == "regular" else waves.tp)
 
 
@@ -267,8 +272,23 @@ def jonswap_waves(rho: float, g: float, hs: float, tp: float, gamma: float = 3.3
     return Waves(rho, g, amplitude, omega, wavenumber(omega, g, depth), theta, phase, depth)
 
 
-def make_water(waves, rho: float, g: float, current=(0.0, 0.0)):
-    """The water a scene's [waves] table, [water] current and [fluid] rho, g describe."""
+def record_waves(rho: float, g: float, dt: float, eta: np.ndarray, direction_deg: float = 0.0, depth: float = math.inf,
+                 point=(0.0, 0.0), cutoff_period: float | None = None) -> Waves:  # fmt: skip
+    """The long-crested sea whose elevation at `point` is the record eta (samples dt apart, the first at t = 0),
+    travelling in `direction_deg` (records.components: its periodic extension, less its mean)."""
+    from .records import components
+
+    omega, amplitude, alpha = components(dt, eta, cutoff_period)
+    k = wavenumber(omega, g, depth)
+    theta = math.radians(direction_deg)
+    # a cos(k . x_ref - omega t + phi) = a cos(omega t + alpha) at the reference point
+    phase = -alpha - k * (math.cos(theta) * point[0] + math.sin(theta) * point[1])
+    return Waves(rho, g, amplitude, omega, k, np.full(len(omega), theta), phase, depth)
+
+
+def make_water(waves, rho: float, g: float, current=(0.0, 0.0), base_dir: str = "."):
+    """The water a scene's [waves] table, [water] current and [fluid] rho, g describe (a record's file is found
+    from `base_dir`, the scene file's folder)."""
     depth = math.inf if waves.depth is None else float(waves.depth)
     current = (float(current[0]), float(current[1]))
     if waves.kind == "regular":
@@ -277,4 +297,10 @@ def make_water(waves, rho: float, g: float, current=(0.0, 0.0)):
     if waves.kind == "jonswap":
         sea = jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
         return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves))
+    if waves.kind == "record":
+        from .records import measured
+
+        dt, eta = measured(waves, base_dir)
+        sea = record_waves(rho, g, dt, eta, waves.direction, depth, waves.record_point, waves.cutoff_period)
+        return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves, base_dir))
     return StillWater(rho, g, current)

@@ -105,8 +105,8 @@ WAVES = (
           kind="text", name="wave record", flag_name="wave_record"),
     Param("waves", "record_point", (0.0, 0.0), "Measured sea: where the record was taken (x, y), world frame", "m", lo=-1e7, hi=1e7,
           kind="vector", size=2, flag_name="wave_record_point"),
-    Param("waves", "cutoff_period", None, "Measured sea: the shortest period kept (unset: every component above 1e-6 of the largest, "
-          "at most 4096)", "s", lo=0.0, lo_open=True, hi=1e3, kind="optional", flag_name="wave_cutoff_period"),
+    Param("waves", "cutoff_period", None, "Measured sea: the shortest period kept (unset: a quarter of the record's peak period; "
+          "components under 1e-6 of the largest are left out; at most 4096 remain)", "s", lo=0.0, lo_open=True, hi=1e3, kind="optional", flag_name="wave_cutoff_period"),
     Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
           "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )

@@ -23,6 +23,10 @@ import numpy as np
 
 from .errors import ConfigError
 
+PEAK_MULTIPLE = 4.0
+"""Unless `cutoff_period` says otherwise, components up to this many times the record's peak frequency are kept (a
+JONSWAP spectrum holds about 1e-3 of its variance above 4 omega_p): a gauge's noise and the leakage of waves between
+the record's frequencies would otherwise give thousands of components, each costing the run."""
 FLOOR = 1e-6
 """Components below this fraction of the largest are left out: each carries under 1e-12 of its variance (a
 record written from a sea on the record's frequency grid comes back with exactly that sea's components)."""
@@ -89,15 +93,17 @@ def _read(path: str, mtime_ns: int, size: int) -> tuple[float, np.ndarray]:
 
 def components(dt: float, eta: np.ndarray, cutoff_period: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(omega, amplitude, alpha) with eta(t_n) - mean = sum_j amplitude_j cos(omega_j t_n + alpha_j) at every
-    sample t_n = n dt (less the Nyquist component), keeping omega_j <= 2 pi / cutoff_period and the
-    components above FLOOR of the largest."""
+    sample t_n = n dt (less the Nyquist component and the components left out), keeping omega_j <= 2 pi /
+    cutoff_period (unset: PEAK_MULTIPLE times the peak frequency) and the components above FLOOR of the largest."""
     n = len(eta)
     c = np.fft.rfft(eta - eta.mean())[1 : (n + 1) // 2]  # the mean and (n even) the Nyquist bin left out
     omega = 2 * math.pi * np.arange(1, len(c) + 1) / (n * dt)
     amplitude = 2 * np.abs(c) / n
-    keep = amplitude >= FLOOR * amplitude.max() if amplitude.size and amplitude.max() > 0 else np.zeros(len(c), bool)
-    if cutoff_period is not None:
-        keep &= omega <= 2 * math.pi / cutoff_period
+    if not amplitude.size or amplitude.max() == 0:
+        raise ConfigError("the record is flat: its elevation never changes (no waves to take apart)")
+    keep = amplitude >= FLOOR * amplitude.max()
+    highest = PEAK_MULTIPLE * omega[np.argmax(amplitude)] if cutoff_period is None else 2 * math.pi / cutoff_period
+    keep &= omega <= highest * (1 + 1e-12)
     if keep.sum() > MAX_COMPONENTS:
         raise ConfigError(f"the record has {int(keep.sum())} components (over {MAX_COMPONENTS}): keep the longer waves with [waves] "
                           f"cutoff_period (--wave-cutoff-period), e.g. {math.ceil(100 * n * dt / MAX_COMPONENTS) / 100:g} s")  # fmt: skip
@@ -108,7 +114,7 @@ def peak_period(dt: float, eta: np.ndarray, cutoff_period: float | None = None) 
     """The period of the record's largest component, s (the default ramp counts in it)."""
     omega, amplitude, _ = components(dt, eta, cutoff_period)
     if not amplitude.size:
-        raise ConfigError("the record is flat: its elevation never changes (no waves to take apart)")
+        raise ConfigError(f"the record has no component longer than cutoff_period = {cutoff_period:g} s")
     return float(2 * math.pi / omega[np.argmax(amplitude)])
 
 
@@ -121,3 +127,15 @@ def measured(waves, base_dir: str = ".") -> tuple[float, np.ndarray]:
         where = "" if Path(waves.record).is_absolute() else f" (looked in the working directory and {base_dir})"
         raise ConfigError(f"[waves] record {waves.record!r}: no such file{where}")
     return read_record(path)
+
+
+def describe(sea, waves) -> str:
+    """The note a run with a record gives: how many components it kept, over which periods, and when it repeats."""
+    shortest, longest = 2 * math.pi / sea.omega.max(), 2 * math.pi / sea.omega.min()
+    why = (
+        f"cutoff_period {waves.cutoff_period:g} s"
+        if waves.cutoff_period is not None
+        else "a quarter of its peak period: set cutoff_period to keep more"
+    )
+    return (f"the measured sea: {len(sea.omega)} components of periods {shortest:.3g}-{longest:.4g} s ({why}); "
+            f"the record repeats after {longest:.4g} s")  # fmt: skip

@@ -284,6 +284,11 @@ class Simulation:
     def _model(self, body: Body) -> Model:
         fluid = self.scene.fluid
         water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current, self.scene.base_dir)
+        if self.scene.waves.kind == "record":
+            from .records import describe
+
+            if (note := describe(water, self.scene.waves)) not in self.notes:
+                self.notes.append(note)
         radiation = None
         if fluid.radiation == "bem":
             from .radiation import make_radiation

@@ -62,15 +62,19 @@ def test_a_record_of_a_sea_on_its_grid_gives_back_that_sea(tmp_path, depth):
 
 
 def test_the_record_is_its_periodic_extension_exact_at_every_sample(tmp_path):
-    """A record not on any grid (noise and a tone between bins): the sea equals it at every sample, less its mean and
-    its Nyquist component, and repeats after the record's length; with a cut-off only the longer waves remain."""
+    """A record not on any grid (noise and a tone between bins), every component kept (a cut-off at the Nyquist
+    period): the sea equals it at every sample, less its mean and its Nyquist component, and repeats after the
+    record's length; with a cut-off only the longer waves remain; unset, the cut-off is at 4 times the peak frequency."""
     rng = np.random.default_rng(1)
     n, dt = 600, 0.2
     t = np.arange(n) * dt
     eta = 0.3 * np.sin(0.913 * t) + 0.05 * rng.standard_normal(n) + 0.1
     _write(tmp_path / "rec.csv", t, eta)
-    scene = _scene(tmp_path / "s.toml", "rec.csv", "ramp = 0")
+    scene = _scene(tmp_path / "s.toml", "rec.csv", "ramp = 0", f"cutoff_period = {2 * dt}")  # every component kept
     sea = make_water(scene.waves, 1025.0, G, base_dir=scene.base_dir)
+    assert len(sea.omega) == n // 2 - 1
+    default = make_water(dataclasses.replace(scene.waves, cutoff_period=None), 1025.0, G, base_dir=scene.base_dir)
+    np.testing.assert_allclose(default.omega.max(), 4 * 2 * math.pi * round(0.913 * n * dt / (2 * math.pi)) / (n * dt), rtol=0.02)
     nyquist = np.fft.rfft(eta)[-1].real / n * np.cos(np.pi * np.arange(n))
     at = np.array([sea.elevation(np.array([POINT]), ti)[0] for ti in t])
     np.testing.assert_allclose(at, eta - eta.mean() - nyquist, atol=1e-12)
@@ -121,7 +125,7 @@ def test_a_body_in_the_record_of_a_jonswap_sea_moves_as_in_that_sea(tmp_path):
         ("t,eta\n" + "".join(f"{0.1 * i},0.1\n" for i in range(20)) + "x,y\n", [], "is not two numbers"),
         ("".join(f"{0.1 * i},{1000 * math.sin(i / 4)},3\n" for i in range(20)), [], "3 columns"),
         ("".join(f"{0.1 * i},{1000 * math.sin(i / 4)}\n" for i in range(200)), [], "breaking limit"),
-        ("".join(f"{0.01 * i},{0.1 * math.sin(i * i)}\n" for i in range(10000)), [], "--wave-cutoff-period"),
+        ("".join(f"{0.01 * i},{0.1 * math.sin(i * i)}\n" for i in range(10000)), ["--wave-cutoff-period", "0.02"], "--wave-cutoff-period"),
         ("".join(f"{0.1 * i},{0.1 * math.sin(i / 50)}\n" for i in range(400)), ["--current", "0.5", "0"], "with a current"),
     ],
     ids=[

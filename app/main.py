@@ -223,17 +223,18 @@ def is_loopback(host: str) -> bool:
 def serve(args: ViewArgs) -> int:
     """Run the viewer until Ctrl-C (or SIGTERM); exit status 0."""
     app = start(args)
+    done = threading.Event()
+    if threading.current_thread() is threading.main_thread():
+        # Both set explicitly: a shell starts background jobs with SIGINT ignored, and Ctrl-C must still stop us. Before the
+        # address is printed: whoever reads it may stop us at once (a loaded machine once took the signal before this).
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, lambda *_: done.set())
     moved = f" (port {args.port} was busy)" if args.port not in (0, app.port) else ""
     print(f"floatsim viewer: {app.address()}{moved}  scene '{args.scene}'; Ctrl-C to stop", flush=True)
     if not is_loopback(args.host) and not args.token:
         print(f"floatsim viewer: warning: --host {args.host} serves beyond this machine: anyone who can reach port {app.port} can "
               "watch and drive this run; give --token SECRET so only pages opened with ?token=SECRET can drive it, or keep the "
               "default 127.0.0.1 and use an SSH tunnel (ssh -L 8080:127.0.0.1:8080 host)", file=sys.stderr, flush=True)  # fmt: skip
-    done = threading.Event()
-    if threading.current_thread() is threading.main_thread():
-        # Both set explicitly: a shell starts background jobs with SIGINT ignored, and Ctrl-C must still stop us.
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(sig, lambda *_: done.set())
     try:
         while not done.wait(0.5):
             pass

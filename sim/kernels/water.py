@@ -147,6 +147,18 @@ def _cut(x, R, spans, spheres, reach, size):
     return node[:parts], status[:parts], centre[:parts]
 
 
+@njit(inline="always", **JIT)
+def _scales(comps, r):
+    """(sum a, sum a omega, the slope bound r sum a k, k_max) of a sea's components: the bounds' scales."""
+    amp = amp_w = slope = k_max = 0.0
+    for j in range(comps.shape[0]):
+        amp += comps[j, A]
+        amp_w += comps[j, A] * comps[j, OMEGA]
+        slope += r * comps[j, A] * comps[j, K]
+        k_max = max(k_max, comps[j, K])
+    return amp, amp_w, slope, k_max
+
+
 @njit(**JIT)
 def clusters(sea, t, x, R, spans, spheres, need_flow):
     """The body's tree of triangles (clusters.py) cut at this pose (_cut), and a local expansion about each part.
@@ -156,16 +168,10 @@ def clusters(sea, t, x, R, spans, spheres, need_flow):
     weighted bound. Returns (node, status, P, Pe (elevation degree), centre x, y, z0, Me, Mp, Mv (parts, P+1) complex,
     offset, ramp factor, k_max); P = -1 where a part takes the direct sum (every part, in other seas)."""
     comps = sea[0]
-    n = comps.shape[0]
     offset = _offsets(sea, t)
     r = ramp_factor(t, sea[5])
     expand = expandable(sea)
-    amp = amp_w = k_max = slope = 0.0
-    for j in range(n):
-        amp += comps[j, A]
-        amp_w += comps[j, A] * comps[j, OMEGA]
-        slope += r * comps[j, A] * comps[j, K]
-        k_max = max(k_max, comps[j, K])
+    amp, amp_w, slope, k_max = _scales(comps, r)
     spread = not long_crested(comps)
     node, status, centre = _cut(x, R, spans, spheres, r * amp, (KR_SPREAD if spread else KR) / k_max if expand else 0.0)
     return _with_series(comps, offset, r, amp, amp_w, slope, k_max, spheres, need_flow, node, status, centre, expand, spread, True)
@@ -308,14 +314,8 @@ def prepare(sea, t, x):
     phase offset, the ramp's factor, and (when the series serves) its centre, scale, degree and moments: `clusters`
     with the body as one part."""
     comps = sea[0]
-    n = comps.shape[0]
     r = ramp_factor(t, sea[5])
-    amp = amp_w = k_max = slope = 0.0
-    for j in range(n):
-        amp += comps[j, A]
-        amp_w += comps[j, A] * comps[j, OMEGA]
-        slope += r * comps[j, A] * comps[j, K]
-        k_max = max(k_max, comps[j, K])
+    amp, amp_w, slope, k_max = _scales(comps, r)
     spheres = np.array([[0.0, 0.0, 0.0, sea[3]]])
     one = np.zeros(1, dtype=np.int64)
     cut = _with_series(comps, _offsets(sea, t), r, amp, amp_w, slope, k_max, spheres, True, one, one + 1, x.reshape(1, 3).copy(),

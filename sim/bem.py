@@ -8,7 +8,8 @@ omega -> infinity A_inf. A lid on the water plane inside the body removes the ir
 Asked for, the same solve gives the wave excitation of the body held at rest: for an incident wave
 of unit amplitude heading beta (elevation Re{e^(i (k (x cos beta + y sin beta) - omega t))}), the
 complex Froude-Krylov force (the undisturbed wave's pressure) and diffraction force (the scattered
-wave's), 6 dofs, on a grid of headings around the circle.
+wave's), 6 dofs, on a grid of headings around the circle; and the far field of each wave the body
+sends out (its Kochin function, for the mean drift force: sim/drift.py).
 
 Solving takes seconds to a minute, so results are kept on disk, keyed by everything they depend on
 (the clipped mesh, rho, g, depth and the frequency grid): first in the shipped `assets/coefficients/`,
@@ -85,10 +86,21 @@ class Coefficients:
     """(n, m, 6) complex diffraction force per unit wave amplitude: N/m, N m/m (time factor e^(-i omega t))."""
     froude_krylov: np.ndarray | None = None
     """(n, m, 6) complex Froude-Krylov force per unit wave amplitude, likewise."""
+    kochin_diffraction: np.ndarray | None = None
+    """(n, m, KOCHIN_ANGLES) complex: the Kochin function H(theta) of the wave scattered by the body held still in each
+    unit wave (Capytaine's: (1/4 pi) of the sources times e^(k z - i k (x cos theta + y sin theta)) over the hull and
+    lid, about the world's origin), at theta = 2 pi j / KOCHIN_ANGLES. None: not solved."""
+    kochin_radiation: np.ndarray | None = None
+    """(n, 6k, KOCHIN_ANGLES) complex: likewise of the wave each dof radiates moving at unit velocity amplitude
+    (Capytaine's radiation problem: the body's motion per unit wave, times these, adds its share)."""
 
     @property
     def has_excitation(self) -> bool:
         return self.headings is not None
+
+    @property
+    def has_far_field(self) -> bool:
+        return self.kochin_diffraction is not None
 
     def save(self, path: Path) -> None:
         """Written to a new temporary file beside it (mkstemp: O_EXCL, so never through a link someone placed),
@@ -97,6 +109,8 @@ class Coefficients:
         excitation = (
             {"headings": self.headings, "diffraction": self.diffraction, "froude_krylov": self.froude_krylov} if self.has_excitation else {}
         )
+        if self.has_far_field:  # single precision: 1e-7 is far below the solve's own error, and halves the shipped files
+            excitation |= {name: getattr(self, name).astype(np.complex64) for name in FAR_FIELD}
 
         def arrays(f) -> None:
             np.savez_compressed(f, omega=self.omega, added_mass=self.added_mass, damping=self.damping, added_mass_inf=self.added_mass_inf,
@@ -111,6 +125,7 @@ class Coefficients:
         try:
             with np.load(path) as f:
                 extra = {key: f[key] for key in ("center", "headings", "diffraction", "froude_krylov") if key in f.files}
+                extra |= {key: f[key].astype(complex) for key in FAR_FIELD if key in f.files}
                 c = cls(
                     f["omega"],
                     f["added_mass"],
@@ -209,6 +224,11 @@ def check(c: Coefficients) -> None:
             X = np.asarray(getattr(c, name))
             if X.shape != (n, len(beta), d) or X.dtype.kind != "c" or not np.isfinite(X).all():
                 raise ValueError(f"{name} force {X.shape}: need finite complex numbers, ({n}, {len(beta)}, {d})")
+    if c.kochin_diffraction is not None:
+        for name, rows in zip(FAR_FIELD, (len(c.headings) if c.headings is not None else -1, d)):
+            H = np.asarray(getattr(c, name))
+            if H is None or H.shape != (n, rows, KOCHIN_ANGLES) or H.dtype.kind != "c" or not np.isfinite(H).all():
+                raise ValueError(f"{name} {np.shape(H)}: need finite complex numbers, ({n}, {rows}, {KOCHIN_ANGLES})")
 
 
 def passive(A: np.ndarray, B: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray, float]:
@@ -244,6 +264,10 @@ def default_frequencies(
 
 HEADINGS = np.radians(np.arange(0.0, 360.0, 15.0))
 """Wave headings the excitation is solved for (15 degrees apart, interpolated between)."""
+KOCHIN_ANGLES = 72
+"""Directions the far field is taken at, 5 degrees apart (every heading among them): the drift's integrals over them
+are the periodic trapezoid rule, exact for the angular modes under 36 a body of k r up to about 30 sends out."""
+FAR_FIELD = ("kochin_diffraction", "kochin_radiation")
 
 
 LID_DEPTH = 0.01
@@ -299,41 +323,47 @@ def note(text: str) -> None:
 
 def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf,
                            omega: np.ndarray | None = None, panel: float | None = None, progress: bool = True, center=(0.0, 0.0, 0.0),
-                           excitation: bool = False) -> Coefficients:  # fmt: skip
+                           excitation: bool = False, far_field: bool = False) -> Coefficients:  # fmt: skip
     """A(omega), B(omega), A_inf of the closed mesh (world frame, at rest) floating in water of density rho,
     rotations about `center` (its centre of mass), and with `excitation` the wave excitation forces too:
     from the shipped files or the user's cache when they hold this case, else solved by Capytaine (and
-    cached). A file that fails `check` counts as absent, with a note; one without the excitation asked for is solved again."""
+    cached). A file that fails `check` counts as absent, with a note; one without the excitation asked for is solved again.
+    `far_field`: the Kochin functions too (the mean drift force), which come with every excitation solved since issue 42."""
     vertices = np.asarray(vertices, float)
     size = float(np.ptp(vertices, axis=0).max())
     wv, wf = wet_mesh(vertices, faces, panel or size / 8)
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     key = cache_key(wv, wf, rho, g, depth, omega, center)
-    return _stored_or_solved(
-        key, excitation, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if excitation else None)
-    )
+    needs = "far field" if far_field else "excitation" if excitation else ""
+    return _stored_or_solved(key, needs, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if needs else None))
 
 
 def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf, omega: np.ndarray | None = None,
-                        panel: float | None = None, progress: bool = True, excitation: bool = False) -> Coefficients:  # fmt: skip
+                        panel: float | None = None, progress: bool = True, excitation: bool = False,
+                        far_field: bool = False) -> Coefficients:  # fmt: skip
     """The same for several bodies solved together (their waves act on one another): `parts` = [(vertices,
     faces, center)] at rest, world frame; the matrices are 6k x 6k, body after body."""
     if len(parts) == 1:
-        return radiation_coefficients(*parts[0][:2], rho, g, depth, omega, panel, progress, parts[0][2], excitation)
+        return radiation_coefficients(*parts[0][:2], rho, g, depth, omega, panel, progress, parts[0][2], excitation, far_field)
     size = max(float(np.ptp(np.asarray(v, float), axis=0).max()) for v, _, _ in parts)
     wet = [(*wet_mesh(np.asarray(v, float), f, panel or size / 8), np.asarray(c, float)) for v, f, c in parts]
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     h = hashlib.sha256(b"bodies")
     for wv, wf, c in wet:
         h.update(cache_key(wv, wf, rho, g, depth, omega, c).encode())
+    needs = "far field" if far_field else "excitation" if excitation else ""
     return _stored_or_solved(
-        h.hexdigest()[:20], excitation, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if excitation else None)
+        h.hexdigest()[:20], needs, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)
     )
 
 
-def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
+def _has(c: Coefficients, needs: str) -> bool:
+    return {"": True, "excitation": c.has_excitation, "far field": c.has_far_field}[needs]
+
+
+def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
     """The shipped file or the user's cached one for `key` (the cached one only with the sha256 recorded beside
-    it), else `solve_now()` (kept in the cache)."""
+    it) holding what `needs` names ("", "excitation", "far field"), else `solve_now()` (kept in the cache)."""
     cached = user_cache() / f"{key}.npz"
     bad, partial = [], None
     for path in (SHIPPED / f"{key}.npz", cached):
@@ -345,26 +375,21 @@ def _stored_or_solved(key: str, excitation: bool, solve_now) -> Coefficients:
             except ValueError as e:
                 bad.append(f"{path} is not usable ({e})")
                 continue
-            if found.has_excitation or not excitation:
+            if _has(found, needs):
                 return found
             partial = partial or found
-    what = "the wave excitation (diffraction)" if partial is not None else "radiation = 'bem'"
+    wanted = "the mean drift force (the far field)" if needs == "far field" else "the wave excitation (diffraction)"
+    what = wanted if partial is not None else "radiation = 'bem'"
     if getattr(_thread, "no_solve", None):
         raise ConfigError(f"it needs a boundary-element solve of the body as it now floats, {_thread.no_solve}")
     try:
         import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:
-            note(
-                f"note: {bad[0]}: solving again"
-                if bad
-                else "note: the stored solve for this body has no wave excitation: solving again with it"
-            )
+            note(f"note: {bad[0]}: solving again" if bad else f"note: the stored solve for this body lacks {wanted}: solving again with it")
         result = solve_now()
     except (ImportError, MissingSolver):
         if partial is not None:
-            raise MissingSolver(
-                f'{what} for this body needs Capytaine (the stored solve has radiation only): pip install -e ".[bem]"'
-            ) from None
+            raise MissingSolver(f'{what} for this body needs Capytaine (the stored solve lacks it): pip install -e ".[bem]"') from None
         raise MissingSolver(f"{what}: {bad[0]} and solving again needs Capytaine: pip install -e \".[bem]\"" if bad else
                             f"{what} needs the boundary-element solver Capytaine for this body (or its coefficients in {cached}): "
                             'pip install -e ".[bem]"') from None  # fmt: skip
@@ -431,6 +456,7 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     import logging
 
     from capytaine.bem.airy_waves import froude_krylov_force
+    from capytaine.post_pro.kochin import compute_kochin
 
     from .lid import make_lid
 
@@ -459,6 +485,9 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     B = np.zeros((len(freqs), n, n))
     Xd = np.zeros((len(omega), len(betas), n), complex)
     Xfk = np.zeros_like(Xd)
+    Hd = np.zeros((len(omega), len(betas), KOCHIN_ANGLES), complex)
+    Hr = np.zeros((len(omega), n, KOCHIN_ANGLES), complex)
+    theta = 2 * math.pi * np.arange(KOCHIN_ANGLES) / KOCHIN_ANGLES
     for r in results:
         i = freqs.index(r.omega)
         if isinstance(r.problem, cpt.DiffractionProblem):
@@ -466,12 +495,16 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
             fk = froude_krylov_force(r.problem)
             Xd[i, j] = [r.forces[name] for name in names]
             Xfk[i, j] = [fk[name] for name in names]
+            Hd[i, j] = compute_kochin(r, theta)
             continue
         j = names.index(r.radiating_dof)
         for k, name in enumerate(names):
             A[i, k, j] = r.added_masses[name]
             B[i, k, j] = r.radiation_dampings[name]
-    excitation = {} if headings is None else {"headings": np.asarray(betas), "diffraction": Xd, "froude_krylov": Xfk}
+        if headings is not None and math.isfinite(r.omega):
+            Hr[i, j] = compute_kochin(r, theta)
+    excitation = {} if headings is None else {"headings": np.asarray(betas), "diffraction": Xd, "froude_krylov": Xfk,
+                                               "kochin_diffraction": Hd, "kochin_radiation": Hr}  # fmt: skip
     center = np.asarray(centers[0] if len(centers) == 1 else centers, float)
     A, B, change = passive(A, B, max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts))
     if change > 0.01:

@@ -107,6 +107,8 @@ WAVES = (
           kind="vector", size=2, flag_name="wave_record_point"),
     Param("waves", "cutoff_period", None, "Measured sea: the shortest period kept (unset: a quarter of the record's peak period; "
           "components under 1e-6 of the largest are left out; at most 4096 remain)", "s", lo=0.0, lo_open=True, hi=1e3, kind="optional", flag_name="wave_cutoff_period"),
+    Param("waves", "drift", False, "The mean and slow drift force of the waves (from the BEM solve's far field, Newman's approximation "
+          "in an irregular sea; needs radiation = bem; docs/physics.md)", kind="switch", name="wave drift", flag_name="wave_drift"),
     Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
           "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )
@@ -412,6 +414,10 @@ def validate(scene: SceneConfig) -> SceneConfig:
                               "submerged all along; put anchors at or below z = 0")  # fmt: skip
     if not m.line_file and (spread := lines_of(m)) is not None:
         check_start(spread, checked["fluid"].rho, scene.step.dt)  # before MoorDyn: its start-up cannot be cut short
+    if checked["waves"].drift and checked["fluid"].radiation != "bem":
+        raise ConfigError('the drift force comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
+    if checked["waves"].drift and scene.bodies:
+        raise ConfigError("[waves] drift = true is for scenes of one body for now (several bodies: a next step)")
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)

@@ -38,7 +38,8 @@ class Radiation:
     twists and loads are turned into those axes and back. The gyroscopic terms of the added mass
     (Munk moments) are left out: second order in the motion, like the linearisation itself."""
 
-    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray, diffraction=None, coefficients=None):
+    def __init__(self, added_mass_body: np.ndarray, memory: RadiationMemory, R0: np.ndarray, diffraction=None, coefficients=None,
+                 drift=None):  # fmt: skip
         T0 = self._frame(np.asarray(R0, float))  # the fit's residual mass (memory_fit.py), turned into the body frame
         added = added_mass_body + T0.T @ memory.residual_mass @ T0 if memory.residual_mass.size else added_mass_body
         self.added_mass_body = 0.5 * (added + added.T)  # symmetric in theory; the BEM's is to ~1e-4
@@ -49,6 +50,8 @@ class Radiation:
         """diffraction.Diffraction (the scattered waves' force in the scene's sea), or None."""
         self.coefficients = coefficients
         """bem.Coefficients the memory was fitted to (world axes at rest), or None."""
+        self.drift = drift
+        """drift.Drift (the waves' mean and slow drift force), or None."""
         self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
     @property
@@ -74,10 +77,12 @@ class Radiation:
         return -self._frame(R @ self.R0.T) @ (self.H @ x)
 
     def load(self, R: np.ndarray, x: np.ndarray, t: float, position: np.ndarray) -> np.ndarray:
-        """(6,) every load of the BEM model at time t: the memory's force, plus the diffraction force in waves with the
-        centre of mass at `position` (world, m)."""
+        """(6,) every load of the BEM model at time t: the memory's force, plus the diffraction and drift forces in waves
+        with the centre of mass at `position` (world, m)."""
         f = self.force(R, x)
-        return f if self.diffraction is None else f + self.diffraction.force(t, position)
+        if self.diffraction is not None:
+            f = f + self.diffraction.force(t, position)
+        return f if self.drift is None else f + self.drift.force(t, position)
 
     def rate(self, R: np.ndarray, x: np.ndarray, nu: np.ndarray) -> np.ndarray:
         """x' = F x + G nu_fit."""
@@ -100,7 +105,7 @@ class Radiation:
         fed by one twist component and feeding one load component: Phi and F go as bands (row i holds
         its block's columns start[i], start[i] + 1, ...), Gamma, G and H as one number per state with
         its twist component col[i] and load component row[i]; then the diffraction force's (diffraction.Diffraction.kernel_arrays:
-        empty without diffraction)."""
+        empty without diffraction) and the drift force's (drift.Drift.kernel_arrays)."""
         Mb = self.added_mass_body + np.diag([body.mass] * 3 + list(body.inertia))
         lam, V = np.linalg.eigh(Mb)
         self.advance(np.zeros(self.states), np.zeros(6), dt)  # fills the exact step for dt
@@ -118,10 +123,15 @@ class Radiation:
         dense = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, band(Phi), band(self.F))
         per_state = (Gamma[states, col], self.G[states, col], self.H[row, states])
         from .diffraction import NO_DIFFRACTION
+        from .drift import NO_DRIFT
 
         waves = NO_DIFFRACTION if self.diffraction is None else self.diffraction.kernel_arrays()
+        if self.drift is not None and self.diffraction is None:  # the components' phases without a diffraction force
+            d = self.drift
+            waves = (np.zeros((0, 6)), np.zeros((0, 6)), np.ascontiguousarray(np.column_stack([d.omega, d.k])), d.ramp)
+        drift = NO_DRIFT if self.drift is None else self.drift.kernel_arrays()
         return (*(np.ascontiguousarray(a, dtype=float) for a in dense), start, col, row, *(np.ascontiguousarray(a, dtype=float) for a in per_state),
-                np.ascontiguousarray(self.R0), *waves)  # fmt: skip
+                np.ascontiguousarray(self.R0), *waves, *drift)  # fmt: skip
 
 
 MOORED_QUANTUM = 1e-3
@@ -146,14 +156,16 @@ def lowest_frequency(scene, mass: float, rest: np.ndarray, R_input: np.ndarray) 
     return float(2.0 ** (np.floor(4 * np.log2(0.5 * np.sqrt(k / mass))) / 4))
 
 
-def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None) -> Radiation:
+def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None, drift=None) -> Radiation:
     """The body's radiation model about its rest pose at orientation R0 in the scene (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame. The rest pose holds the mooring
     lines' pull too, and the frequency grid reaches down past their slowest natural frequency. With `water` (waves),
-    also the diffraction force in that sea (phased where the body is at each instant)."""
+    also the diffraction force in that sea (phased where the body is at each instant); with `drift` (waves), the
+    mean and slow drift force in that sea (drift.Drift, the body moving with its linear response)."""
     from .bem import default_frequencies, radiation_coefficients
     from .config import moored
     from .diffraction import Diffraction
+    from .drift import Drift
     from .equilibrium import scene_rest
     from .errors import ConfigError
     from .rotation import quat_to_matrix
@@ -169,9 +181,36 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
         lowest = lowest_frequency(scene, body.mass, rest, R0 @ quat_to_matrix(body.q_input_body).T) if moored(scene) else None
         omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
-                               excitation=water is not None)  # fmt: skip
+                               excitation=water is not None, far_field=drift is not None)  # fmt: skip
     memory = fit_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:
         raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")
-    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water), c)
+    drifting = None if drift is None else Drift(c, drift, linear_response(body, scene, c, rest, R0))
+    return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water), c, drifting)
+
+
+def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray) -> np.ndarray:
+    """(n, m, 6) the body's motion per unit wave amplitude at the solve's frequencies and headings (drift.body_rao):
+    its rigid-body mass, the stiffness and linear damping of its own force model at rest (linear_hydro.LinearLoads:
+    the exact pressure's hydrostatics), its joint and take-off. The mooring lines' stiffness is left out: their
+    natural frequencies lie far below the waves'."""
+    from .drift import body_rao
+    from .forces import Model
+    from .joints import WorldJoint
+    from .linear_hydro import LinearLoads
+    from .water import StillWater
+
+    still = LinearLoads(Model(body, StillWater(scene.fluid.rho, scene.fluid.g), scene.fluid), rest, R0)
+    mass = np.zeros((6, 6))
+    mass[:3, :3] = body.mass * np.eye(3)
+    mass[3:, 3:] = (R0 * body.inertia) @ R0.T
+    damping = np.zeros((6, 6)) if still.D0 is None else still.D0
+    stiffness = still.C.copy()
+    joint = WorldJoint.of_scene(scene, rest, R0)
+    J = None
+    if joint is not None:
+        J = joint.jacobian(rest).reshape(6, joint.dofs)
+        stiffness += joint.stiffness * (J @ J.T)
+        damping = damping + joint.damping * (J @ J.T)
+    return body_rao(c, mass, stiffness, damping, J)

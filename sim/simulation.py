@@ -294,7 +294,8 @@ class Simulation:
             from .radiation import make_radiation
 
             start = initial_state(body, self.scene)
-            radiation = make_radiation(body, self.scene, start.R_world_body, water=water if diffracting(self.scene) else None)
+            drift = water if self.scene.waves.drift and not water.flat else None
+            radiation = make_radiation(body, self.scene, start.R_world_body, water=water if diffracting(self.scene) else None, drift=drift)
             depth = self.scene.waves.depth
             if depth is not None:
                 note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "

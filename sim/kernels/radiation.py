@@ -1,7 +1,8 @@
 """Compiled twin of the radiation terms the integrators use (radiation.Radiation, integrators.kick,
 with_memory, drift_memory and exact_linear_flow's generalised mass).
 
-`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, waves, ramp): the
+`rad` is layout.radiation_pack's tuple (Minv_b, W_b, S_b, Phi, F, start, col, row, gamma, g, h, R0, Xre, Xim, waves, ramp, Dre,
+Dim): the
 inverse, the inverse square root and the square root of M_RB + A_inf in the body frame (6, 6); the
 memory's exact step over dt and its system as bands (n, w), row i holding columns start[i] + j (the
 memory is block diagonal, one small block per fitted entry); and per state i the twist component
@@ -9,7 +10,8 @@ col[i] feeding it (through gamma[i] over a step, g[i] in the system) and the loa
 it feeds (through h[i]), all in the axes the memory was fitted in: the rest pose's world axes, R0
 from the body frame; then the diffraction force's complex amplitude per wave component referred to the world's
 origin (real and imaginary parts, (n, 6), world axes), each component's (omega, k_x, k_y) (n, 3) (none without
-diffraction) and the sea's ramp, s (diffraction.Diffraction.kernel_arrays).
+diffraction nor drift) and the sea's ramp, s (diffraction.Diffraction.kernel_arrays); last the drift force's envelopes
+per component, (n, 6) real and imaginary parts (drift.Drift.kernel_arrays; none without drift).
 Without radiation `rad` is None: numba compiles that case apart and prunes every radiation branch
 (`rad is None` tests on an argument are resolved at compile time), so still scenes pay nothing. Vectors in the body frame are R^T times the world ones.
 """
@@ -112,18 +114,36 @@ def kick(rad, R, u, L, F, T, h, inertia):
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array
 def memory_load(rad, R, x, t, p):
     """The memory's force and torque on the body, world frame: -R (H x); plus, in waves, the diffraction
-    force at time t with the centre of mass at p (radiation.Radiation.load)."""
+    and drift forces at time t with the centre of mass at p (radiation.Radiation.load)."""
     Fm, Tm = fit_to_world(R, rad[11], memory_output(rad, x))
     Fm, Tm = -Fm, -Tm
     re, im, waves = rad[12], rad[13], rad[14]
     r = ramp_factor(t, rad[15]) if waves.shape[0] else 0.0
-    for i in range(waves.shape[0]):  # r Re{(re + i im) e^(-i psi)} = r (re cos + im sin), psi = omega t - k . p
+    for i in range(re.shape[0]):  # r Re{(re + i im) e^(-i psi)} = r (re cos + im sin), psi = omega t - k . p
         psi = waves[i, 0] * t - waves[i, 1] * p[0] - waves[i, 2] * p[1]
         c, s = r * math.cos(psi), r * math.sin(psi)
         for j in range(3):
             Fm[j] += re[i, j] * c + im[i, j] * s
             Tm[j] += re[i, 3 + j] * c + im[i, 3 + j] * s
+    if rad[16].shape[0]:
+        drift_load(rad[16], rad[17], waves, t, p, r * r, Fm, Tm)
     return Fm, Tm
+
+
+@njit(**JIT)
+def drift_load(dre, dim, waves, t, p, r2, F, T):
+    """Adds the drift force (drift.Drift.force) to F and T: r^2 Re{A conj(A')} for F_x, F_y and M_z, the envelopes A and
+    A' the sums of (dre + i dim) e^(-i psi) over the components, psi = omega t - k . p."""
+    env_re, env_im = np.zeros(6), np.zeros(6)
+    for i in range(dre.shape[0]):
+        psi = waves[i, 0] * t - waves[i, 1] * p[0] - waves[i, 2] * p[1]
+        cs, sn = math.cos(psi), math.sin(psi)
+        for j in range(6):
+            env_re[j] += dre[i, j] * cs + dim[i, j] * sn
+            env_im[j] += dim[i, j] * cs - dre[i, j] * sn
+    F[0] += r2 * (env_re[0] * env_re[1] + env_im[0] * env_im[1])
+    F[1] += r2 * (env_re[2] * env_re[3] + env_im[2] * env_im[3])
+    T[2] += r2 * (env_re[4] * env_re[5] + env_im[4] * env_im[5])
 
 
 @njit(inline="always", **JIT)  # no call: passing the rad tuple costs a reference count per array

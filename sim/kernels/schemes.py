@@ -295,7 +295,7 @@ def warm_up() -> None:
     if RADIATING:  # the types only
         eye, one, index, zero = np.eye(6), np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1)
         no_waves = (np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 3)), 0.0)
-        rad = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3), *no_waves)
+        rad = (eye, eye, eye, one, -one, index, index, index, zero, zero, zero, np.eye(3), *no_waves, np.zeros((0, 6)), np.zeros((0, 6)))
         y = np.concatenate([y, np.zeros(2)])
     model = Model(body.packed, body.mass, body.inertia, coef)
     if SPEC.system:  # one of several bodies: the system's kick asks its loads only

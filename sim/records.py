@@ -65,8 +65,8 @@ def _read(path: str, mtime_ns: int, size: int) -> tuple[float, np.ndarray]:
                 text = line.strip()
                 if not text or text.startswith("#"):
                     continue
-                cells = [c for c in text.replace(";", ",").replace("\t", ",").split(",")]
-                cells = cells if len(cells) > 1 else text.split()
+                cells = text.replace(";", ",").replace("\t", ",").split(",")
+                cells = cells if len(cells) > 1 else text.split()  # comma, semicolon, tab or space separated
                 try:
                     values = [float(c) for c in cells]
                 except ValueError:

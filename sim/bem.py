@@ -227,7 +227,7 @@ def check(c: Coefficients) -> None:
     if c.kochin_diffraction is not None:
         for name, rows in zip(FAR_FIELD, (len(c.headings) if c.headings is not None else -1, d)):
             H = np.asarray(getattr(c, name))
-            if H is None or H.shape != (n, rows, KOCHIN_ANGLES) or H.dtype.kind != "c" or not np.isfinite(H).all():
+            if H.shape != (n, rows, KOCHIN_ANGLES) or H.dtype.kind != "c" or not np.isfinite(H).all():
                 raise ValueError(f"{name} {np.shape(H)}: need finite complex numbers, ({n}, {rows}, {KOCHIN_ANGLES})")
 
 

@@ -486,19 +486,17 @@ def _check_steepness(w, g: float, base_dir: str = ".") -> None:
     (a record read in millimetres as metres is caught here). A record that cannot be read is refused too."""
     from .water import wavenumber
 
+    if w.kind == "still" or g == 0:
+        return
     if w.kind == "record":
         from .records import measured, peak_period
 
         dt, eta = measured(w, base_dir)
         height, period, what = 4 * float(np.std(eta)), peak_period(dt, eta, w.cutoff_period), "the record's 4 std(eta) / peak wavelength"
-    elif w.kind == "still" or g == 0:
-        return
     else:
         height, period, what = (
             (w.height, w.period, "wave height / wavelength") if w.kind == "regular" else (w.hs, w.tp, "Hs / peak wavelength")
         )
-    if g == 0:
-        return
     depth = math.inf if w.depth is None else w.depth
     wavelength = 2 * math.pi / float(wavenumber(2 * math.pi / period, g, depth))
     if height / wavelength > BREAKING_STEEPNESS:

@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from .bem import Coefficients
-from .water import wavenumber
+from .water import ramp_factor, wavenumber
 
 
 def flux_coefficient(omega: np.ndarray, rho: float, g: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
@@ -131,8 +131,6 @@ class Drift:
 
     def force(self, t: float, at) -> np.ndarray:
         """(6,) the drift force and moment (F_x, F_y, 0, 0, 0, M_z), world frame, at time t with the centre of mass at `at`."""
-        from .water import ramp_factor
-
         turn = np.exp(1j * (self.k @ np.asarray(at, float)[:2] - self.omega * t))
         A = turn @ self.envelope  # (6,)
         F = (A[0::2] * np.conj(A[1::2])).real * ramp_factor(t, self.ramp) ** 2

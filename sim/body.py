@@ -148,23 +148,26 @@ def shell_inertia(verts: np.ndarray, faces: np.ndarray, mass: float) -> np.ndarr
     return np.trace(S) * np.eye(3) - S
 
 
-def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool = False) -> Body:
+def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool = False, centre_of_mass=None, moments=None) -> Body:
     """Shift to the centre of mass and rotate to principal axes; compute inertia (the samples', or
     with `exact` the mesh shell's; both share the centre of mass: the area centroid, which the
-    samples' midpoint rule gets exactly)."""
+    samples' midpoint rule gets exactly). A given `centre_of_mass` (the shape's own frame) and principal
+    `moments` (about it, along the shape's axes) replace the shell's: a ballasted body as its designer gives it."""
     w = area / area.sum()
-    com = w @ r
+    com = w @ r if centre_of_mass is None else np.asarray(centre_of_mass, float)
     r = r - com
     cells = cells - com
     verts = verts - com
     m = mass * w
-    if exact:
+    if moments is not None:
+        inertia = np.diag(check_moments(moments, name))
+    elif exact:
         inertia = shell_inertia(verts, faces, mass)
     else:
         inertia = np.einsum("k,k->", m, np.einsum("ki,ki->k", r, r)) * np.eye(3) - (r * m[:, None]).T @ r
     off = np.abs(inertia - np.diag(np.diag(inertia))).max()
     lam = np.linalg.eigvalsh(inertia)
-    if off <= 1e-12 * np.abs(inertia).max() or np.ptp(lam) <= 1e-6 * lam.max():  # any axes are principal: keep the given ones
+    if moments is not None or off <= 1e-12 * np.abs(inertia).max() or np.ptp(lam) <= 1e-6 * lam.max():  # keep the given axes
         moments, axes = np.diag(inertia).copy(), np.eye(3)
     else:
         moments, axes = np.linalg.eigh(inertia)
@@ -189,12 +192,22 @@ def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool
     )
 
 
-def make_box(extents, points_per_edge: int, mass: float, name: str = "box", exact: bool = False) -> Body:
+def check_moments(moments, name: str) -> np.ndarray:
+    """Principal moments of inertia a rigid body can have (each at most the sum of the other two), else one ConfigError line."""
+    m = np.asarray(moments, float)
+    if m.shape != (3,) or not np.all(np.isfinite(m)) or np.any(m <= 0) or np.any(2 * m > m.sum() * (1 + 1e-9)):
+        raise ConfigError(f"'{name}': moments of inertia {tuple(float(v) for v in m.ravel())} are not a rigid body's "
+                          "(each must be positive and at most the sum of the other two)")  # fmt: skip
+    return m
+
+
+def make_box(extents, points_per_edge: int, mass: float, name: str = "box", exact: bool = False, centre_of_mass=None,
+             moments=None) -> Body:  # fmt: skip
     import trimesh
 
     r, nrm, area, cells = box_samples(extents, points_per_edge)
     display = trimesh.creation.box(extents=extents)
-    return _assemble(r, nrm, area, cells, mass, np.prod(extents), display.vertices, display.faces, name, exact)
+    return _assemble(r, nrm, area, cells, mass, np.prod(extents), display.vertices, display.faces, name, exact, centre_of_mass, moments)
 
 
 MESH_FORMATS = ("stl", "obj", "ply")
@@ -340,7 +353,7 @@ def check_body(body: Body) -> Body:
 
 
 def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float | None = None, name: str = "mesh", unit: str = "m",
-                   exact: bool = False) -> Body:  # fmt: skip
+                   exact: bool = False, centre_of_mass=None, moments=None) -> Body:  # fmt: skip
     """Samples at triangle centroids after subdividing to at least `samples` triangles (one per
     triangle when the mesh already has more); the count used is `Body.n_samples`. ConfigError (one
     line) for a mesh that is not one closed surface enclosing a volume, or that gives no usable body."""
@@ -374,18 +387,20 @@ def make_mesh_body(mesh, samples: int, mass: float | None = None, density: float
     if not (np.isfinite(total) and total > 0):  # before the principal axes, which a nan would stop with LinAlgError
         raise ConfigError(f"mesh '{name}' gives no usable body: mass {total:.3g} kg (it needs a positive mass or density)")
     cells = tri[keep][:, [0, 1, 2, 2]]  # each sample's own triangle, as a polygon of four corners
-    return check_body(_assemble(tri.mean(axis=1)[keep], normals, area[keep], cells, total, volume, verts, faces, name, exact))
+    return check_body(_assemble(tri.mean(axis=1)[keep], normals, area[keep], cells, total, volume, verts, faces, name, exact, centre_of_mass,
+                                moments))  # fmt: skip
 
 
 def make_body(cfg: BodyConfig, base_dir: str = ".", exact_inertia: bool = False) -> Body:
     """The body a scene's config describes; `exact_inertia`: the mesh shell's (for the panels model)."""
+    given = (cfg.centre_of_mass, cfg.inertia)
     if cfg.shape == "cube":
         s = float(cfg.size)
-        return make_box((s, s, s), int(cfg.points_per_edge), _mass_from(cfg, s**3), "cube", exact_inertia)
+        return make_box((s, s, s), int(cfg.points_per_edge), _mass_from(cfg, s**3), "cube", exact_inertia, *given)
     if cfg.shape == "box":
         ext = tuple(float(e) for e in cfg.extents)
-        return make_box(ext, int(cfg.points_per_edge), _mass_from(cfg, float(np.prod(ext))), "box", exact_inertia)
+        return make_box(ext, int(cfg.points_per_edge), _mass_from(cfg, float(np.prod(ext))), "box", exact_inertia, *given)
     path = Path(cfg.mesh)
     if not path.is_absolute() and not path.is_file():
         path = Path(base_dir) / path
-    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit, exact_inertia)
+    return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit, exact_inertia, *given)

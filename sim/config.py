@@ -45,6 +45,10 @@ BODY = (
     Param("body", "density", 900.0, "Body density: mass / enclosed volume (ignored when mass is set)", "kg/m^3", lo=1e-3,
           hi=1e5, live=(1.0, 1e5), kind="optional", gui=(1.0, 5000.0, 1.0), label="Density"),
     Param("body", "mass", None, "Total mass; overrides density when given", "kg", lo=1e-6, hi=1e12, kind="optional"),
+    Param("body", "centre_of_mass", None, "The centre of mass in the shape's own frame (a mesh: its file's coordinates in metres; "
+          "unset: the surface's area centroid, a uniform shell's)", "m", lo=-1e5, hi=1e5, kind="vector", size=3, name="centre of mass"),
+    Param("body", "inertia", None, "Principal moments of inertia about the centre of mass, along the shape's own axes "
+          "(unset: a uniform shell's)", "kg m^2", lo=0.0, lo_open=True, hi=1e16, kind="vector", size=3, name="moments of inertia"),
 )
 FLUID = (
     Param("fluid", "rho", 1000.0, "Water density", "kg/m^3", lo=0.0, hi=1e5, name="water density rho"),

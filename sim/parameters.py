@@ -15,7 +15,7 @@ from .errors import ConfigError
 
 KINDS = ("float", "int", "choice", "text", "vector", "optional", "switch", "points")
 """float: a finite number; int: a whole number; choice: one of `choices`; text: any string;
-vector: `size` finite numbers; optional: a finite number or None (unset); switch: true or false (or None,
+vector: `size` finite numbers (or None, unset, when that is its default); optional: a finite number or None (unset); switch: true or false (or None,
 unset, when that is its default: the scene decides); points: a list of up to `size` points of three
 finite numbers each (scene files only, no flag)."""
 
@@ -85,7 +85,7 @@ class Param:
 
     def check(self, value) -> Any:
         """The value if valid (tuples for vectors), else ConfigError with a one-line message."""
-        if self.kind == "optional" and value is None:
+        if value is None and (self.kind == "optional" or (self.kind == "vector" and self.default is None)):
             return None
         if self.kind == "switch":
             if value is None and self.default is None:

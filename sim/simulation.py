@@ -278,7 +278,8 @@ class Simulation:
     def _make_body(self, scene: SceneConfig) -> Body:
         if self._mesh is not None and scene.body.shape == "mesh" and not isinstance(self._mesh, (str, os.PathLike)):
             b = scene.body
-            return make_mesh_body(self._mesh, int(b.samples), b.mass, b.density, "mesh", b.mesh_unit, exact_inertia(scene))
+            return make_mesh_body(self._mesh, int(b.samples), b.mass, b.density, "mesh", b.mesh_unit, exact_inertia(scene), b.centre_of_mass,
+                                  b.inertia)  # fmt: skip
         return make_body(scene.body, scene.base_dir, exact_inertia(scene))
 
     def _model(self, body: Body) -> Model:

@@ -116,6 +116,14 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
 SAMPLES_NOTE = "a mesh's triangles are split by halving every edge over a length, or kept one sample each when more"
 
 
+def inertia_source(scene, body) -> str:
+    """Where the body's inertia comes from, as the run's summary says it."""
+    if scene.body.inertia is not None:
+        return "as given" + (" about the given centre of mass" if scene.body.centre_of_mass is not None else "")
+    shell = "exact (mesh shell)" if body.exact_inertia else "of the samples"
+    return shell + (" about the given centre of mass" if scene.body.centre_of_mass is not None else "")
+
+
 def describe_terms(sim: Simulation) -> str:
     """The terms in use with their declared parameters, e.g. 'gravity+pressure+damping(damping = 100 N s/m^3)'."""
     parts = []
@@ -216,7 +224,7 @@ def summarise(sim: Simulation, first, last) -> None:
     )
     print(f"scene {scene.name}: {sim.body.name} with {sim.body.n_samples} samples{asked}, mass {sim.body.mass:.6g} kg, "
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
-          f"inertia {'exact (mesh shell)' if sim.body.exact_inertia else 'of the samples'}")  # fmt: skip
+          f"inertia {inertia_source(scene, sim.body)}")  # fmt: skip
     print(f"at rest: {describe_rest(sim.body, sim.params)}")
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "

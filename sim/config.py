@@ -63,6 +63,9 @@ FLUID = (
     Param("fluid", "bem_min_period", None, "Radiation: the shortest wave period of the BEM solve's frequency grid (unset: waves half as "
           "long as the body); below a gap's sloshing resonance (a float around a spar) it keeps the solve clear of it", "s", lo=0.0,
           lo_open=True, hi=1e3, kind="optional"),
+    Param("fluid", "bem_max_period", None, "Radiation: the longest wave period of the BEM solve's frequency grid, where that is longer "
+          "than its own (waves 100 times the body's length): a body on a soft spring swings slower than that", "s", lo=0.0, lo_open=True,
+          hi=1e4, kind="optional"),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (
@@ -151,6 +154,9 @@ CONSTRAINT = (
           name="joint axis"),
     Param("constraint", "pivot", (0.0, 0.0, 0.0), "A point on a revolute joint's axis, from the starting centre of mass, world frame", "m",
           lo=-1e5, hi=1e5, kind="vector", size=3, name="joint pivot"),
+    Param("constraint", "start", None, "A [[bodies]] joint's coordinate at the start, from the pose the scene gives it (the pose the BEM "
+          "solve, the linear hydrostatics and the take-off spring are about): a release from a displaced pose, a decay test (m for a slide, "
+          "rad for a hinge, a planar joint's turn)", lo=-1e5, hi=1e5, kind="optional", name="joint start"),
     Param("constraint", "pto_stiffness", 0.0, "Power take-off spring on the joint's coordinate (N/m sliding, N m/rad turning), about the "
           "starting pose", lo=0.0, hi=1e9, name="PTO stiffness"),
     Param("constraint", "pto_damping", 0.0, "Power take-off damper on the joint's coordinate (N s/m sliding, N m s/rad turning): the "
@@ -344,6 +350,8 @@ def _check_body(b, i, c, where: str = "") -> None:
     check_samples(samples, flag)  # before any array is made
     if c.joint != "free" and not any(c.axis):
         raise ConfigError(f"{where}[constraint] axis must not be zero")
+    if c.start is not None and c.joint not in ("prismatic", "revolute", "planar"):
+        raise ConfigError(f"{where}[constraint] start is a joint's coordinate: it needs a prismatic, revolute or planar joint, not {c.joint!r}")
     if c.joint == "planar" and (c.pto_damping or c.pto_stiffness):
         raise ConfigError(
             f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one"
@@ -425,6 +433,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)
+    if not scene.bodies and checked.constraint.start is not None:
+        raise ConfigError("[constraint] start is for a [[bodies]] entry for now: one body starts where [initial] puts it")
     if not scene.bodies and checked.constraint.joint == "planar":
         raise ConfigError("[constraint] joint 'planar' is for a [[bodies]] entry: one body takes fixed, prismatic or revolute")
     if checked.fluid.hydro == "linear" and not scene.bodies:

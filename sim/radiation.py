@@ -10,6 +10,8 @@ entry and pole replace the convolution over the whole past.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .memory_fit import EntryFit, RadiationMemory, fit_memory, transfer
@@ -156,6 +158,26 @@ def lowest_frequency(scene, mass: float, rest: np.ndarray, R_input: np.ndarray) 
     return float(2.0 ** (np.floor(4 * np.log2(0.5 * np.sqrt(k / mass))) / 4))
 
 
+def passive_memory(c, **fit):
+    """The radiation memory fitted to the solve `c` (memory_fit.fit_memory); a solve no passive memory fits is one
+    ConfigError line, not a traceback."""
+    from .errors import ConfigError
+
+    try:
+        return fit_memory(c, **fit)
+    except ValueError as e:
+        raise ConfigError(f"radiation = 'bem': {e} from this solve's coefficients (a finer mesh, or bodies further apart than "
+                          "their panels are long, may mend the solve)") from None  # fmt: skip
+
+
+def longest_wave(fluid, lowest: float | None) -> float | None:
+    """The solve grid's lowest frequency: the lines' (`lowest`) or the scene's bem_max_period's, whichever is lower."""
+    if fluid.bem_max_period is None:
+        return lowest
+    asked = 2.0 * math.pi / fluid.bem_max_period
+    return asked if lowest is None else min(asked, lowest)
+
+
 def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None, drift=None) -> Radiation:
     """The body's radiation model about its rest pose at orientation R0 in the scene (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame. The rest pose holds the mooring
@@ -177,12 +199,13 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
         z = round(z / (MOORED_QUANTUM * body.radius)) * MOORED_QUANTUM * body.radius
     vertices = body.mesh_vertices @ R0.T + [0.0, 0.0, z]
     omega = None
-    if fluid.bem_min_period is not None or moored(scene):
+    if fluid.bem_min_period is not None or fluid.bem_max_period is not None or moored(scene):
         lowest = lowest_frequency(scene, body.mass, rest, R0 @ quat_to_matrix(body.q_input_body).T) if moored(scene) else None
+        lowest = longest_wave(fluid, lowest)
         omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
     c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None, far_field=drift is not None)  # fmt: skip
-    memory = fit_memory(c)
+    memory = passive_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:
         raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")

@@ -165,13 +165,13 @@ class SystemRadiation:
         (moored bodies: `moored_lowest`)."""
         from .bem import bodies_coefficients, default_frequencies
         from .diffraction import Diffraction
-        from .radiation import fit_memory
+        from .radiation import longest_wave, passive_memory
 
         parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
         size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
-        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
+        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=longest_wave(fluid, lowest))
         c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
-        memory = fit_memory(c, length=max(m.body.radius for m in models))
+        memory = passive_memory(c, length=max(m.body.radius for m in models))
         # the solve has each body where it starts
         diffraction = None if water is None else Diffraction(c, water, [s.x_world[:2] for s in starts])
         return cls(c.added_mass_inf, memory, [s.R_world_body for s in starts], diffraction, c)
@@ -495,7 +495,7 @@ def _body_mass(body: Body, R: np.ndarray) -> np.ndarray:
 
 def build(scene: SceneConfig) -> tuple[System, SystemState]:
     """The system and its starting state from a scene with [[bodies]]: groups of welded bodies, their
-    joints about the starting poses, the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
+    joints about the poses the scene gives (each starting at its `start` coordinate, 0 unless given), the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
     from .config import diffracting
     from .simulation import initial_state
 
@@ -550,7 +550,11 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
         system.loads = [LinearLoads(m, s.x_world, s.R_world_body) for m, s in zip(models, starts)]
     x_free = np.array([g.origin for g in groups if g.kind == "free"]).reshape(-1, 3)
     q_free = np.tile([1.0, 0.0, 0.0, 0.0], (n_free, 1))
-    rest = SystemState(0.0, x_free, q_free, np.zeros(n_joints), np.zeros(system.n_dofs), np.zeros(n_joints),
+    theta = np.zeros(n_joints)  # each joint's start ([constraint] start): a planar joint's on its turn
+    for g, e in zip(groups, (scene.bodies[h] for h in heads)):
+        if e.constraint.start is not None:
+            theta[g.coordinate + (2 if g.kind == "planar" else 0)] = e.constraint.start
+    rest = SystemState(0.0, x_free, q_free, theta, np.zeros(system.n_dofs), np.zeros(n_joints),
                        np.zeros(0 if radiation is None else radiation.states))  # fmt: skip
     return system, replace(rest, v=_projected(system, rest, starts))
 

@@ -351,7 +351,9 @@ def _check_body(b, i, c, where: str = "") -> None:
     if c.joint != "free" and not any(c.axis):
         raise ConfigError(f"{where}[constraint] axis must not be zero")
     if c.start is not None and c.joint not in ("prismatic", "revolute", "planar"):
-        raise ConfigError(f"{where}[constraint] start is a joint's coordinate: it needs a prismatic, revolute or planar joint, not {c.joint!r}")
+        raise ConfigError(
+            f"{where}[constraint] start is a joint's coordinate: it needs a prismatic, revolute or planar joint, not {c.joint!r}"
+        )
     if c.joint == "planar" and (c.pto_damping or c.pto_stiffness):
         raise ConfigError(
             f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one"

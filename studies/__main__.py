@@ -9,6 +9,7 @@ COMMANDS = {
     "figures": "studies.seed_figures:figures",
     "decay": "studies.decay:decay",
     "stability": "studies.stability:stability",
+    "f3of": "studies.f3of:main",
 }
 
 

@@ -2,7 +2,7 @@
 .[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.memory_fit`).
 
 The cases: each preset with radiation as it builds (its rest pose, moorings included, its grid, the excitation when
-it has waves, a sphere in waves too), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
+it has waves, a sphere in waves too), the cross-code checks' scenes (assets/scenes/*/), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
 change to how solves are made (sim.bem.SOLVER_VERSION, the lid, the wet mesh) or to a preset's body: the old files'
 keys no longer match, so the presets would otherwise solve on every machine.
 """
@@ -20,7 +20,7 @@ def main() -> None:
 
     import sim.bem as bem
     from sim import Simulation
-    from sim.config import available_scenes, load_scene, with_overrides
+    from sim.config import SCENES_DIR, available_scenes, load_scene, with_overrides
     from sim.memory_fit import main as fit_all
     from sim.system import build
 
@@ -34,7 +34,8 @@ def main() -> None:
         return stored_or_solved(key, *args)
 
     bem._stored_or_solved = recorded
-    for name in available_scenes():
+    checks = sorted(str(p) for p in SCENES_DIR.glob("*/*.toml"))  # the cross-code checks' scenes (assets/scenes/f3of/...)
+    for name in [*available_scenes(), *checks]:
         scene = load_scene(name)
         if scene.fluid.radiation != "bem":
             continue

@@ -63,7 +63,7 @@ def test_a_hinge_started_turned_swings_as_the_pendulum_it_is(tmp_path):
     ('joint = "free"\nstart = 0.1', "start is a joint's coordinate"),
 ])  # fmt: skip
 def test_a_start_without_a_coordinate_is_one_clear_line(joint, message, tmp_path, capsys):
-    code, _ = _run(tmp_path, joint + ('\nstart = 0.1' if "start" not in joint else ""))
+    code, _ = _run(tmp_path, joint + ("\nstart = 0.1" if "start" not in joint else ""))
     assert code == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -26,14 +26,17 @@ SOLVES = sorted(SHIPPED.glob("*.npz"))
 )
 def test_every_shipped_solve_fits_a_passive_memory(path):
     """Each shipped solve's fit: min eig B_fit >= 0 to 10x the grid's top frequency (round-off: 1e-12 of the peak damping),
-    B and A within 2 % of each entry's peak on the grid (that matters: 1.4 % and 0.7 % for rm3's), every pole stable."""
+    B and A within 2 % of each entry's peak on the grid (that matters: 1.4 % and 0.7 % for rm3's), every pole stable. The
+    F3OF platform's three bodies (18 dofs) within 3 %: its 9-dof block, with the near-trapped wave between the flaps,
+    fits passively to 1.7 % in B and 2.6 % in A at ten pole pairs."""
     c = Coefficients.load(path)
     memory = fit_memory(c, length=scene_length(c))
     low, where = lowest_damping(memory, c.omega.max())
     assert low >= -1e-12 * np.abs(c.damping).max(), (low, where)
     assert np.linalg.eigvals(memory.F).real.max() < 0
     error_B, error_A = memory.error
-    assert error_B <= 0.02 and error_A <= 0.02, (error_B, error_A)
+    limit = 0.03 if c.damping.shape[1] == 18 else 0.02
+    assert error_B <= limit and error_A <= limit, (error_B, error_A)
     assert np.linalg.eigvalsh(memory.residual_mass).min() >= -1e-9 * np.abs(c.added_mass_inf).max()  # dA >= 0
 
 
@@ -42,7 +45,7 @@ def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path)
     assets/coefficients/memory under a key that covers memory_fit.py's source, so a changed fit cannot be read stale
     (after a change: `python -m sim.memory_fit`)."""
     from sim import Simulation, memory_fit
-    from sim.config import available_scenes
+    from sim.config import SCENES_DIR, available_scenes
 
     def refuse(*args):
         raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.memory_fit` and commit the files")
@@ -51,7 +54,7 @@ def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path)
     monkeypatch.setattr(memory_fit, "_FITS", {})
     monkeypatch.setattr(memory_fit, "_fit", refuse)
     built = 0
-    for name in available_scenes():
+    for name in [*available_scenes(), *(str(p) for p in SCENES_DIR.glob("*/*.toml"))]:  # the cross-code checks' too
         scene = load_scene(name)
         if scene.fluid.radiation == "bem":
             build(scene) if scene.bodies else Simulation(scene)

@@ -150,13 +150,15 @@ def misfits(memory, c) -> tuple[float, float]:
 
 
 def scene_length(c) -> float:
-    """The body size the scenes fit with: 1 m for one body (make_radiation's), the largest body radius for several (rm3's)."""
-    if c.damping.shape[1] == 6:
+    """The body size the scenes fit with: 1 m for one body (make_radiation's), the largest body radius for several (rm3's
+    two bodies, the F3OF platform's three)."""
+    bodies = c.damping.shape[1] // 6
+    if bodies == 1:
         return 1.0
     from sim.body import make_body
-    from sim.config import load_scene
+    from sim.config import SCENES_DIR, load_scene
 
-    scene = load_scene("rm3")
+    scene = load_scene({2: "rm3", 3: str(SCENES_DIR / "f3of" / "dt1.toml")}[bodies])
     return max(make_body(e.body, scene.base_dir, True).radius for e in scene.bodies)
 
 

@@ -257,8 +257,9 @@ def default_frequencies(
     lo, hi = math.sqrt(2 * math.pi * g / (100 * length)), math.sqrt(2 * math.pi * g / (0.5 * length))
     hi = hi if min_period is None else 2 * math.pi / min_period
     if lowest is not None and 0.0 < lowest < lo:  # as many more points below, at the same spacing (the fit keeps its detail)
-        more = math.ceil((lo - lowest) / ((hi - lo) / (n - 1)))
-        lo, n = lo - more * (hi - lo) / (n - 1), n + more
+        step = (hi - lo) / (n - 1)
+        more = min(math.ceil((lo - lowest) / step), math.ceil(lo / step) - 1)  # (never down to zero or below it)
+        lo, n = lo - more * (hi - lo) / (n - 1), n + more  # (as the shipped grids were computed, to the last bit)
     return np.linspace(lo, hi, n)
 
 

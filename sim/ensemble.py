@@ -11,7 +11,7 @@ from .config import ConfigError, SceneConfig
 from .simulation import Frame, SimulationDiverged, body_mass, with_mass
 from .state import State
 
-SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.samples", "fluid.rho", "fluid.g", "fluid.forces",
+SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.samples", "body.centre_of_mass", "body.inertia", "fluid.rho", "fluid.g", "fluid.forces",
           "step.integrator", "step.dt")  # fmt: skip
 """What the bodies of an ensemble must share; they may differ in mass, term coefficients and initial state."""
 
@@ -35,7 +35,7 @@ class Ensemble:
         shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir, exact_inertia(base))
         self.sims = []
         for s in scenes:
-            self.sims.append(Simulation(s, body=with_mass(shape, body_mass(s, shape.volume)), backend=backend))
+            self.sims.append(Simulation(s, body=with_mass(shape, body_mass(s, shape.volume), s.body.inertia), backend=backend))
         self.shape = shape
         self.dt = float(base.step.dt)
         self.backend = backend or default_backend()

@@ -177,9 +177,10 @@ def initial_state(body: Body, scene: SceneConfig) -> State:
     return State(0.0, np.asarray(init.position, float), q, np.asarray(init.velocity, float), L)
 
 
-def with_mass(body: Body, mass: float) -> Body:
-    """The same geometry with another total mass (inertia scales with it)."""
-    return dataclasses.replace(body, mass=float(mass), inertia=body.inertia * (mass / body.mass))
+def with_mass(body: Body, mass: float, given_inertia=None) -> Body:
+    """The same geometry with another total mass (inertia scales with it, unless the scene gives it: [body] inertia)."""
+    inertia = body.inertia * (mass / body.mass) if given_inertia is None else np.asarray(given_inertia, float)
+    return dataclasses.replace(body, mass=float(mass), inertia=inertia)
 
 
 def body_mass(scene: SceneConfig, volume: float) -> float:
@@ -204,7 +205,7 @@ def default_backend() -> str:
     return choice
 
 
-GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", "samples")
+GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", "samples", "centre_of_mass", "inertia")
 """Body keys whose change rebuilds the body (the others only change its mass)."""
 
 
@@ -680,7 +681,7 @@ class Simulation:
         elif body_mass(scene, body.volume) != body.mass:
             R = self.state.R_world_body
             omega = angular_velocity(body, R, self.state.L_world)
-            self.model = self._model(with_mass(body, body_mass(scene, body.volume)))
+            self.model = self._model(with_mass(body, body_mass(scene, body.volume), scene.body.inertia))
             self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
         elif (
             old.fluid != scene.fluid

@@ -73,3 +73,19 @@ def test_one_body_refuses_a_start_in_one_line(capsys):
     code = main(["run", "--scene", "rest", "--joint", "prismatic", "--start", "0.1", "--t-end", "0.1"])
     assert code == 2
     assert "[constraint] start is for a [[bodies]] entry" in capsys.readouterr().err
+
+
+def test_a_long_bem_max_period_keeps_the_solve_grid_above_zero():
+    """[fluid] bem_max_period reaches the grid down at its own spacing, but never to zero or below (a 1 m body asked
+    for 100 s waves: its spacing is 0.17 rad/s); shorter asks reach past 2 pi / T."""
+    import math
+
+    from sim.bem import default_frequencies
+    from sim.config import FluidConfig
+    from sim.radiation import longest_wave
+
+    for length, period in ((1.0, 100.0), (28.0, 500.0), (28.0, 60.0)):
+        w = default_frequencies(length, lowest=longest_wave(FluidConfig(bem_max_period=period), None))
+        step = np.diff(w)
+        assert w[0] > 0 and np.allclose(step, step[0])
+        assert w[0] <= 2 * math.pi / period or w[0] < step[0]  # reached, or as near zero as the spacing allows

@@ -73,3 +73,19 @@ def test_impossible_mass_properties_get_one_clear_line(flags, message, tmp_path,
     assert code == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_sweep_and_a_live_density_change_keep_the_given_inertia(tmp_path):
+    """Given moments are the body's whatever its mass: an ensemble of two densities (a sweep's cases) and a live
+    density change keep them, where a shell's inertia scales with the mass."""
+    from sim import Simulation
+    from sim.config import load_scene, with_overrides
+    from sim.ensemble import Ensemble
+
+    scene = load_scene(_scene(tmp_path, "inertia = [50.0, 40.0, 60.0]"))
+    ensemble = Ensemble([with_overrides(scene, body__density=d) for d in (400.0, 600.0)], backend="numpy")
+    assert [s.body.mass for s in ensemble.sims] == [400.0, 600.0]
+    assert all(np.array_equal(s.body.inertia, [50.0, 40.0, 60.0]) for s in ensemble.sims)
+    sim = Simulation(scene, backend="numpy")
+    sim.update(body__density=700.0)
+    assert sim.body.mass == 700.0 and np.array_equal(sim.body.inertia, [50.0, 40.0, 60.0])

@@ -41,7 +41,8 @@ def test_ctrl_c_during_a_run_keeps_whole_rows_and_says_where_it_stopped(tmp_path
     csv = tmp_path / "x.csv"
     done, stopped_in = interrupt(["run", "--t-end", "1e6", "--max-steps", "1000000000", "--every", "1000", "--out", str(csv)],
                                  lambda: csv.exists() and csv.stat().st_size > 20_000)  # fmt: skip
-    assert done.returncode == 130 and stopped_in < 1.0
+    assert done.returncode == 130 and stopped_in < 5.0  # at once (0.1-0.3 s here; 1.08 s on a loaded machine): a run that
+    # only stopped at its end would take hours
     assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C) at t = " in done.stderr and "rows in" in done.stderr
     rows = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert rows.ndim == 2 and rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()  # whole lines, no NaN

@@ -251,7 +251,8 @@ class Assembly(Simulation):
             lines, pull, tensions = (), (), ()
             if self.moorings is not None:
                 lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
-                pull = (*self.moorings.load[:3], float(self.moorings.fairlead_tensions().max()))
+                each = self.moorings.fairlead_tensions()
+                pull = (*self.moorings.load[:3], float(each.max()), *(float(t) for t in each))
             self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
                                             pull, float(s.E_rad), tensions))  # fmt: skip
         return self._frame[1]
@@ -289,7 +290,8 @@ class AssemblyFrame:
     lines: tuple = ()
     """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
     mooring: tuple = ()
-    """The lines' pull on the moored body (Fx, Fy, Fz, N) and the largest fairlead tension (N); empty without lines."""
+    """The lines' pull on the moored body (Fx, Fy, Fz, N), the largest fairlead tension and each fairlead's, in the order of
+    the lines' input (N); empty without lines."""
     E_rad: float = 0.0
     """Energy the radiated waves have carried away so far, J (0 without radiation)."""
     line_tensions: tuple = ()
@@ -314,7 +316,7 @@ class AssemblyFrame:
         for name, *_ in self.joints:
             cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
         if self.mooring:
-            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max"]
+            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max", *(f"T_fair_{i + 1}" for i in range(len(self.mooring) - 4))]
         return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
 
     def row(self) -> list[float]:

@@ -66,6 +66,9 @@ FLUID = (
     Param("fluid", "bem_max_period", None, "Radiation: the longest wave period of the BEM solve's frequency grid, where that is longer "
           "than its own (waves 100 times the body's length): a body on a soft spring swings slower than that", "s", lo=0.0, lo_open=True,
           hi=1e4, kind="optional"),
+    Param("fluid", "bem_file", "", "Radiation: the bodies' coefficients from a file instead of a Capytaine solve: WAMIT's output "
+          "(.out) or floatsim's own (.npz), one body per [[bodies]] entry in order, relative to the scene file or the working "
+          "directory (docs/physics.md)", kind="text", name="BEM file"),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (
@@ -432,6 +435,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError('the drift force comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     if checked["waves"].drift and scene.bodies:
         raise ConfigError("[waves] drift = true is for scenes of one body for now (several bodies: a next step)")
+    if checked["fluid"].bem_file and (checked["fluid"].radiation != "bem" or not scene.bodies):
+        raise ConfigError('[fluid] bem_file is for scenes of [[bodies]] (one entry for one body) with radiation = "bem"')
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
     checked = dataclasses.replace(scene, **checked)

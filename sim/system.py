@@ -160,17 +160,21 @@ class SystemRadiation:
         self._steps: dict = {}
 
     @classmethod
-    def of(cls, models: list, starts: list, fluid, water=None, lowest: float | None = None) -> SystemRadiation:
+    def of(cls, models: list, starts: list, fluid, water=None, lowest: float | None = None, base_dir: str = ".") -> SystemRadiation:
         """Solved (or read) about the starting poses, the grid reaching down to `lowest` (rad/s) where that is lower
-        (moored bodies: `moored_lowest`)."""
+        (moored bodies: `moored_lowest`); or from the scene's `bem_file` (bem_file.py)."""
         from .bem import bodies_coefficients, default_frequencies
+        from .bem_file import bem_file_path, from_file
         from .diffraction import Diffraction
         from .radiation import longest_wave, passive_memory
 
-        parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
-        size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
-        omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=longest_wave(fluid, lowest))
-        c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
+        if fluid.bem_file:
+            c = from_file(bem_file_path(fluid.bem_file, base_dir), models, starts, fluid, water)
+        else:
+            parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
+            size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
+            omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=longest_wave(fluid, lowest))
+            c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
         memory = passive_memory(c, length=max(m.body.radius for m in models))
         # the solve has each body where it starts
         diffraction = None if water is None else Diffraction(c, water, [s.x_world[:2] for s in starts])
@@ -543,7 +547,7 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
     radiation = None
     if scene.fluid.radiation == "bem":
         radiation = SystemRadiation.of(
-            models, starts, scene.fluid, water if diffracting(scene) else None, moored_lowest(scene, models, starts)
+            models, starts, scene.fluid, water if diffracting(scene) else None, moored_lowest(scene, models, starts), scene.base_dir
         )
     system = System(groups, order, water, scene.fluid, radiation)
     if scene.fluid.hydro == "linear":

@@ -10,6 +10,7 @@ COMMANDS = {
     "decay": "studies.decay:decay",
     "stability": "studies.stability:stability",
     "f3of": "studies.f3of:main",
+    "rm3-mooring": "studies.rm3_mooring:main",
 }
 
 

@@ -118,7 +118,8 @@ WAVES = (
     Param("waves", "cutoff_period", None, "Measured sea: the shortest period kept (unset: a quarter of the record's peak period; "
           "components under 1e-6 of the largest are left out; at most 4096 remain)", "s", lo=0.0, lo_open=True, hi=1e3, kind="optional", flag_name="wave_cutoff_period"),
     Param("waves", "drift", False, "The mean and slow drift force of the waves (from the BEM solve's far field, Newman's approximation "
-          "in an irregular sea; needs radiation = bem; docs/physics.md)", kind="switch", name="wave drift", flag_name="wave_drift"),
+          "in an irregular sea; needs radiation = bem; several bodies: joined in one tree; docs/physics.md)", kind="switch",
+          name="wave drift", flag_name="wave_drift", label="Drift", gui=()),
     Param("waves", "diffraction", None, "The linear diffraction force of the waves the body scatters (from the BEM solve; needs "
           "radiation = bem; unset: on wherever radiation is bem)", kind="switch", label="Diffraction", gui=()),
 )
@@ -433,8 +434,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
         check_start(spread, checked["fluid"].rho, scene.step.dt)  # before MoorDyn: its start-up cannot be cut short
     if checked["waves"].drift and checked["fluid"].radiation != "bem":
         raise ConfigError('the drift force comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
-    if checked["waves"].drift and scene.bodies:
-        raise ConfigError("[waves] drift = true is for scenes of one body for now (several bodies: a next step)")
+    if checked["waves"].drift and checked["fluid"].bem_file:
+        raise ConfigError("the drift force comes from a Capytaine solve's far field: a bem_file has none (leave [waves] drift off)")
     if checked["fluid"].bem_file and (checked["fluid"].radiation != "bem" or not scene.bodies):
         raise ConfigError('[fluid] bem_file is for scenes of [[bodies]] (one entry for one body) with radiation = "bem"')
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":

@@ -44,6 +44,7 @@ from scipy.linalg import expm
 from .body import Body, make_body
 from .body_loads import BodyLoads
 from .config import SceneConfig
+from .errors import ConfigError
 from .forces import Model
 from .joints import _rotation
 from .linear_hydro import LinearLoads
@@ -157,10 +158,17 @@ class SystemRadiation:
         self.memory = memory
         self.R0 = R0
         self.diffraction = diffraction
+        self.wave_drift = None
+        """drift.Drift of the bodies together (their far field gives the total), applied to `drift_root`; or None."""
+        self.drift_root = 0
+        """The body the drift force acts on: the root of the bodies' one tree (scene order)."""
+        self.drift_lever = np.zeros(2)
+        """(2,) where that body starts (horizontal, world): the drift's yaw moment is about the solve's origin."""
         self._steps: dict = {}
 
     @classmethod
-    def of(cls, models: list, starts: list, fluid, water=None, lowest: float | None = None, base_dir: str = ".") -> SystemRadiation:
+    def of(cls, models: list, starts: list, fluid, water=None, lowest: float | None = None, base_dir: str = ".",
+           far_field: bool = False) -> SystemRadiation:  # fmt: skip
         """Solved (or read) about the starting poses, the grid reaching down to `lowest` (rad/s) where that is lower
         (moored bodies: `moored_lowest`); or from the scene's `bem_file` (bem_file.py)."""
         from .bem import bodies_coefficients, default_frequencies
@@ -174,7 +182,7 @@ class SystemRadiation:
             parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
             size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)
             omega = default_frequencies(size, fluid.g, min_period=fluid.bem_min_period, lowest=longest_wave(fluid, lowest))
-            c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None)
+            c = bodies_coefficients(parts, fluid.rho, fluid.g, omega=omega, excitation=water is not None or far_field, far_field=far_field)
         memory = passive_memory(c, length=max(m.body.radius for m in models))
         # the solve has each body where it starts
         diffraction = None if water is None else Diffraction(c, water, [s.x_world[:2] for s in starts])
@@ -195,9 +203,17 @@ class SystemRadiation:
 
     def load(self, T: np.ndarray, x: np.ndarray, t: float, positions: list) -> np.ndarray:
         """(6k,) the memory's loads (-mu, turned with the bodies) and the diffraction force on each body where its centre of
-        mass is (`positions`), world frame."""
+        mass is (`positions`), world frame; the drift force of them all on the root body (`attach_drift`)."""
         f = -T @ (self.H @ x)
-        return f if self.diffraction is None else f + self.diffraction.force(t, positions)
+        if self.diffraction is not None:
+            f = f + self.diffraction.force(t, positions)
+        if self.wave_drift is not None:
+            r = self.drift_root
+            F = self.wave_drift.force(t, positions[r])
+            F[5] -= self.drift_lever[0] * F[1] - self.drift_lever[1] * F[0]  # about the root's centre of mass
+            f = f.copy()
+            f[6 * r : 6 * r + 6] += F
+        return f
 
     def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
         """The memory after dt with a constant twist (in the fit's axes), exactly."""
@@ -256,8 +272,9 @@ class System:
 
     @property
     def has_twin(self) -> bool:
-        """Whether every body's loads have a compiled twin (the kinematics and kicks are numpy either way)."""
-        return all(loads.has_twin for loads in self.loads)
+        """Whether every body's loads have a compiled twin (the kinematics and kicks are numpy either way), and the
+        radiation's terms: the drift of several bodies has none yet (the scene runs on the numpy reference)."""
+        return all(loads.has_twin for loads in self.loads) and (self.radiation is None or self.radiation.wave_drift is None)
 
     @property
     def specs(self) -> list:
@@ -545,10 +562,12 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
         groups.append(group)
         dof += width
     radiation = None
+    if drifting(scene) and sum(g.parent < 0 for g in groups) != 1:
+        raise ConfigError("[waves] drift = true takes bodies joined in one tree (the far field gives the drift of them all together); "
+                          f"this scene has {sum(g.parent < 0 for g in groups)} on the world: each one's own drift is not built")  # fmt: skip
     if scene.fluid.radiation == "bem":
-        radiation = SystemRadiation.of(
-            models, starts, scene.fluid, water if diffracting(scene) else None, moored_lowest(scene, models, starts), scene.base_dir
-        )
+        radiation = SystemRadiation.of(models, starts, scene.fluid, water if diffracting(scene) else None,
+                                       moored_lowest(scene, models, starts), scene.base_dir, far_field=drifting(scene))  # fmt: skip
     system = System(groups, order, water, scene.fluid, radiation)
     if scene.fluid.hydro == "linear":
         system.loads = [LinearLoads(m, s.x_world, s.R_world_body) for m, s in zip(models, starts)]
@@ -560,7 +579,28 @@ def build(scene: SceneConfig) -> tuple[System, SystemState]:
             theta[g.coordinate + (2 if g.kind == "planar" else 0)] = e.constraint.start
     rest = SystemState(0.0, x_free, q_free, theta, np.zeros(system.n_dofs), np.zeros(n_joints),
                        np.zeros(0 if radiation is None else radiation.states))  # fmt: skip
+    if radiation is not None and drifting(scene):
+        attach_drift(system, replace(rest, theta=np.zeros_like(theta)), water)
     return system, replace(rest, v=_projected(system, rest, starts))
+
+
+def drifting(scene) -> bool:
+    """Whether the scene's bodies feel the waves' drift force: asked for, with radiation from the BEM, in waves."""
+    return bool(scene.waves.drift) and scene.fluid.radiation == "bem" and scene.waves.kind != "still"
+
+
+def attach_drift(system: System, rest: SystemState, water) -> None:
+    """The drift force of the bodies together (drift.Drift, from the solve's far field with the bodies moving as the
+    linear system does: system_frequency.raos) on the root of their one tree, about its centre of mass. The far field
+    gives the total on them all; bodies apart (several trees) would need each body's own, from the near field."""
+    from .drift import Drift
+    from .system_frequency import raos
+
+    roots = [i for i, g in enumerate(system.groups) if g.parent < 0]  # one (build checks)
+    rad = system.radiation
+    rad.wave_drift = Drift(rad.coefficients, water, raos(system, rest))
+    rad.drift_root = system.order.index((roots[0], 0))
+    rad.drift_lever = np.asarray(system.pose(rest).x[rad.drift_root], float)[:2].copy()
 
 
 def moored_body(scene) -> int | None:

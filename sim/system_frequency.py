@@ -46,6 +46,19 @@ def stiffness(system: System, s0: SystemState, step: float = 1e-4) -> np.ndarray
     return np.column_stack(columns)
 
 
+def damping_at_rest(system: System, pose) -> np.ndarray:
+    """(d, d) the terms' linear damping at rest in still water and the take-offs' dampers, generalised."""
+    D = np.zeros((system.n_dofs, system.n_dofs))
+    for m, x, R, Jb in zip(system.members, pose.x, pose.R, pose.J):
+        Dm = Model(m.body, StillWater(system.water.rho, system.water.g), m.model.fluid)
+        _, lin = Dm.linearised(Dm.wetted(x, R, 0.0), np.zeros(6))
+        if lin is not None:
+            D += Jb.T @ lin @ Jb
+    for g in system.joints:
+        D[g.dofs.start, g.dofs.start] += g.damping
+    return D
+
+
 def response(system: System, s0: SystemState, i: int, heading: int = 0, diffraction: bool = True, froude_krylov=None) -> np.ndarray:
     """(d,) complex xi per unit wave amplitude at the solve's frequency i and heading index `heading`; `froude_krylov`:
     (6k,) complex, the bodies' Froude-Krylov force per unit amplitude to use instead of the solve's (a linear run's own)."""
@@ -54,17 +67,25 @@ def response(system: System, s0: SystemState, i: int, heading: int = 0, diffract
     pose = system.pose(s0)
     J = np.vstack(pose.J)
     M = system.mass_matrix(pose) + J.T @ c.added_mass[i] @ J
-    D = J.T @ c.damping[i] @ J
-    for m, x, R, Jb in zip(system.members, pose.x, pose.R, pose.J):
-        Dm = Model(m.body, StillWater(system.water.rho, system.water.g), m.model.fluid)
-        _, lin = Dm.linearised(Dm.wetted(x, R, 0.0), np.zeros(6))
-        if lin is not None:
-            D += Jb.T @ lin @ Jb
-    for g in system.joints:
-        D[g.dofs.start, g.dofs.start] += g.damping
+    D = J.T @ c.damping[i] @ J + damping_at_rest(system, pose)
     X_FK = c.froude_krylov[i, heading] if froude_krylov is None else froude_krylov
     X = J.T @ (X_FK + (c.diffraction[i, heading] if diffraction else 0.0))
     return np.linalg.solve(-(w**2) * M - 1j * w * D + stiffness(system, s0), X)
+
+
+def raos(system: System, s0: SystemState) -> np.ndarray:
+    """(n, m, 6k) complex: each body's motion (its twist's integral, about its centre of mass, world axes) per unit wave
+    amplitude at every frequency and heading of the solve: `response` at all of them, the stiffness taken once."""
+    c = system.radiation.coefficients
+    pose = system.pose(s0)
+    J = np.vstack(pose.J)
+    M, D, K = system.mass_matrix(pose), damping_at_rest(system, pose), stiffness(system, s0)
+    out = np.zeros((len(c.omega), len(c.headings), J.shape[0]), complex)
+    for i, w in enumerate(np.asarray(c.omega, float)):
+        Z = -(w**2) * (M + J.T @ c.added_mass[i] @ J) - 1j * w * (J.T @ c.damping[i] @ J + D) + K
+        X = (c.froude_krylov[i] + c.diffraction[i]) @ J  # (m, d)
+        out[i] = np.linalg.solve(Z, X.T).T @ J.T
+    return out
 
 
 def steady_start(system: System, s0: SystemState, xi: np.ndarray, omega: float, amplitude: float) -> SystemState:

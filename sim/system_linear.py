@@ -45,6 +45,8 @@ def exact_linear(system, s0):
     """The exact stepper of `system` from its starting state s0 (`ExactLinear`), or None where it does not apply."""
     if not all(isinstance(loads, LinearLoads) for loads in system.loads) or any(h is not None for h in system.held):
         return None
+    if system.radiation is not None and system.radiation.wave_drift is not None:  # a force quadratic in the sea, not a linear one
+        return None
     if any(g.kind not in ("fixed", "prismatic") for g in system.groups) or not system.n_dofs:
         return None
     if not system.water.flat and moves_horizontally(system, s0):

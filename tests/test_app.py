@@ -508,6 +508,26 @@ def test_diffraction_control_shows_the_switch_in_effect_and_refuses_it_without_r
     assert other.loop.sim.scene.waves.diffraction is None and other.loop.is_alive()
 
 
+def test_drift_control_switches_the_drift_force_and_refuses_it_without_radiation(make_app):
+    """The Waves folder's Drift checkbox: ticked on the sphere in regular waves, the running model gains the drift force
+    (from the shipped solve's far field), unticked it drops it; ticked on a scene without radiation: a notice, kept off."""
+    app = make_app("sphere", paused=True)
+    app.controls.kind.value = "regular"
+    app.sync()
+    assert app.controls.drift.value is False and app.loop.sim.model.radiation.drift is None
+    app.controls.drift.value = True
+    snap = app.sync()
+    assert snap.settings.drift is True and app.loop.sim.model.radiation.drift is not None
+    assert app.loop.sim.model.radiation.drift.mean[0] > 0  # downwave
+    app.controls.drift.value = False
+    app.sync()
+    assert app.loop.sim.model.radiation.drift is None
+    other = make_app("damped", paused=True)
+    other.controls.drift.value = True
+    snap = other.sync()
+    assert "needs [fluid] radiation" in snap.notice and other.controls.drift.value is False and other.loop.is_alive()
+
+
 def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
     """The drag coefficient's control (generated from its declaration) changes Simulation.scene, and
     the term joins the model only while it is nonzero."""

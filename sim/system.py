@@ -272,9 +272,8 @@ class System:
 
     @property
     def has_twin(self) -> bool:
-        """Whether every body's loads have a compiled twin (the kinematics and kicks are numpy either way), and the
-        radiation's terms: the drift of several bodies has none yet (the scene runs on the numpy reference)."""
-        return all(loads.has_twin for loads in self.loads) and (self.radiation is None or self.radiation.wave_drift is None)
+        """Whether every body's loads have a compiled twin (the kinematics and kicks are numpy either way)."""
+        return all(loads.has_twin for loads in self.loads)
 
     @property
     def specs(self) -> list:

@@ -268,6 +268,32 @@ def radiation_into(mem, G, J, x, Hm, t, Q, f, phase, shift):
                 for i in range(6):
                     acc += J[b, i, c] * (r * f[6 * b + i])
                 Q[c] += acc
+    if mem.drifting:
+        wave_drift_into(mem, J, x, t, Q)
+
+
+@njit(**JIT)
+def wave_drift_into(mem, J, x, t, Q):
+    """Q += J_root^T F: the drift force of the bodies together on the root (SystemRadiation.load's, drift.Drift.force)."""
+    b = mem.drift_root
+    A = np.zeros(6)
+    B = np.zeros(6)
+    for i in range(mem.drift_omega.shape[0]):
+        psi = mem.drift_k[i, 0] * x[b, 0] + mem.drift_k[i, 1] * x[b, 1] - mem.drift_omega[i] * t
+        c, s = math.cos(psi), math.sin(psi)
+        for j in range(6):
+            A[j] += c * mem.E_re[i, j] - s * mem.E_im[i, j]
+            B[j] += s * mem.E_re[i, j] + c * mem.E_im[i, j]
+    r = ramp_factor(t, mem.drift_ramp)
+    F = np.zeros(6)
+    for j in range(3):  # Re{A conj(A')} of F_x, F_y, M_z
+        F[(0, 1, 5)[j]] = (A[2 * j] * A[2 * j + 1] + B[2 * j] * B[2 * j + 1]) * r * r
+    F[5] -= mem.drift_lever[0] * F[1] - mem.drift_lever[1] * F[0]
+    for c in range(J.shape[2]):
+        acc = 0.0
+        for i in range(6):
+            acc += J[b, i, c] * F[i]
+        Q[c] += acc
 
 
 @njit(**JIT)

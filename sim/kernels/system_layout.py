@@ -108,6 +108,21 @@ class Memory(NamedTuple):
     omega: np.ndarray
     """(n,) rad/s."""
     ramp: float
+    drifting: bool
+    """Whether the waves' drift force acts (SystemRadiation.wave_drift: drift.Drift of the bodies together)."""
+    E_re: np.ndarray
+    """(m, 6) its envelope's real parts (drift.Drift.envelope: A and A' of F_x, F_y, M_z in turn), m components."""
+    E_im: np.ndarray
+    """(m, 6) imaginary parts."""
+    drift_k: np.ndarray
+    """(m, 2) the components' wave vectors, rad/m."""
+    drift_omega: np.ndarray
+    """(m,) rad/s."""
+    drift_ramp: float
+    drift_root: int
+    """The body it acts on (scene order)."""
+    drift_lever: np.ndarray
+    """(2,) where that body starts: the yaw moment is moved there from the world's origin."""
 
 
 def sparse_rows(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -162,7 +177,7 @@ def memory_pack(system, dt: float) -> Memory:
     none = sparse_rows(np.zeros((0, 0)))
     if rad is None:
         return Memory(False, np.zeros((6 * k, 6 * k)), np.zeros((k, 3, 3)), none, none, none, False, np.zeros((0, 6 * k)),
-                      np.zeros((0, 6 * k)), np.zeros((0, 2)), np.zeros(0), 0.0)  # fmt: skip
+                      np.zeros((0, 6 * k)), np.zeros((0, 2)), np.zeros(0), 0.0, *drift_pack(None))  # fmt: skip
     Phi, Gamma = held_step(rad.F, rad.G, dt)
     d = rad.diffraction
     if d is None:
@@ -172,4 +187,14 @@ def memory_pack(system, dt: float) -> Memory:
     return Memory(True, np.ascontiguousarray(rad.added_mass_inf, dtype=float), np.array(rad.R0, float).reshape(k, 3, 3), sparse_rows(Phi),
                   sparse_rows(Gamma), sparse_rows(rad.H), d is not None, np.ascontiguousarray(amplitude.real),
                   np.ascontiguousarray(amplitude.imag), np.ascontiguousarray(wave_k, dtype=float).reshape(-1, 2),
-                  np.asarray(omega, float), float(ramp))  # fmt: skip
+                  np.asarray(omega, float), float(ramp), *drift_pack(rad))  # fmt: skip
+
+
+def drift_pack(rad) -> tuple:
+    """Memory's drift fields: the radiation's wave drift (SystemRadiation.wave_drift), or none."""
+    drift = None if rad is None else rad.wave_drift
+    if drift is None:
+        return False, np.zeros((0, 6)), np.zeros((0, 6)), np.zeros((0, 2)), np.zeros(0), 0.0, 0, np.zeros(2)
+    re, im = drift.kernel_arrays()
+    return (True, re, im, np.ascontiguousarray(drift.k, dtype=float).reshape(-1, 2), np.asarray(drift.omega, float), float(drift.ramp),
+            int(rad.drift_root), np.asarray(rad.drift_lever, float).copy())  # fmt: skip

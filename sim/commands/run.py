@@ -118,10 +118,8 @@ SAMPLES_NOTE = "a mesh's triangles are split by halving every edge over a length
 
 def inertia_source(scene, body) -> str:
     """Where the body's inertia comes from, as the run's summary says it."""
-    if scene.body.inertia is not None:
-        return "as given" + (" about the given centre of mass" if scene.body.centre_of_mass is not None else "")
-    shell = "exact (mesh shell)" if body.exact_inertia else "of the samples"
-    return shell + (" about the given centre of mass" if scene.body.centre_of_mass is not None else "")
+    source = "as given" if scene.body.inertia is not None else "exact (mesh shell)" if body.exact_inertia else "of the samples"
+    return source + (" about the given centre of mass" if scene.body.centre_of_mass is not None else "")
 
 
 def describe_terms(sim: Simulation) -> str:

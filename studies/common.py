@@ -130,3 +130,21 @@ def pct(x: float, digits: int = 3) -> str:
 def fmt_spec(x: float | None, spec: str = ".2e") -> str:
     """`format(x, spec)`, or 'n/a' for a missing or non-finite number."""
     return "n/a" if x is None or not np.isfinite(x) else format(x, spec)
+
+
+def publish_cross_code(name: str, runs, compare, table, figure, page: str, source: str) -> int:
+    """A cross-code page (`python -m studies f3of`, `rm3-mooring`): `runs(folder)` runs floatsim's scenes as their user
+    does, `compare` takes their statistics against the other codes', `table` prints them; the figure goes to
+    reports/accuracy/NAME.png and the page (`page` formatted with the table and the data's `source`) to reports/NAME.md."""
+    import tempfile
+
+    reports = Path(__file__).resolve().parent.parent / "reports"
+    with tempfile.TemporaryDirectory() as tmp:
+        results = runs(Path(tmp))
+    rows = compare(results)
+    text = table(rows)
+    print(text)
+    (reports / "accuracy").mkdir(parents=True, exist_ok=True)
+    figure(rows, results, reports / "accuracy" / f"{name}.png")
+    (reports / f"{name}.md").write_text(page.format(table=text, source=source))
+    return 0

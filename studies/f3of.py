@@ -21,7 +21,6 @@ from .f3of_reference import statistics
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "assets" / "scenes" / "f3of"
-REPORTS = ROOT / "reports"
 CYCLES = 3
 """The period compared: the mean over the first CYCLES cycles after the release (as each code's)."""
 
@@ -136,18 +135,11 @@ class F3ofArgs:
 
 def main(args: F3ofArgs) -> int:
     """Run the three decay tests, print the table of periods, write the figure and the page."""
-    import tempfile
+    from .common import publish_cross_code
 
     del args
-    with tempfile.TemporaryDirectory() as tmp:
-        runs = {test: run(test, Path(tmp)) for test in ("DT1", "DT2", "DT3")}
-    rows = compare(runs)
-    text = table(rows)
-    print(text)
-    (REPORTS / "accuracy").mkdir(parents=True, exist_ok=True)
-    figure(rows, runs, REPORTS / "accuracy" / "f3of.png")
-    (REPORTS / "f3of.md").write_text(PAGE.format(table=text, source=reference()["source"]))
-    return 0
+    runs = lambda folder: {test: run(test, folder) for test in ("DT1", "DT2", "DT3")}  # noqa: E731
+    return publish_cross_code("f3of", runs, compare, table, figure, PAGE, reference()["source"])
 
 
 if __name__ == "__main__":

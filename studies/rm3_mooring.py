@@ -18,8 +18,6 @@ import numpy as np
 
 from .rm3_wecsim import REFERENCE, statistics
 
-ROOT = Path(__file__).resolve().parent.parent
-REPORTS = ROOT / "reports"
 SCENE = "rm3-wecsim-moorings"
 QUANTITIES = (
     ("float heave", "float_z", "m"),
@@ -120,18 +118,10 @@ class Rm3MooringArgs:
 
 def main(args: Rm3MooringArgs) -> int:
     """Run the preset, print the table, write the figure and the page."""
-    import tempfile
+    from .common import publish_cross_code
 
     del args
-    with tempfile.TemporaryDirectory() as tmp:
-        columns = run(Path(tmp))
-    rows = compare(columns)
-    text = table(rows)
-    print(text)
-    (REPORTS / "accuracy").mkdir(parents=True, exist_ok=True)
-    figure(rows, columns, REPORTS / "accuracy" / "rm3-mooring.png")
-    (REPORTS / "rm3-mooring.md").write_text(PAGE.format(table=text, source=reference()["source"]))
-    return 0
+    return publish_cross_code("rm3-mooring", run, compare, table, figure, PAGE, reference()["source"])
 
 
 if __name__ == "__main__":

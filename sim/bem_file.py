@@ -37,9 +37,9 @@ HORIZONTAL_SLACK = 0.01
 
 def bem_file_path(name: str, base_dir: str) -> Path:
     """The file a scene names: relative to the scene file, else to the working directory."""
-    path = Path(name)
-    if not path.is_absolute() and not path.is_file():
-        path = Path(base_dir) / path
+    from .records import record_path  # (the same rule as a wave record's)
+
+    path = record_path(name, base_dir)
     if not path.is_file():
         raise ConfigError(f"[fluid] bem_file {name!r}: no such file (beside the scene or from the working directory)")
     return path

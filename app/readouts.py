@@ -152,7 +152,7 @@ class Readouts:
         size = scales(snap.body, snap.params.g)
         raw = [f(frame) for *_, f in SERIES]
         if snap.system:  # the chosen body's take-off is its joint's (the run's frame lists each joint's power)
-            raw[-1] = next((p for name, _, _, p, _ in snap.run.joints if name == snap.settings.focus), 0.0)
+            raw[-1] = next((p for name, _, _, p, *_ in snap.run.joints if name == snap.settings.focus), 0.0)
         values = denoise(np.array(raw, dtype=float), size)
         self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
@@ -181,7 +181,7 @@ def _system(snap: Snapshot) -> list[str]:
     """A scene of several bodies: where each body is, each joint's stroke and take-off, the lines' pull, the energies of all."""
     run = snap.run
     out = [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies)]
-    for name, theta, _, p, e in run.joints:
+    for name, theta, _, p, e, *_ in run.joints:
         out.append(f"Joint {name}: stroke **{theta:+.4f}** · take-off **{p / 1e3:.4g} kW** now, **{e / 1e6:.4g} MJ** absorbed")
     if run.mooring:
         out.append(

@@ -43,9 +43,11 @@ class Assembly(Simulation):
         """The index of the body the mooring lines hold (None: no lines)."""
         self.moorings = self._moorings()
         self.notes: list[str] = []
+        self._custom: dict = {}  # controllers given from Python (`control`), by joint
+        self.controllers = self._make_controllers()
         from .system_linear import exact_linear
 
-        self.exact = exact_linear(self.system, self.state)
+        self.exact = None if self.switching else exact_linear(self.system, self.state)
         """The exact stepper of a linear system (system_linear.py), or None: Stormer-Verlet."""
         if self.exact is not None:
             self.notes.append(
@@ -69,6 +71,82 @@ class Assembly(Simulation):
     @property
     def compiled(self) -> bool:
         return self.backend == "numba"
+
+    # take-off control (control.py)
+
+    def _make_controllers(self) -> list:
+        """Each joint's take-off controller (the one `control` gave, else its [constraint]'s), its law set for the first step;
+        a negative spring checked against the joint's own stiffness (system_frequency.stiffness, with the springs)."""
+        from .control import of_constraint, stiffness_check
+
+        system, entries = self.system, {e.name: e for e in self.scene.bodies}
+        pose = system.pose(self.start)
+        mass, stiff = system.inertia(pose), None
+        out = []
+        for j, g in enumerate(system.joints):
+            c, i = entries[g.name].constraint, g.dofs.start
+            if j not in self._custom and c.pto_stiffness < 0:
+                if stiff is None:
+                    from .system_frequency import stiffness
+
+                    stiff = stiffness(system, replace(self.start, theta=np.zeros_like(self.start.theta), v=np.zeros_like(self.start.v)))
+                stiffness_check(c.controller, c.pto_stiffness, stiff[i, i] - c.pto_stiffness, f"[[bodies]] {g.name}: ")
+            controller = self._custom.get(j) or of_constraint(c, float(mass[i, i]))
+            controller.reset()
+            out.append(controller)
+        system.laws = [c.linear or law for c, law in zip(out, system.passive_laws())]
+        return out
+
+    @property
+    def switching(self) -> bool:
+        """Whether some take-off's law changes from step to step (a controller other than a spring and damper)."""
+        return any(c.linear is None for c in self.controllers)
+
+    def control(self, controller, body: str) -> None:
+        """Drive the take-off of `body`'s joint (the body a joint's group is named by) by `controller`: a callable
+        (t, control.JointState, control.WaveState) -> force (N or N m, held over each step) or a control.Controller;
+        None: back to the scene's."""
+        from .control import wrap
+
+        names = [g.name for g in self.system.joints]
+        if body not in names:
+            raise ConfigError(f"no take-off on {body!r}: the joints with one are on {', '.join(names) or 'no body'}")
+        j = names.index(body)
+        if controller is None:
+            self._custom.pop(j, None)
+        else:
+            self._custom[j] = wrap(controller)
+        self.controllers = self._make_controllers()
+        self._check_exact()
+        self._repack()
+
+    def _next_laws(self) -> None:
+        """Each switching controller's law for the step from the state now (the spring's energy kept whole where its
+        stiffness changes: the difference goes to E_pto), into the system and the compiled step's tree."""
+        from .control import JointState, WaveState
+
+        s, system = self.state, self.system
+        absorbed = s.absorbed
+        for j, (g, controller) in enumerate(zip(system.joints, self.controllers)):
+            if controller.linear is not None:
+                continue
+            theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
+            law = controller.law(JointState(s.t, theta, rate, self.dt), WaveState(system.water, g.origin[:2], s.t))
+            if law.stiffness != system.laws[j].stiffness:
+                absorbed = absorbed.copy() if absorbed is s.absorbed else absorbed
+                absorbed[g.coordinate] -= 0.5 * (law.stiffness - system.laws[j].stiffness) * theta**2
+            system.laws[j] = law
+        if absorbed is not s.absorbed:
+            self.state = replace(s, absorbed=absorbed)
+        self._repack()
+
+    def _repack(self) -> None:
+        """The laws into the compiled step's tree (read at each call)."""
+        if self.stepper is not None:
+            from .kernels.system_layout import take_offs
+
+            tree = self.stepper.tree
+            tree.stiffness[:], tree.damping[:], tree.force[:] = take_offs(self.system)
 
     @property
     def kernels_ready(self) -> bool:
@@ -158,9 +236,17 @@ class Assembly(Simulation):
         if scene == old:
             return
         if _only_take_offs(old, scene):
-            self.system.groups = [_with_take_off(g, scene) for g in self.system.groups]
-            self.system.joints = [g for g in self.system.groups if g.kind in ("prismatic", "revolute")]
-            self.scene, self._frame = scene, None
+            groups = [_with_take_off(g, scene) for g in self.system.groups]
+            joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
+            kept = (self.scene, self.system.groups, self.system.joints)
+            self.scene, self.system.groups, self.system.joints = scene, groups, joints
+            try:
+                self.controllers = self._make_controllers()
+            except ConfigError:
+                self.scene, self.system.groups, self.system.joints = kept
+                self.controllers = self._make_controllers()
+                raise
+            self._frame = None
             self._check_exact()
             if self.stepper is not None:  # the take-offs are packed in the compiled step's tree
                 self.use_backend("numba")
@@ -172,6 +258,7 @@ class Assembly(Simulation):
             self.notes.append("a joint's kind or the bodies' tree changed: the scene started again from its starting pose")
         backend, lines = self.backend, (old.moorings, old.fluid.rho, old.fluid.g) != (scene.moorings, scene.fluid.rho, scene.fluid.g)
         self.scene, self.system, self.state, self.start, self._frame = scene, system, state, start, None
+        self.controllers = self._make_controllers()
         if self.moorings is not None and not (lines or restarted):
             self.system.held[self.moored] = self.moorings.load.copy()
         else:
@@ -183,7 +270,7 @@ class Assembly(Simulation):
     def _check_exact(self) -> None:
         from .system_linear import exact_linear
 
-        self.exact = exact_linear(self.system, self.state)
+        self.exact = None if self.switching else exact_linear(self.system, self.state)
 
     def _moorings(self):
         """The lines in MoorDyn at the starting state (moorings.py), or None."""
@@ -201,6 +288,10 @@ class Assembly(Simulation):
     def reset(self, state: SystemState | None = None) -> None:
         """Back to the starting state, or to `state` (the system, its coefficients and kernels kept; the lines start afresh)."""
         self.state = self.start if state is None else state
+        for controller in self.controllers:
+            controller.reset()
+        self.system.laws = [c.linear or law for c, law in zip(self.controllers, self.system.passive_laws())]
+        self._repack()
         if self.moorings is not None:
             self.moorings.close()
             self.moorings = self._moorings()
@@ -219,13 +310,16 @@ class Assembly(Simulation):
                 raise SimulationDiverged(f"the state became non-finite by t = {new.t:.6g} s")
             self.state = new
             return new
-        if self.stepper is not None and self.moorings is None:  # all n steps in one compiled call (or a loop of two a step)
+        if self.stepper is not None and self.moorings is None and not self.switching:  # all n steps in one compiled call
             new, _ = self.stepper.step(self.state, self.dt, n)
             if not new.is_finite():
                 raise SimulationDiverged(f"the state became non-finite at t = {new.t:.6g} s: try a smaller time step")
             self.state = new
             return new
+        switching = self.switching
         for _ in range(n):
+            if switching:  # the controllers' laws for this step (a call back into Python a step)
+                self._next_laws()
             if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
                 x, R, J = self._moored_pose()
                 nu = J @ self.state.v
@@ -246,8 +340,10 @@ class Assembly(Simulation):
     def frame(self) -> AssemblyFrame:
         if self._frame is None or self._frame[0] is not self.state:
             s = self.state
-            joints = [(g.name, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), g.damping * float(s.v[g.dofs.start]) ** 2,
-                       float(s.absorbed[g.coordinate])) for g in self.system.joints]  # fmt: skip
+            joints = []
+            for g, law in zip(self.system.joints, self.system.laws):
+                theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
+                joints.append((g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate)))
             lines, pull, tensions = (), (), ()
             if self.moorings is not None:
                 lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
@@ -283,7 +379,8 @@ class AssemblyFrame:
     bodies: list
     """Each body's dict: name, x, q, u, omega (body_frames)."""
     joints: list
-    """Each joint's (name, theta, rate, P_pto, E_pto)."""
+    """Each joint's (name, theta, rate, P_pto, E_pto, F_pto): P_pto the power its take-off absorbs (its law's damper and
+    force: the spring's is stored, E_spring), F_pto its force by its controller's law."""
     energies: dict
     joint_axes: list = field(default_factory=list)
     """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
@@ -314,7 +411,7 @@ class AssemblyFrame:
         for b in self.bodies:
             cols += [f"{b['name']}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
         for name, *_ in self.joints:
-            cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto")]
+            cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto", "F_pto")]
         if self.mooring:
             cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max", *(f"T_fair_{i + 1}" for i in range(len(self.mooring) - 4))]
         return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
@@ -332,8 +429,11 @@ class AssemblyFrame:
 
 def _only_take_offs(old: SceneConfig, new: SceneConfig) -> bool:
     """Whether the scenes differ in their joints' take-offs alone."""
-    strip = lambda scene: replace(scene, bodies=tuple(replace(e, constraint=replace(e.constraint, pto_damping=0.0, pto_stiffness=0.0))  # noqa: E731
-                                                      for e in scene.bodies))  # fmt: skip
+    def strip(scene):
+        bodies = tuple(replace(e, constraint=replace(e.constraint, pto_damping=0.0, pto_stiffness=0.0, controller="passive", latch_time=0.0,
+                                                     declutch_time=0.0, pto_max_force=None)) for e in scene.bodies)  # fmt: skip
+        return replace(scene, bodies=bodies)
+
     return strip(old) == strip(new)
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .body import UNITS
+from .control import CONTROLLERS
 from .errors import ConfigError
 from .forces import TERMS
 from .integrators import INTEGRATORS
@@ -162,10 +163,20 @@ CONSTRAINT = (
           "solve, the linear hydrostatics and the take-off spring are about): a release from a displaced pose, a decay test (m for a slide, "
           "rad for a hinge, a planar joint's turn)", lo=-1e5, hi=1e5, kind="optional", name="joint start"),
     Param("constraint", "pto_stiffness", 0.0, "Power take-off spring on the joint's coordinate (N/m sliding, N m/rad turning), about the "
-          "starting pose", lo=0.0, hi=1e9, name="PTO stiffness"),
+          "starting pose; negative with controller reactive (or pi: its integral gain)", lo=-1e9, hi=1e9, name="PTO stiffness"),
     Param("constraint", "pto_damping", 0.0, "Power take-off damper on the joint's coordinate (N s/m sliding, N m s/rad turning): the "
           "power it absorbs is the CSV's P_pto", lo=0.0, hi=1e9, live=(0.0, 1e7), name="PTO damping", label="PTO damping",
           gui=(0.0, 20000.0, 10.0)),
+    Param("constraint", "controller", "passive", "The take-off's control (docs/control.md): passive (its spring and damper), reactive "
+          "(the same, a negative spring allowed), latching (held latch_time at each stop), declutching (no force for declutch_time after "
+          "each stop) or pi (on the rate: Kp = pto_damping, Ki = pto_stiffness)", kind="choice", choices=CONTROLLERS, label="Control",
+          gui=()),
+    Param("constraint", "latch_time", 0.0, "Latching control: how long the joint is held at each stop (regular waves: about (T - T_n) / 2)",
+          "s", lo=0.0, hi=1e4, name="latch time"),
+    Param("constraint", "declutch_time", 0.0, "Declutching control: how long the take-off is off after each stop", "s", lo=0.0, hi=1e4,
+          name="declutch time"),
+    Param("constraint", "pto_max_force", None, "The largest force (N) or moment (N m) the take-off gives: its controller's law limited "
+          "to it", lo=0.0, hi=1e12, lo_open=True, kind="optional", name="PTO force limit"),
 )
 # fmt: on
 SECTIONS = {
@@ -358,16 +369,33 @@ def _check_body(b, i, c, where: str = "") -> None:
         raise ConfigError(
             f"{where}[constraint] start is a joint's coordinate: it needs a prismatic, revolute or planar joint, not {c.joint!r}"
         )
-    if c.joint == "planar" and (c.pto_damping or c.pto_stiffness):
+    if c.joint == "planar" and (c.pto_damping or c.pto_stiffness or c.controller != "passive"):
         raise ConfigError(
-            f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness) acts on a prismatic or revolute one"
+            f"{where}a planar joint has three coordinates: a take-off (pto_damping, pto_stiffness, controller) acts on a prismatic or "
+            "revolute one"
         )
+    _check_controller(c, where)
     norm = math.sqrt(sum(q * q for q in i.orientation))
     if abs(norm - 1.0) > QUATERNION_SLACK:
         raise ConfigError(
             f"{where}initial orientation q0 must be a unit quaternion (w, x, y, z), got {i.orientation} with norm {norm:.6g} "
             f"(one within {QUATERNION_SLACK:g} of 1 is normalised)"
         )
+
+
+def _check_controller(c, where: str = "") -> None:
+    """A take-off's controller and its settings agree (sim/control.py)."""
+    if c.pto_stiffness < 0 and c.controller not in ("reactive", "pi"):
+        raise ConfigError(f"{where}[constraint] pto_stiffness {c.pto_stiffness:g} < 0 needs controller = \"reactive\" (a negative spring is "
+                          "reactive control)")  # fmt: skip
+    if c.pto_damping < 0:
+        raise ConfigError(f"{where}[constraint] pto_damping must be >= 0, got {c.pto_damping:g}")
+    needs = {"latching": ("latch_time", c.latch_time), "declutching": ("declutch_time", c.declutch_time)}.get(c.controller)
+    if needs and needs[1] <= 0:
+        raise ConfigError(f"{where}{c.controller} control needs [constraint] {needs[0]} > 0 (regular waves: about (T - T_n) / 2)")
+    if c.controller != "passive" and c.joint not in ("prismatic", "revolute"):
+        raise ConfigError(f"{where}controller {c.controller!r} acts on a joint's take-off: it needs a prismatic or revolute joint, not "
+                          f"{c.joint!r}")  # fmt: skip
 
 
 def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:

@@ -126,12 +126,17 @@ class WorldJoint:
         return -self.stiffness * theta - self.damping * rate
 
 
-def step(model, joint: WorldJoint, s: State, dt: float, theta: float) -> tuple[State, float, float]:
+def step(model, joint: WorldJoint, s: State, dt: float, theta: float, law=None) -> tuple[State, float, float]:
     """One Stormer-Verlet step on the joint's coordinate (`theta`: its last value, which counts a hinge's
-    whole turns), twist terms and the take-off's damper implicit in each half kick; returns the new state,
-    the energy the take-off absorbed over the step, J, and the new coordinate."""
+    whole turns), twist terms and the take-off's spring and damper implicit in each half kick; returns the new state,
+    the energy the take-off absorbed over the step, J, and the new coordinate. `law`: the take-off's control.Law over
+    the step (default: the joint's spring and damper); its force's work is -f times the coordinate's change."""
+    from .control import Law
+
     body = model.body
+    law = Law(0.0, joint.stiffness, joint.damping) if law is None else law
     theta, rate = joint.coordinate(s, near=theta), joint.rate(body, s)
+    start = theta
     memory, radiated = s.memory, s.E_rad
     if not joint.dofs:
         return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), memory, radiated), 0.0, 0.0
@@ -140,10 +145,10 @@ def step(model, joint: WorldJoint, s: State, dt: float, theta: float) -> tuple[S
         if half == 1:
             memory, radiated = _drift_memory(model, joint, theta, theta + dt * rate, rate, memory, radiated, dt)
             theta = theta + dt * rate
-        rate, work = _kick(*_affine(model, joint, theta, rate, s.t + half * dt, memory), rate, 0.5 * dt, joint.damping)
+        rate, work = _kick(*_affine(model, joint, theta, rate, s.t + half * dt, memory, law), rate, 0.5 * dt, law.damping)
         absorbed += work
     new = joint.state(body, s.t + dt, theta, rate, State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, radiated))
-    return new, absorbed, theta
+    return new, absorbed - law.force * (theta - start), theta
 
 
 def _drift_memory(model, joint: WorldJoint, theta0: float, theta1: float, rate: float, memory, radiated: float, dt: float):
@@ -172,16 +177,32 @@ def _kick(Q: float, Dq: float, Mq: float, v: float, h: float, c: float) -> tuple
     return a + b * (1.0 - e1), c * (a * a * h + 2.0 * a * b * e1 / lam + b * b * e2 / (2.0 * lam))
 
 
-def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memory) -> tuple[float, float, float]:
-    """(Q0, D_q, M_q) with the generalised load ~ Q0 - D_q theta_dot near `rate`: the take-off's spring in Q0,
+def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memory, law) -> tuple[float, float, float]:
+    """(Q0, D_q, M_q) with the generalised load ~ Q0 - D_q theta_dot near `rate`: the take-off's force and spring in Q0,
     its damper in D_q with the loads' own damping along the joint; with radiation, the memory's and the
     diffraction force in Q0 and the added mass at infinite frequency in M_q."""
     x, R = joint.pose(theta)
     J = joint.jacobian(x)
     wet = model.wetted(x, R, t)
     f, D = model.linearised(wet, J * rate, t)  # loads ~ f - D nu near nu = J rate
-    Dq = joint.damping + (0.0 if D is None else float(J @ D @ J))
+    Dq = law.damping + (0.0 if D is None else float(J @ D @ J))
+    take_off = law.force - law.stiffness * theta
     rad = model.radiation
     if rad is None:
-        return float(J @ f) - joint.stiffness * theta, Dq, joint.mass(model.body, R, J)
-    return float(J @ (f + rad.load(R, memory, t, x))) - joint.stiffness * theta, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)
+        return float(J @ f) + take_off, Dq, joint.mass(model.body, R, J)
+    return float(J @ (f + rad.load(R, memory, t, x))) + take_off, Dq, float(J @ rad.mass_matrix(model.body, R) @ J)
+
+
+def stiffness_along(model, joint: WorldJoint, step: float = 1e-4) -> float:
+    """K = -dQ/dtheta at the joint's start in still water: the water's and gravity's stiffness along the joint (central
+    differences of the generalised pose load), what a take-off's negative spring must stay below (control.py)."""
+    from .forces import Model
+    from .water import StillWater
+
+    still = Model(model.body, StillWater(model.water.rho, model.water.g), model.fluid)
+
+    def load(theta: float) -> float:
+        x, R = joint.pose(theta)
+        return float(joint.jacobian(x) @ np.concatenate(still.pose_loads(still.wetted(x, R, 0.0))))
+
+    return -(load(step) - load(-step)) / (2.0 * step)

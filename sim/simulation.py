@@ -12,7 +12,7 @@ import numpy as np
 from . import stability
 from .body import Body, make_body, make_mesh_body
 from .config import SceneConfig, diffracting, moored, validate, with_overrides
-from .errors import SimulationDiverged
+from .errors import ConfigError, SimulationDiverged
 from .forces import Model, hydrostatic_energy
 from .hydrostatics import sampled_model_warning
 from .integrators import make_integrator
@@ -23,7 +23,7 @@ from .water import make_water
 
 CSV_COLUMNS = (
     "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff,"
-    "Fx_moor,Fy_moor,Fz_moor,T_fair_max,P_pto,E_pto".split(",")
+    "Fx_moor,Fy_moor,Fz_moor,T_fair_max,P_pto,E_pto,F_pto".split(",")
 )
 
 
@@ -75,9 +75,12 @@ class Frame:
     line_tensions: tuple = ()
     """Each mooring line's tension at those nodes, (segments + 1,), N."""
     P_pto: float = 0.0
-    """The power the joint's take-off absorbs, c theta_dot^2, W (0 without a joint)."""
+    """The power the joint's take-off absorbs, (c theta_dot - f) theta_dot of its law F = f - k theta - c theta_dot, W (its
+    spring's power is stored, not absorbed; 0 without a joint)."""
     E_pto: float = 0.0
     """The energy it has absorbed so far, J."""
+    F_pto: float = 0.0
+    """The take-off's force on the joint's coordinate, N (a hinge's moment, N m), by its controller's law."""
     joint_axis: tuple | None = None
     """(point, unit direction), world frame: the axis a prismatic joint slides along or a revolute one turns
     about (None: free or fixed)."""
@@ -105,7 +108,8 @@ class Frame:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
-                self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0)), self.P_pto, self.E_pto]  # fmt: skip
+                self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0)), self.P_pto, self.E_pto,
+                self.F_pto]  # fmt: skip
 
 
 def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
@@ -264,6 +268,9 @@ class Simulation:
         """joints.WorldJoint: the body's joint to the world, or None (free)."""
         self.pto_energy = 0.0
         """The energy the joint's take-off has absorbed since the start, J."""
+        self.controller = None
+        """control.Controller: the joint's take-off control (None without a joint that moves)."""
+        self._custom = None  # a controller given from Python (`control`), kept over scene changes
         self.model = self._model(body)
         self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
         self.state = initial_state(body, scene)
@@ -319,6 +326,7 @@ class Simulation:
             s = self.state
             self.joint_theta = self.joint.coordinate(s)
             self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
+        self._make_controller()
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
@@ -331,7 +339,50 @@ class Simulation:
             s = self.state
             self.joint_theta = self.joint.coordinate(s, near=self.joint_theta if old is not None and old.kind == self.joint.kind else 0.0)
             self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
+        self._make_controller()
         self._check_backend()
+
+    def _make_controller(self) -> None:
+        """The joint's take-off control: the one `control` gave, else the scene's (control.py), a negative spring checked
+        against the joint's own stiffness."""
+        from .control import Law, of_constraint, stiffness_check
+        from .joints import stiffness_along
+
+        j = self.joint
+        self._law = Law()
+        """The take-off's law over the last step (the frame's force and power)."""
+        if j is None or not j.dofs:
+            self.controller = None
+            return
+        c = self.scene.constraint
+        if self._custom is None and c.pto_stiffness < 0:
+            stiffness_check(c.controller, c.pto_stiffness, stiffness_along(self.model, j))
+        x, R = j.pose(0.0)
+        J = j.jacobian(x)
+        rad = self.model.radiation
+        mass = j.mass(self.body, R, J) if rad is None else float(J @ rad.mass_matrix(self.body, R) @ J)
+        self.controller = self._custom or of_constraint(c, mass)
+        self.controller.reset()
+        self._law = self.controller.linear or Law(0.0, j.stiffness, j.damping)
+
+    def control(self, controller) -> None:
+        """Drive the joint's take-off by `controller`: a callable (t, control.JointState, control.WaveState) -> force
+        (N or N m, held over each step), or a control.Controller; None: back to the scene's [constraint] controller."""
+        from .control import wrap
+
+        if self.joint is None or not self.joint.dofs:
+            raise ConfigError("a take-off controller needs the body on a prismatic or revolute joint ([constraint] joint)")
+        self._custom = None if controller is None else wrap(controller)
+        self._make_controller()
+
+    def _next_law(self, s: State):
+        """The controller's law for the step from s."""
+        from .control import JointState, WaveState
+
+        j = self.joint
+        self._law = self.controller.law(JointState(s.t, self.joint_theta, j.rate(self.body, s), self.dt),
+                                        WaveState(self.model.water, j.x0[:2], s.t))  # fmt: skip
+        return self._law
 
     def _moor(self) -> None:
         """(Re)start the mooring lines at the current state: MoorDyn finds their shape at rest for it."""
@@ -383,7 +434,9 @@ class Simulation:
                 rate = self.joint.rate(self.body, self.state)
                 j = self.joint
                 axis = None if j.kind == "fixed" else ((j.pivot if j.kind == "revolute" else j.x0), j.axis)
-                frame = dataclasses.replace(frame, P_pto=j.damping * rate * rate, E_pto=self.pto_energy, joint_axis=axis)
+                law = self._law  # its spring's power is stored, not absorbed
+                frame = dataclasses.replace(frame, P_pto=(law.damping * rate - law.force) * rate, E_pto=self.pto_energy,
+                                            F_pto=law.at(self.joint_theta, rate), joint_axis=axis)  # fmt: skip
             self._frame, self._frame_key = frame, key
         return self._frame
 
@@ -540,7 +593,8 @@ class Simulation:
                 if self.joint is None:
                     self.state = advance(1)
                     continue
-                new, absorbed, theta = joint_step(self.model, self.joint, s, self.dt, self.joint_theta)
+                law = None if self.controller is None else self._next_law(s)
+                new, absorbed, theta = joint_step(self.model, self.joint, s, self.dt, self.joint_theta, law)
                 if not new.is_finite():
                     raise SimulationDiverged(self.diagnose(s.t + self.dt, "the state became non-finite"))
                 self.state, self.pto_energy, self.joint_theta = new, self.pto_energy + absorbed, theta

@@ -251,6 +251,8 @@ class System:
         """Each body's loads near a twist (the numpy reference, or its compiled twin: use_kernels)."""
         self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
         self.joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
+        self.laws = self.passive_laws()
+        """Each joint's take-off law over the next step (control.Law): its spring and damper, or its controller's (assembly.py)."""
         self.n_free = sum(g.kind == "free" for g in groups)
         constant = []
         for g in groups:  # a slide on slides to the world has a constant Jacobian; a lone hinge to the world no velocity-product load
@@ -265,6 +267,12 @@ class System:
         slides = {"free": 3, "prismatic": 1, "planar": 2}
         self._turning_dofs = [i for g in groups for k, i in enumerate(range(g.dofs.start, g.dofs.stop))
                               if not (k < slides.get(g.kind, 0) and (g.parent < 0 or unturning[g.parent]))]  # fmt: skip
+
+    def passive_laws(self) -> list:
+        """Each joint's take-off as its scene gives it: its spring and damper."""
+        from .control import Law
+
+        return [Law(0.0, g.stiffness, g.damping) for g in self.joints]
 
     @property
     def members(self) -> list[Member]:
@@ -430,10 +438,10 @@ class System:
             Q += J.T @ (f if held is None else f + held)
             if Dm is not None:
                 D += J.T @ Dm @ J
-        for g in self.joints:
+        for g, law in zip(self.joints, self.laws):
             i = g.dofs.start
-            Q[i] -= g.stiffness * s.theta[g.coordinate]
-            D[i, i] += g.damping
+            Q[i] += law.force - law.stiffness * s.theta[g.coordinate]
+            D[i, i] += law.damping
         M = self.inertia(pose)
         if self.radiation is not None:  # the memory's and the diffraction force
             Q += pose.stacked.T @ self.radiation.load(self.radiation.frames(pose), s.memory, s.t, pose.x)
@@ -443,7 +451,8 @@ class System:
         return M, Q, D
 
     def kick(self, s: SystemState, h: float) -> SystemState:
-        """v over h under M v_dot = Q0 - D v (linearised at s.v), solved exactly; each take-off's absorbed energy over it."""
+        """v over h under M v_dot = Q0 - D v (linearised at s.v), solved exactly; each take-off's absorbed energy over it
+        (its law's damper and force: the spring's energy is stored, E_spring)."""
         M, Q, D = self.affine(s, s.v)
         n = self.n_dofs
         A = np.zeros((n + 1, n + 1))  # z = (v, 1): z_dot = A z
@@ -457,8 +466,8 @@ class System:
         gram = E[: n + 1, n + 1 :] @ E[: n + 1, : n + 1].T  # integral over the step of z z^T
         v = (E[: n + 1, : n + 1] @ z)[:n]
         absorbed = s.absorbed.copy()
-        for g in self.joints:
-            absorbed[g.coordinate] += g.damping * gram[g.dofs.start, g.dofs.start]
+        for g, law in zip(self.joints, self.laws):  # the damper's integral of v^2, the force's of v
+            absorbed[g.coordinate] += law.damping * gram[g.dofs.start, g.dofs.start] - law.force * gram[g.dofs.start, n]
         return replace(s, v=v, absorbed=absorbed)
 
     def step(self, s: SystemState, h: float) -> SystemState:
@@ -486,7 +495,7 @@ class System:
         M = self.inertia(pose)
         return {"E_kin": 0.5 * float(s.v @ M @ s.v),
                 "E_grav": float(sum(m.body.mass * g * x[2] for m, x in zip(self.members, pose.x))), "E_hyd": e_hyd,
-                "E_spring": float(sum(0.5 * j.stiffness * s.theta[j.coordinate] ** 2 for j in self.joints))}  # fmt: skip
+                "E_spring": float(sum(0.5 * law.stiffness * s.theta[j.coordinate] ** 2 for j, law in zip(self.joints, self.laws)))}  # fmt: skip
 
 
 def _in_plane(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -60,7 +60,7 @@ def test_a_power_matrix_of_rm3_matches_linear_theory(tmp_path):
     "flags, message",
     [
         (["--scene", "rm3", "--param", "buoy.pto_damping=1e6"], "'buoy' is not a section or one of the bodies (spar, float)"),
-        (["--scene", "rm3", "--param", "float.colour=1"], "KEY one of damping, density, drag_coefficient, joint"),
+        (["--scene", "rm3", "--param", "float.colour=1"], "KEY one of controller, damping, declutch_time, density"),
         (["--scene", "damped", "--param", "float.pto_damping=1e6"], "the one body of this scene is named 'body' (body.pto_damping)"),
         (["--scene", "rm3", "--param", "z0=0,1"], "the start parameters are for one-body scenes"),
         (["--scene", "rm3", "--param", "float.pto_damping=1e6", "--settle"], "--settle is for one-body scenes"),

@@ -245,7 +245,7 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
           "{}, dt {:g} s; the bodies' loads {}".format(*how_stepped(sim)))  # fmt: skip
     for b in last.bodies:
         print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
-    for name, theta, _, _, absorbed in last.joints:
+    for name, theta, _, _, absorbed, *_ in last.joints:
         print(
             f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)"
         )

@@ -325,7 +325,7 @@ def kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w):
         add_sandwich(D, J[b], D_b[b], w.DJ)
     for gi in tree.joints:
         i = tree.dof[gi]
-        Q[i] -= tree.stiffness[gi] * theta[tree.coordinate[gi]]
+        Q[i] += tree.force[gi] - tree.stiffness[gi] * theta[tree.coordinate[gi]]
         D[i, i] += tree.damping[gi]
     if mem.on:
         radiation_into(mem, G, J, x, w.Hm, t, w.Qr, w.fd, w.phase, w.shift)
@@ -353,13 +353,13 @@ def kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w):
             big[i, n + 1 + j] = z[i] * z[j] * h
     E = w.E
     expm_into(big, E, w.expm)
-    for gi in tree.joints:  # the take-off's diagonal of the gram E_12 Phi^T
+    for gi in tree.joints:  # the take-off's diagonal of the gram E_12 Phi^T (the damper's), and its last column (the force's)
         i = tree.dof[gi]
         acc = 0.0
         for m in range(n + 1):
             if E[i, n + 1 + m] != 0.0:
                 acc += E[i, n + 1 + m] * E[i, m]
-        absorbed[tree.coordinate[gi]] += tree.damping[gi] * acc
+        absorbed[tree.coordinate[gi]] += tree.damping[gi] * acc - tree.force[gi] * E[i, 2 * n + 1]
     for i in range(n):
         acc = 0.0
         for j in range(n + 1):

@@ -43,6 +43,8 @@ class Tree(NamedTuple):
     """(g,) the take-off's spring, N/m or N m/rad."""
     damping: np.ndarray
     """(g,) the take-off's damper, N s/m or N m s/rad."""
+    force: np.ndarray
+    """(g,) the take-off's force held over the step, N or N m (a controller's: control.py)."""
     joints: np.ndarray
     """(j,) int64 the groups with a take-off (prismatic and revolute: System.joints)."""
     group: np.ndarray
@@ -134,6 +136,14 @@ def sparse_rows(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.cumsum(indptr), cols.astype(np.int64), np.ascontiguousarray(M[rows, cols])
 
 
+def take_offs(system) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(stiffness, damping, force) of each group's take-off: its joint's law over the next step (System.laws), zeros for the rest."""
+    out = np.zeros((3, len(system.groups)))
+    for g, law in zip(system.joints, system.laws):
+        out[:, system.groups.index(g)] = (law.stiffness, law.damping, law.force)
+    return out[0], out[1], out[2]
+
+
 def tree_pack(system) -> Tree:
     groups, members = system.groups, system.members
     g, k = len(groups), len(members)
@@ -145,8 +155,7 @@ def tree_pack(system) -> Tree:
     ints = lambda values: np.array(values, np.int64).reshape(-1)  # noqa: E731
     return Tree(ints([KINDS[gr.kind] for gr in groups]), ints([gr.parent for gr in groups]), three("axis"), three("pivot"), three("offset"),
                 plane, ints([gr.dofs.start for gr in groups]), ints([gr.dofs.stop - gr.dofs.start for gr in groups]),
-                ints([gr.coordinate for gr in groups]), np.array([gr.stiffness for gr in groups], float),
-                np.array([gr.damping for gr in groups], float), ints([groups.index(j) for j in system.joints]),
+                ints([gr.coordinate for gr in groups]), *take_offs(system), ints([groups.index(j) for j in system.joints]),
                 ints([gi for gi, _ in system.order]), np.array([m.offset for m in members], float).reshape(k, 3),
                 np.array([m.rotation for m in members], float).reshape(k, 3, 3), np.array([m.body.mass for m in members], float),
                 np.array([m.body.inertia for m in members], float).reshape(k, 3), ints(system._turning_dofs), int(system.n_dofs),

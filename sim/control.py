@@ -1,0 +1,253 @@
+"""Take-off control: the force a joint's power take-off puts on its coordinate, chosen at each step.
+
+A controller reads, at the start of each step, the time, its joint's coordinate theta and rate theta_dot and the sea at
+its body (`WaveState`), and gives the affine law the step holds:
+
+    F = f - k theta - c theta_dot      (N on a slide, N m on a hinge)
+
+k and c act inside the step's implicit kick (joints.py, system.py), so a stiff spring, a large damper or a latch's
+brake stays stable at any time step; f is held over the step. The power into the take-off is P = -F theta_dot
+(negative while reactive control gives power back); the energy it has taken, E_pto, adds the damper's c theta_dot^2
+and f's work exactly over each step.
+
+Shipped (`[constraint] controller`, the gains beside it):
+- `passive`: the spring and damper (pto_stiffness >= 0, pto_damping), as before controllers existed;
+- `reactive`: the same law with a negative spring allowed: complex-conjugate control at one frequency is
+  k = omega^2 (m + A(omega)) - C, c = B(omega) (Falnes 2002, Ocean Waves and Oscillating Systems, ch. 6). The total
+  stiffness along the joint, C + k, must stay positive (checked at the start: otherwise the body leaves its rest);
+- `latching`: the damper, and a brake at each stop: when theta_dot changes sign the coordinate is held for `latch_time`
+  (Babarit & Clement 2006, Applied Ocean Research 28: 77-91; for regular waves about (T - T_n) / 2). The brake is a
+  damper with time constant dt / 20 (the kick solves it exactly: the body creeps at under 1e-3 of its speed);
+- `declutching`: no take-off force for `declutch_time` after each stop, the damper the rest of the time
+  (Babarit, Guglielmi & Clement 2009, Ocean Engineering 36: 1015-1024);
+- `pi`: a proportional-integral loop on the rate's error from a reference (zero, or a callable of t in the API):
+  F = -Kp e - Ki integral(e), Kp = pto_damping, Ki = pto_stiffness; the integral stops while the force is limited.
+Any of them takes `pto_max_force`: past it the force is held at the limit over the step (explicit there).
+
+From Python a controller is any callable (t, JointState, WaveState) -> force, or a Controller (its own law):
+`Simulation.control(fn)` (one body) or `Simulation.control(fn, "float")`. A callable's force is held over each step
+(explicit: keep its gains well inside the step's stability). Compiled runs call back into Python once a step where a
+controller other than the passive one is set (docs/control.md gives the cost).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+CONTROLLERS = ("passive", "reactive", "latching", "declutching", "pi")
+BRAKE = 20.0
+"""A latch's brake: damping BRAKE M_q / dt (time constant dt / BRAKE): held to well under a per mille, and still small
+enough for the kick's matrix exponential (its exponent stays near BRAKE / 2)."""
+
+
+@dataclass(frozen=True)
+class Law:
+    """F = force - stiffness theta - damping theta_dot, held over one step."""
+
+    force: float = 0.0
+    stiffness: float = 0.0
+    damping: float = 0.0
+
+    def at(self, theta: float, rate: float) -> float:
+        return self.force - self.stiffness * theta - self.damping * rate
+
+
+@dataclass(frozen=True)
+class JointState:
+    t: float
+    theta: float
+    """The joint's coordinate from its start, m or rad."""
+    rate: float
+    """theta_dot, m/s or rad/s."""
+    dt: float = 0.0
+    """The step the law is held over, s."""
+
+
+class WaveState:
+    """The sea at the joint's body: its surface over the body's starting (x, y), computed when asked."""
+
+    def __init__(self, water, xy, t: float):
+        self.water, self.xy, self.t = water, xy, float(t)
+
+    @property
+    def eta(self) -> float:
+        """Elevation, m."""
+        return float(self.water.elevation(self.xy, self.t))
+
+    @property
+    def eta_rate(self) -> float:
+        """Its rate, m/s (a central difference over 1 ms)."""
+        h = 5e-4
+        return float(self.water.elevation(self.xy, self.t + h) - self.water.elevation(self.xy, self.t - h)) / (2 * h)
+
+
+class Controller:
+    """A take-off's law, stateful (timers, integrals): `law` once per step, in time order; `reset` to start again."""
+
+    name = "controller"
+
+    def law(self, joint: JointState, wave: WaveState) -> Law:
+        raise NotImplementedError
+
+    def reset(self) -> None:
+        pass
+
+    @property
+    def linear(self) -> Law | None:
+        """The law when it never changes (passive, reactive): the run may keep it packed; None otherwise."""
+        return None
+
+
+class Passive(Controller):
+    name = "passive"
+
+    def __init__(self, stiffness: float, damping: float):
+        self._law = Law(0.0, float(stiffness), float(damping))
+
+    def law(self, joint, wave) -> Law:
+        return self._law
+
+    @property
+    def linear(self) -> Law:
+        return self._law
+
+
+class Reactive(Passive):
+    name = "reactive"
+
+
+class _Stops(Controller):
+    """Something done for `hold` seconds from each stop of the joint (a change of the rate's sign, timed by linear
+    interpolation between the two steps it falls between)."""
+
+    def __init__(self, damping: float, hold: float, special: Law):
+        self.free, self.hold, self.special = Law(0.0, 0.0, float(damping)), float(hold), special
+        self.reset()
+
+    def reset(self) -> None:
+        self.until, self.last = -math.inf, None
+
+    def law(self, joint, wave) -> Law:
+        if joint.t < self.until - 1e-9:
+            return self.special
+        last, self.last = self.last, joint
+        if last is not None and last.rate * joint.rate < 0.0 and self.hold > 0.0:
+            stop = last.t + (joint.t - last.t) * last.rate / (last.rate - joint.rate)
+            self.until, self.last = stop + self.hold, None
+            if joint.t < self.until - 1e-9:
+                return self.special
+        return self.free
+
+
+class Latching(_Stops):
+    name = "latching"
+
+    def __init__(self, damping: float, latch_time: float, mass: float):
+        super().__init__(damping, latch_time, Law())
+        self.mass = float(mass)
+
+    def law(self, joint, wave) -> Law:
+        law = super().law(joint, wave)
+        return Law(0.0, 0.0, BRAKE * self.mass / joint.dt) if law is self.special else law
+
+
+class Declutching(_Stops):
+    name = "declutching"
+
+    def __init__(self, damping: float, declutch_time: float):
+        super().__init__(damping, declutch_time, Law())
+
+
+class PI(Controller):
+    """F = -Kp (theta_dot - r) - Ki (theta - theta_start - integral of r): the integral is the coordinate's, so the
+    Ki term acts inside the kick as a spring; `reference` r(t) (m/s or rad/s) defaults to 0."""
+
+    name = "pi"
+
+    def __init__(self, kp: float, ki: float, reference: Callable[[float], float] | None = None):
+        self.kp, self.ki, self.reference = float(kp), float(ki), reference
+        self.reset()
+
+    def reset(self) -> None:
+        self.origin, self.last = None, None  # theta at which the integral is zero; the last (t, theta, r)
+
+    def law(self, joint, wave) -> Law:
+        r = 0.0 if self.reference is None else float(self.reference(joint.t))
+        if self.origin is None:
+            self.origin = joint.theta
+        elif self.reference is not None:
+            self.origin += 0.5 * (self.last[2] + r) * (joint.t - self.last[0])  # the reference's integral, trapezoidal
+        self.last = (joint.t, joint.theta, r)
+        return Law(self.kp * r + self.ki * self.origin, self.ki, self.kp)
+
+    def saturated(self, joint: JointState) -> None:
+        """The force was limited over the last step: the integral keeps its value (no wind-up)."""
+        if self.last is not None and self.origin is not None:
+            self.origin += joint.theta - self.last[1]
+
+
+class Callback(Controller):
+    """A Python callable (t, JointState, WaveState) -> force, held over each step."""
+
+    def __init__(self, fn: Callable):
+        self.fn, self.name = fn, getattr(fn, "__name__", "callable")
+
+    def law(self, joint, wave) -> Law:
+        return Law(float(self.fn(joint.t, joint, wave)))
+
+
+class Limited(Controller):
+    """Another controller's force kept within +-limit: past it, the limit held over the step."""
+
+    def __init__(self, inner: Controller, limit: float):
+        self.inner, self.limit, self.name = inner, float(limit), inner.name
+        self._over = False
+
+    def reset(self) -> None:
+        self.inner.reset()
+        self._over = False
+
+    def law(self, joint, wave) -> Law:
+        if self._over and isinstance(self.inner, PI):
+            self.inner.saturated(joint)
+        law = self.inner.law(joint, wave)
+        F = law.at(joint.theta, joint.rate)
+        self._over = abs(F) > self.limit
+        return Law(math.copysign(self.limit, F)) if self._over else law
+
+
+def of_constraint(c, mass: float) -> Controller:
+    """The controller a [constraint] table names (`mass`: the joint's generalised mass, for a latch's brake)."""
+    kind = c.controller
+    if kind in ("passive", "reactive"):
+        made = (Passive if kind == "passive" else Reactive)(c.pto_stiffness, c.pto_damping)
+    elif kind == "latching":
+        made = Latching(c.pto_damping, c.latch_time, mass)
+    elif kind == "declutching":
+        made = Declutching(c.pto_damping, c.declutch_time)
+    else:
+        made = PI(c.pto_damping, c.pto_stiffness)
+    return made if c.pto_max_force is None else Limited(made, c.pto_max_force)
+
+
+def wrap(controller) -> Controller:
+    """A Controller as given, or a callable wrapped as one."""
+    if isinstance(controller, Controller):
+        return controller
+    if callable(controller):
+        return Callback(controller)
+    raise TypeError(f"a controller is a callable (t, joint, wave) -> force or a sim.control.Controller, not {type(controller).__name__}")
+
+
+def stiffness_check(kind: str, k: float, K: float, where: str = "") -> None:
+    """A negative take-off spring must leave the joint's total stiffness positive: K (the water's and gravity's along
+    the joint, at rest) + k > 0. Raises ConfigError otherwise."""
+    from .errors import ConfigError
+
+    if k < 0.0 and K + k <= 0.0:
+        raise ConfigError(
+            f"{where}{kind} control: pto_stiffness {k:g} leaves the joint's total stiffness K + k = {K + k:.4g} <= 0 (K = {K:.4g} from "
+            f"the water and gravity): the body would leave its rest; keep pto_stiffness > {-K:.4g}"
+        )

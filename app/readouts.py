@@ -32,8 +32,9 @@ SERIES = (
     ("F", "|F| (N)", "#c92a2a", lambda f: float(np.linalg.norm(f.force_world))),
     ("E", "E total (J)", "#7048e8", lambda f: f.E_total),
     ("P", "P take-off (W)", "#e8590c", lambda f: f.P_pto),
+    ("Fp", "F take-off (N)", "#d6336c", lambda f: f.F_pto),
 )
-JOINT_ONLY = ("P",)
+JOINT_ONLY = ("P", "Fp")
 """Plots shown only while the body has a joint to the world."""
 NOISE = 1e-9
 """Plotted values are rounded to this fraction of the body's own scale (`scales`): round-off (|F| of 1e-13 N
@@ -56,10 +57,10 @@ X_STEPS = 20
 
 def scales(body, g: float) -> np.ndarray:
     """The natural size of each plotted quantity for a body (SERIES order): its radius, M r sqrt(g r),
-    its weight, its weight times its radius, its weight times sqrt(g r)."""
+    its weight, its weight times its radius, its weight times sqrt(g r), its weight."""
     r, weight = max(body.radius, 1e-6), body.mass * max(g, 1e-6)
     speed = np.sqrt(max(g, 1e-6) * r)
-    return np.array([r, body.mass * r * speed, weight, weight * r, weight * speed])
+    return np.array([r, body.mass * r * speed, weight, weight * r, weight * speed, weight])
 
 
 def denoise(values: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -151,8 +152,8 @@ class Readouts:
             return  # paused: nothing new to draw
         size = scales(snap.body, snap.params.g)
         raw = [f(frame) for *_, f in SERIES]
-        if snap.system:  # the chosen body's take-off is its joint's (the run's frame lists each joint's power)
-            raw[-1] = next((p for name, _, _, p, *_ in snap.run.joints if name == snap.settings.focus), 0.0)
+        if snap.system:  # the chosen body's take-off is its joint's (the run's frame lists each joint's power and force)
+            raw[-2:] = next(((p, force) for name, _, _, p, _, force in snap.run.joints if name == snap.settings.focus), (0.0, 0.0))
         values = denoise(np.array(raw, dtype=float), size)
         self._history.append((frame.t, *values))
         data = np.array(self._history, dtype=float).T
@@ -181,8 +182,9 @@ def _system(snap: Snapshot) -> list[str]:
     """A scene of several bodies: where each body is, each joint's stroke and take-off, the lines' pull, the energies of all."""
     run = snap.run
     out = [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies)]
-    for name, theta, _, p, e, *_ in run.joints:
-        out.append(f"Joint {name}: stroke **{theta:+.4f}** · take-off **{p / 1e3:.4g} kW** now, **{e / 1e6:.4g} MJ** absorbed")
+    for name, theta, _, p, e, force in run.joints:
+        out.append(f"Joint {name}: stroke **{theta:+.4f}** · take-off **{force / 1e3:.4g} kN**, **{p / 1e3:.4g} kW** now, "
+                   f"**{e / 1e6:.4g} MJ** absorbed")  # fmt: skip
     if run.mooring:
         out.append(
             f"Mooring: pull **{np.linalg.norm(run.mooring[:3]) / 1e3:.4g} kN**, largest fairlead tension **{run.mooring[3] / 1e3:.4g} kN**"
@@ -211,7 +213,8 @@ def describe(snap: Snapshot) -> str:
         lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
                      f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**")  # fmt: skip
     if s.joint != "free" and not snap.system:
-        lines.append(f"Joint: {s.joint} to the seabed · power take-off **{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")
+        lines.append(f"Joint: {s.joint} to the seabed · power take-off ({s.controller}) **{f.F_pto:.4g} N**, "
+                     f"**{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")  # fmt: skip
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "

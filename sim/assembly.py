@@ -80,8 +80,7 @@ class Assembly(Simulation):
         from .control import of_constraint, stiffness_check
 
         system, entries = self.system, {e.name: e for e in self.scene.bodies}
-        pose = system.pose(self.start)
-        mass, stiff = system.inertia(pose), None
+        stiff = None
         out = []
         for j, g in enumerate(system.joints):
             c, i = entries[g.name].constraint, g.dofs.start
@@ -90,8 +89,10 @@ class Assembly(Simulation):
                     from .system_frequency import stiffness
 
                     stiff = stiffness(system, replace(self.start, theta=np.zeros_like(self.start.theta), v=np.zeros_like(self.start.v)))
-                stiffness_check(c.controller, c.pto_stiffness, stiff[i, i] - c.pto_stiffness, f"[[bodies]] {g.name}: ")
-            controller = self._custom.get(j) or of_constraint(c, float(mass[i, i]))
+                e = np.zeros(system.n_dofs)
+                e[i] = 1.0
+                stiffness_check(c.controller, c.pto_stiffness, stiff - c.pto_stiffness * np.outer(e, e), e, f"[[bodies]] {g.name}: ")
+            controller = self._custom.get(j) or of_constraint(c)
             controller.reset()
             out.append(controller)
         system.laws = [c.linear or law for c, law in zip(out, system.passive_laws())]
@@ -132,9 +133,15 @@ class Assembly(Simulation):
                 continue
             theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
             law = controller.law(JointState(s.t, theta, rate, self.dt), WaveState(system.water, g.origin[:2], s.t))
-            if law.stiffness != system.laws[j].stiffness:
+            if law.stiffness != system.laws[j].stiffness or (law.held and rate != 0.0):
                 absorbed = absorbed.copy() if absorbed is s.absorbed else absorbed
                 absorbed[g.coordinate] -= 0.5 * (law.stiffness - system.laws[j].stiffness) * theta**2
+            if law.held and rate != 0.0:  # the lock takes the joint's rate and its share of the kinetic energy
+                M = system.inertia(system.pose(s))
+                v = s.v.copy()
+                v[g.dofs.start] = 0.0
+                absorbed[g.coordinate] += 0.5 * float(s.v @ M @ s.v - v @ M @ v)
+                s = replace(s, v=v)
             system.laws[j] = law
         if absorbed is not s.absorbed:
             self.state = replace(s, absorbed=absorbed)
@@ -146,7 +153,7 @@ class Assembly(Simulation):
             from .kernels.system_layout import take_offs
 
             tree = self.stepper.tree
-            tree.stiffness[:], tree.damping[:], tree.force[:] = take_offs(self.system)
+            tree.stiffness[:], tree.damping[:], tree.force[:], tree.held[:] = take_offs(self.system)
 
     @property
     def kernels_ready(self) -> bool:
@@ -343,7 +350,9 @@ class Assembly(Simulation):
             joints = []
             for g, law in zip(self.system.joints, self.system.laws):
                 theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
-                joints.append((g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate)))
+                joints.append(
+                    (g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate))
+                )
             lines, pull, tensions = (), (), ()
             if self.moorings is not None:
                 lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
@@ -429,6 +438,7 @@ class AssemblyFrame:
 
 def _only_take_offs(old: SceneConfig, new: SceneConfig) -> bool:
     """Whether the scenes differ in their joints' take-offs alone."""
+
     def strip(scene):
         bodies = tuple(replace(e, constraint=replace(e.constraint, pto_damping=0.0, pto_stiffness=0.0, controller="passive", latch_time=0.0,
                                                      declutch_time=0.0, pto_max_force=None)) for e in scene.bodies)  # fmt: skip

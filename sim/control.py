@@ -15,14 +15,16 @@ Shipped (`[constraint] controller`, the gains beside it):
 - `reactive`: the same law with a negative spring allowed: complex-conjugate control at one frequency is
   k = omega^2 (m + A(omega)) - C, c = B(omega) (Falnes 2002, Ocean Waves and Oscillating Systems, ch. 6). The total
   stiffness along the joint, C + k, must stay positive (checked at the start: otherwise the body leaves its rest);
-- `latching`: the damper, and a brake at each stop: when theta_dot changes sign the coordinate is held for `latch_time`
-  (Babarit & Clement 2006, Applied Ocean Research 28: 77-91; for regular waves about (T - T_n) / 2). The brake is a
-  damper with time constant dt / 20 (the kick solves it exactly: the body creeps at under 1e-3 of its speed);
+- `latching`: the damper, and a lock at each stop: when theta_dot changes sign the coordinate is held for `latch_time`
+  (Babarit & Clement 2006, Applied Ocean Research 28: 77-91; for regular waves about (T - T_n) / 2). The lock is exact
+  (the joint's rate set to zero and kept there: the other coordinates move on without it); it engages at the first
+  step start after the stop and releases at the step start nearest its end;
 - `declutching`: no take-off force for `declutch_time` after each stop, the damper the rest of the time
   (Babarit, Guglielmi & Clement 2009, Ocean Engineering 36: 1015-1024);
 - `pi`: a proportional-integral loop on the rate's error from a reference (zero, or a callable of t in the API):
   F = -Kp e - Ki integral(e), Kp = pto_damping, Ki = pto_stiffness; the integral stops while the force is limited.
-Any of them takes `pto_max_force`: past it the force is held at the limit over the step (explicit there).
+Any of them takes `pto_max_force`: where the law's force at a step's start passes it, the limit is held over that step
+(explicit there; within a step that starts inside the limit the law runs on, by at most one step's change).
 
 From Python a controller is any callable (t, JointState, WaveState) -> force, or a Controller (its own law):
 `Simulation.control(fn)` (one body) or `Simulation.control(fn, "float")`. A callable's force is held over each step
@@ -37,21 +39,21 @@ from dataclasses import dataclass
 from typing import Callable
 
 CONTROLLERS = ("passive", "reactive", "latching", "declutching", "pi")
-BRAKE = 20.0
-"""A latch's brake: damping BRAKE M_q / dt (time constant dt / BRAKE): held to well under a per mille, and still small
-enough for the kick's matrix exponential (its exponent stays near BRAKE / 2)."""
 
 
 @dataclass(frozen=True)
 class Law:
-    """F = force - stiffness theta - damping theta_dot, held over one step."""
+    """F = force - stiffness theta - damping theta_dot, held over one step; or `held`: the joint locked over the step
+    (a latch: its rate set to zero, the kinetic energy that takes counted as absorbed, and kept there)."""
 
     force: float = 0.0
     stiffness: float = 0.0
     damping: float = 0.0
+    held: bool = False
 
     def at(self, theta: float, rate: float) -> float:
-        return self.force - self.stiffness * theta - self.damping * rate
+        """The force at (theta, theta_dot) (a lock's reaction is not known here: 0)."""
+        return 0.0 if self.held else self.force - self.stiffness * theta - self.damping * rate
 
 
 @dataclass(frozen=True)
@@ -120,7 +122,7 @@ class Reactive(Passive):
 
 class _Stops(Controller):
     """Something done for `hold` seconds from each stop of the joint (a change of the rate's sign, timed by linear
-    interpolation between the two steps it falls between)."""
+    interpolation between the two steps it falls between), ending at the step start nearest its end."""
 
     def __init__(self, damping: float, hold: float, special: Law):
         self.free, self.hold, self.special = Law(0.0, 0.0, float(damping)), float(hold), special
@@ -130,13 +132,13 @@ class _Stops(Controller):
         self.until, self.last = -math.inf, None
 
     def law(self, joint, wave) -> Law:
-        if joint.t < self.until - 1e-9:
+        if joint.t + 0.5 * joint.dt < self.until:  # the step starts nearer before the hold's end than after it
             return self.special
         last, self.last = self.last, joint
         if last is not None and last.rate * joint.rate < 0.0 and self.hold > 0.0:
             stop = last.t + (joint.t - last.t) * last.rate / (last.rate - joint.rate)
             self.until, self.last = stop + self.hold, None
-            if joint.t < self.until - 1e-9:
+            if joint.t + 0.5 * joint.dt < self.until:
                 return self.special
         return self.free
 
@@ -144,13 +146,8 @@ class _Stops(Controller):
 class Latching(_Stops):
     name = "latching"
 
-    def __init__(self, damping: float, latch_time: float, mass: float):
-        super().__init__(damping, latch_time, Law())
-        self.mass = float(mass)
-
-    def law(self, joint, wave) -> Law:
-        law = super().law(joint, wave)
-        return Law(0.0, 0.0, BRAKE * self.mass / joint.dt) if law is self.special else law
+    def __init__(self, damping: float, latch_time: float):
+        super().__init__(damping, latch_time, Law(held=True))
 
 
 class Declutching(_Stops):
@@ -218,13 +215,13 @@ class Limited(Controller):
         return Law(math.copysign(self.limit, F)) if self._over else law
 
 
-def of_constraint(c, mass: float) -> Controller:
-    """The controller a [constraint] table names (`mass`: the joint's generalised mass, for a latch's brake)."""
+def of_constraint(c) -> Controller:
+    """The controller a [constraint] table names."""
     kind = c.controller
     if kind in ("passive", "reactive"):
         made = (Passive if kind == "passive" else Reactive)(c.pto_stiffness, c.pto_damping)
     elif kind == "latching":
-        made = Latching(c.pto_damping, c.latch_time, mass)
+        made = Latching(c.pto_damping, c.latch_time)
     elif kind == "declutching":
         made = Declutching(c.pto_damping, c.declutch_time)
     else:
@@ -241,13 +238,26 @@ def wrap(controller) -> Controller:
     raise TypeError(f"a controller is a callable (t, joint, wave) -> force or a sim.control.Controller, not {type(controller).__name__}")
 
 
-def stiffness_check(kind: str, k: float, K: float, where: str = "") -> None:
-    """A negative take-off spring must leave the joint's total stiffness positive: K (the water's and gravity's along
-    the joint, at rest) + k > 0. Raises ConfigError otherwise."""
+def stiffness_check(kind: str, k: float, K0, e, where: str = "") -> None:
+    """A negative take-off spring k on the coordinate e ((d,)) must leave the stiffness of the whole system positive
+    (semi-)definite: K0 (d, d), the water's, gravity's and the other springs' at rest, plus k e e^T. Otherwise some motion
+    (not always the joint's own: a float's spring against its spar's heave) leaves the rest: ConfigError, with the
+    bound -1 / (e^T K0^+ e) (for one body -K)."""
+    import numpy as np
+
     from .errors import ConfigError
 
-    if k < 0.0 and K + k <= 0.0:
-        raise ConfigError(
-            f"{where}{kind} control: pto_stiffness {k:g} leaves the joint's total stiffness K + k = {K + k:.4g} <= 0 (K = {K:.4g} from "
-            f"the water and gravity): the body would leave its rest; keep pto_stiffness > {-K:.4g}"
-        )
+    if k >= 0.0:
+        return
+    K0, e = np.atleast_2d(np.asarray(K0, float)), np.atleast_1d(np.asarray(e, float))
+    K0 = 0.5 * (K0 + K0.T)
+    scale = float(np.abs(np.linalg.eigvalsh(K0)).max(initial=0.0))
+    lowest = float(np.linalg.eigvalsh(K0 + k * np.outer(e, e)).min())
+    if lowest >= -1e-9 * scale:
+        return
+    reach = float(e @ np.linalg.pinv(K0) @ e)
+    bound = f"keep pto_stiffness > {-1.0 / reach:.4g}" if reach > 0 else "this joint's stiffness along it is not positive"
+    raise ConfigError(
+        f"{where}{kind} control: pto_stiffness {k:g} leaves the stiffness at rest with a negative direction (eigenvalue "
+        f"{lowest:.4g}): the bodies would leave their rest; {bound}"
+    )

@@ -140,6 +140,14 @@ def step(model, joint: WorldJoint, s: State, dt: float, theta: float, law=None) 
     memory, radiated = s.memory, s.E_rad
     if not joint.dofs:
         return State(s.t + dt, joint.x0, matrix_to_quat(joint.R0), np.zeros(3), np.zeros(3), memory, radiated), 0.0, 0.0
+    if law.held:  # locked: the rate's kinetic energy to the lock, the memory on with the body still
+        x, R = joint.pose(theta)
+        J = joint.jacobian(x)
+        rad = model.radiation
+        mass = joint.mass(body, R, J) if rad is None else float(J @ rad.mass_matrix(body, R) @ J)
+        memory, radiated = _drift_memory(model, joint, theta, theta, 0.0, memory, radiated, dt)
+        new = joint.state(body, s.t + dt, theta, 0.0, State(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, radiated))
+        return new, 0.5 * mass * rate * rate, theta
     absorbed = 0.0
     for half in (0, 1):
         if half == 1:

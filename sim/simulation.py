@@ -356,12 +356,8 @@ class Simulation:
             return
         c = self.scene.constraint
         if self._custom is None and c.pto_stiffness < 0:
-            stiffness_check(c.controller, c.pto_stiffness, stiffness_along(self.model, j))
-        x, R = j.pose(0.0)
-        J = j.jacobian(x)
-        rad = self.model.radiation
-        mass = j.mass(self.body, R, J) if rad is None else float(J @ rad.mass_matrix(self.body, R) @ J)
-        self.controller = self._custom or of_constraint(c, mass)
+            stiffness_check(c.controller, c.pto_stiffness, [[stiffness_along(self.model, j)]], [1.0])
+        self.controller = self._custom or of_constraint(c)
         self.controller.reset()
         self._law = self.controller.linear or Law(0.0, j.stiffness, j.damping)
 

@@ -454,11 +454,16 @@ class System:
         """v over h under M v_dot = Q0 - D v (linearised at s.v), solved exactly; each take-off's absorbed energy over it
         (its law's damper and force: the spring's energy is stored, E_spring)."""
         M, Q, D = self.affine(s, s.v)
-        n = self.n_dofs
+        n, v0 = self.n_dofs, s.v
+        held = [g.dofs.start for g, law in zip(self.joints, self.laws) if law.held]
+        if held:  # a locked joint (a latch): its rate stays zero, the other coordinates move without it
+            M, Q, D, v0 = M.copy(), Q.copy(), D.copy(), s.v.copy()
+            M[held, :], M[:, held], D[held, :], D[:, held], Q[held], v0[held] = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            M[held, held] = 1.0
         A = np.zeros((n + 1, n + 1))  # z = (v, 1): z_dot = A z
         A[:n, :n] = -np.linalg.solve(M, D)
         A[:n, n] = np.linalg.solve(M, Q)
-        z = np.append(s.v, 1.0)
+        z = np.append(v0, 1.0)
         # Van Loan: expm([[A, z z^T], [0, -A^T]] h) has e^{Ah} ... and the integral of z z^T over the step
         big = np.zeros((2 * n + 2, 2 * n + 2))
         big[: n + 1, : n + 1], big[: n + 1, n + 1 :], big[n + 1 :, n + 1 :] = A, np.outer(z, z), -A.T

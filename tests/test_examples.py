@@ -83,6 +83,18 @@ def test_07_dask_sweep_runs_on_a_cluster_and_finds_the_linear_period():
     assert "backend dask" in out and abs(period / linear - 1) < 0.01
 
 
+@pytest.mark.slow
+def test_08_take_off_control_absorbs_what_the_frequency_domain_says():
+    """Each run's mean power beside its frequency-domain value: the best damper and the reactive optimum within 2 %, the
+    damper as a Python function as the scene's; latching many times the damper's."""
+    out = run("08_take_off_control.py", "--t-end", "105")
+    rows = {line.split()[0] + line.split()[1]: numbers(line)[-2:] for line in out.splitlines()[2:]}
+    for key in ("bestdamper", "reactivek", "thebest"):
+        power, predicted = rows[key]
+        assert power == pytest.approx(predicted, rel=0.02), key
+    assert numbers(next(line for line in out.splitlines() if line.startswith("latching")))[-1] > 5 * rows["bestdamper"][0]
+
+
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
 def test_every_examples_help_says_what_it_demonstrates(path):
     """`python examples/NN_x.py --help` shows the script's docstring (issue 39: it showed the flags alone)."""

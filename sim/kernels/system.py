@@ -335,6 +335,16 @@ def kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w):
         Q += w.b
         D += w.B
     w.LU[:] = M  # [-M^-1 D | M^-1 Q] in one elimination
+    for gi in tree.joints:  # a locked joint (a latch): its rate stays zero, the other coordinates move without it
+        if tree.held[gi] > 0.0:
+            i = tree.dof[gi]
+            v[i] = 0.0
+            w.LU[i, :] = 0.0
+            w.LU[:, i] = 0.0
+            w.LU[i, i] = 1.0
+            D[i, :] = 0.0
+            D[:, i] = 0.0
+            Q[i] = 0.0
     w.rhs[:, :n] = D
     w.rhs[:, n] = Q
     solve_into(w.LU, w.rhs)

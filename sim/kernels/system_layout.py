@@ -45,6 +45,8 @@ class Tree(NamedTuple):
     """(g,) the take-off's damper, N s/m or N m s/rad."""
     force: np.ndarray
     """(g,) the take-off's force held over the step, N or N m (a controller's: control.py)."""
+    held: np.ndarray
+    """(g,) 1.0 where the joint is locked over the step (a latch), else 0.0."""
     joints: np.ndarray
     """(j,) int64 the groups with a take-off (prismatic and revolute: System.joints)."""
     group: np.ndarray
@@ -136,12 +138,13 @@ def sparse_rows(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.cumsum(indptr), cols.astype(np.int64), np.ascontiguousarray(M[rows, cols])
 
 
-def take_offs(system) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(stiffness, damping, force) of each group's take-off: its joint's law over the next step (System.laws), zeros for the rest."""
-    out = np.zeros((3, len(system.groups)))
+def take_offs(system) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(stiffness, damping, force, held) of each group's take-off: its joint's law over the next step (System.laws), zeros
+    for the rest."""
+    out = np.zeros((4, len(system.groups)))
     for g, law in zip(system.joints, system.laws):
-        out[:, system.groups.index(g)] = (law.stiffness, law.damping, law.force)
-    return out[0], out[1], out[2]
+        out[:, system.groups.index(g)] = (law.stiffness, law.damping, law.force, float(law.held))
+    return out[0], out[1], out[2], out[3]
 
 
 def tree_pack(system) -> Tree:

@@ -96,6 +96,7 @@ class Assembly(Simulation):
             controller.reset()
             out.append(controller)
         system.laws = [c.linear or law for c, law in zip(out, system.passive_laws())]
+        self._group_index = [system.groups.index(g) for g in system.joints]
         return out
 
     @property
@@ -121,31 +122,30 @@ class Assembly(Simulation):
         self._check_exact()
         self._repack()
 
-    def _next_laws(self) -> None:
-        """Each switching controller's law for the step from the state now (the spring's energy kept whole where its
-        stiffness changes: the difference goes to E_pto), into the system and the compiled step's tree."""
+    def _laws_into(self, t: float, theta: np.ndarray, v: np.ndarray, absorbed: np.ndarray, inertia) -> None:
+        """Each switching controller's law for the step from (t, theta, v), into the system and the compiled step's tree.
+        Where a spring's stiffness changes, the difference of its energy goes to the take-off's absorbed energy (E_total +
+        E_pto stays whole); where a lock engages, the joint's rate is zeroed and the kinetic energy that takes is absorbed.
+        `v` and `absorbed` change in place; `inertia()` gives the mass matrix there (asked only when a lock engages)."""
         from .control import JointState, WaveState
 
-        s, system = self.state, self.system
-        absorbed = s.absorbed
+        system, tree = self.system, None if self.stepper is None else self.stepper.tree
         for j, (g, controller) in enumerate(zip(system.joints, self.controllers)):
             if controller.linear is not None:
                 continue
-            theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
-            law = controller.law(JointState(s.t, theta, rate, self.dt), WaveState(system.water, g.origin[:2], s.t))
-            if law.stiffness != system.laws[j].stiffness or (law.held and rate != 0.0):
-                absorbed = absorbed.copy() if absorbed is s.absorbed else absorbed
-                absorbed[g.coordinate] -= 0.5 * (law.stiffness - system.laws[j].stiffness) * theta**2
-            if law.held and rate != 0.0:  # the lock takes the joint's rate and its share of the kinetic energy
-                M = system.inertia(system.pose(s))
-                v = s.v.copy()
-                v[g.dofs.start] = 0.0
-                absorbed[g.coordinate] += 0.5 * float(s.v @ M @ s.v - v @ M @ v)
-                s = replace(s, v=v)
+            i, c = g.dofs.start, g.coordinate
+            q, rate = float(theta[c]), float(v[i])
+            law, old = controller.law(JointState(t, q, rate, self.dt), WaveState(system.water, g.origin[:2], t)), system.laws[j]
+            absorbed[c] -= 0.5 * (law.stiffness - old.stiffness) * q * q
+            if law.held and rate != 0.0:
+                M = inertia()
+                before = float(v @ M @ v)
+                v[i] = 0.0
+                absorbed[c] += 0.5 * (before - float(v @ M @ v))
             system.laws[j] = law
-        if absorbed is not s.absorbed:
-            self.state = replace(s, absorbed=absorbed)
-        self._repack()
+            if tree is not None:
+                gi = self._group_index[j]
+                tree.stiffness[gi], tree.damping[gi], tree.force[gi], tree.held[gi] = law.stiffness, law.damping, law.force, float(law.held)
 
     def _repack(self) -> None:
         """The laws into the compiled step's tree (read at each call)."""
@@ -317,16 +317,19 @@ class Assembly(Simulation):
                 raise SimulationDiverged(f"the state became non-finite by t = {new.t:.6g} s")
             self.state = new
             return new
-        if self.stepper is not None and self.moorings is None and not self.switching:  # all n steps in one compiled call
-            new, _ = self.stepper.step(self.state, self.dt, n)
+        switching = self.switching
+        if self.stepper is not None and self.moorings is None:  # all n steps in one compiled call (or a loop of two a step)
+            new, _ = self.stepper.step(self.state, self.dt, n, self._laws_into if switching else None)
             if not new.is_finite():
                 raise SimulationDiverged(f"the state became non-finite at t = {new.t:.6g} s: try a smaller time step")
             self.state = new
             return new
-        switching = self.switching
         for _ in range(n):
             if switching:  # the controllers' laws for this step (a call back into Python a step)
-                self._next_laws()
+                s, system = self.state, self.system
+                v, absorbed = s.v.copy(), s.absorbed.copy()
+                self._laws_into(s.t, s.theta, v, absorbed, lambda: system.inertia(system.pose(s)))
+                self.state = replace(s, v=v, absorbed=absorbed)
             if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
                 x, R, J = self._moored_pose()
                 nu = J @ self.state.v

@@ -375,6 +375,9 @@ class Simulation:
         """The controller's law for the step from s."""
         from .control import JointState, WaveState
 
+        if self.controller.linear is not None:  # a spring and damper: nothing to ask
+            self._law = self.controller.linear
+            return self._law
         j = self.joint
         self._law = self.controller.law(JointState(s.t, self.joint_theta, j.rate(self.body, s), self.dt),
                                         WaveState(self.model.water, j.x0[:2], s.t))  # fmt: skip

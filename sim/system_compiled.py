@@ -74,20 +74,36 @@ class CompiledStep:
         """(k, 6) each body's held load (zeros: none)."""
         return np.array([np.zeros(6) if h is None else np.asarray(h, float) for h in self.system.held]).reshape(-1, 6)
 
-    def step(self, s: SystemState, dt: float, n: int = 1) -> tuple[SystemState, int]:
-        """n steps of dt from s (stopping after one whose state is non-finite): the state and the steps taken."""
+    def step(self, s: SystemState, dt: float, n: int = 1, before=None) -> tuple[SystemState, int]:
+        """n steps of dt from s (stopping after one whose state is non-finite): the state and the steps taken. `before`:
+        called at each step's start as before(t, theta, v, absorbed, inertia) (the take-offs' controllers: they set the
+        tree's laws and may change v and absorbed in place; inertia() the mass matrix there); then a compiled call a step."""
         from .kernels import system as kernels
 
         if n < 1:
             return s, 0
         mem, held = self.memory(dt), self.held()
         args = (float(s.t), s.x_free, s.q_free, s.theta, s.v, s.absorbed, s.memory, float(s.E_rad))
-        if self.linear.on:
+        if self.linear.on and before is None:
             *out, taken = kernels.advance(self.tree, self.linear, mem, *args, held, dt, n)
             return self._state(*out), taken
+        if self.linear.on:  # a controller between the steps: one compiled call each
+            taken, state = 0, s
+            for taken in range(1, n + 1):
+                v, absorbed = state.v.copy(), state.absorbed.copy()
+                before(state.t, state.theta, v, absorbed, lambda: self.configuration(state, dt)[3])  # noqa: B023 (called at once)
+                args = (float(state.t), state.x_free, state.q_free, state.theta, v, absorbed, state.memory, float(state.E_rad))
+                *out, _ = kernels.advance(self.tree, self.linear, mem, *args, held, dt, 1)
+                state = self._state(*out)
+                if not state.is_finite():
+                    break
+            return state, taken
         t, x_free, q_free, theta, v, absorbed, memory, E_rad = args
+        v, absorbed = v.copy(), absorbed.copy()
         config = self.configuration(s, dt)
         for taken in range(1, n + 1):
+            if before is not None:
+                before(t, theta, v, absorbed, lambda: config[3])  # noqa: B023 (called at once)
             f, D = self._loads(config, t, v)
             config, x_free, q_free, theta, v, absorbed, memory, E_rad = kernels.first_half(
                 self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt

@@ -305,8 +305,11 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     linear = with_overrides(sea, fluid__hydro="linear")  # on slides: a linear system, stepped exactly
     spar = linear.bodies[0]
     planar = dataclasses.replace(spar, constraint=dataclasses.replace(spar.constraint, joint="planar", axis=(0.0, 1.0, 0.0)))
+    planar_scene = dataclasses.replace(linear, bodies=(planar, *linear.bodies[1:]))
+    latching = with_overrides(planar_scene, float__controller="latching", float__latch_time=1.0)  # a controller: a call back a step
     cases += [("rm3, JONSWAP, 64 components, dt 0.01 s", linear),
-              ("rm3 (planar spar), JONSWAP, 64 components, dt 0.01 s", dataclasses.replace(linear, bodies=(planar, *linear.bodies[1:])))]  # fmt: skip
+              ("rm3 (planar spar), JONSWAP, 64 components, dt 0.01 s", planar_scene),
+              ("rm3 (planar spar), latching float, JONSWAP, 64 components, dt 0.01 s", latching)]  # fmt: skip
     rows = []
     for label, scene in cases:
         linear = scene.fluid.hydro == "linear"

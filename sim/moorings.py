@@ -371,10 +371,11 @@ class Moorings:
     next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
 
     def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0,
-                 at: np.ndarray | None = None):  # fmt: skip
+                 at: np.ndarray | None = None, start: tuple | None = None):  # fmt: skip
         """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0. `at`: the
         lines settle with the body's centre of mass there instead (the fairleads still those of x0: a file's are where
-        the body starts), as the rest pose's stiffness asks."""
+        the body starts), as the rest pose's stiffness asks. `start`: ((k, 3) positions, (k, 3) velocities) of the
+        coupled points to settle from instead (the lines alone, lines_alone.py)."""
         md = moordyn()
         self._md = md
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
@@ -401,7 +402,7 @@ class Moorings:
             self.close()
             raise
         x0 = x0 if at is None else np.asarray(at, float)
-        x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0)
+        x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0) if start is None else (np.ravel(start[0]), np.ravel(start[1]))
         status = _settle(md, self._system, x, v)
         if status:
             self.close()
@@ -506,6 +507,16 @@ class Moorings:
         viewer colours the lines by it)."""
         md = self._md
         return [np.linalg.norm([md.GetLineNodeTen(ln, i) for i in range(md.GetLineN(ln) + 1)], axis=1) for ln in self._lines]
+
+    def end_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """((lines,) at end A, (lines,) at end B): the magnitude of the net force on each line's end nodes, N: what
+        OpenFAST's MoorDyn reports as AnchTen and FairTen (the end segment's tension with the half segment lumped at the
+        node: GetLineFairTen, the segment's alone, is lower by about its weight's share)."""
+        md = self._md
+        ends = [
+            (np.linalg.norm(md.GetLineNodeForce(ln, 0)), np.linalg.norm(md.GetLineNodeForce(ln, md.GetLineN(ln)))) for ln in self._lines
+        ]
+        return np.array([a for a, _ in ends]), np.array([b for _, b in ends])
 
     def fairlead_tensions(self) -> np.ndarray:
         """(k,) the magnitude of each fairlead's pull, N."""

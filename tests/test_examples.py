@@ -83,6 +83,17 @@ def test_07_dask_sweep_runs_on_a_cluster_and_finds_the_linear_period():
     assert "backend dask" in out and abs(period / linear - 1) < 0.01
 
 
+def test_09_lines_alone_pull_as_the_elastic_catenary():
+    """Each fairlead's tension under the slow surge is the catenary's within 1 % (the first row, at rest from MoorDyn's
+    own start, 0.8 %)."""
+    out = run("09_lines_alone.py")
+    rows = [numbers(line) for line in out.splitlines()[1:]]
+    assert len(rows) > 5 and rows[-1][0] == pytest.approx(8.0)
+    for row in rows:
+        for moordyn, catenary in zip(row[1::2], row[2::2]):
+            assert moordyn == pytest.approx(catenary, rel=0.01), row
+
+
 @pytest.mark.slow
 def test_08_take_off_control_absorbs_what_the_frequency_domain_says():
     """Each run's mean power beside its frequency-domain value: the best damper and the reactive optimum within 2 %, the

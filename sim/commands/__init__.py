@@ -1,4 +1,4 @@
-"""The command line: `python -m sim run|sweep|compare|bench|gains`. Flags for scene parameters are generated
+"""The command line: `python -m sim run|sweep|compare|bench|gains|lines`. Flags for scene parameters are generated
 from their declarations (`parameters.Param`), so a new term's coefficient is a flag without an edit here."""
 
 from __future__ import annotations
@@ -72,6 +72,7 @@ COMMANDS = {
     "compare": "sim.commands.compare:compare",
     "bench": "sim.commands.bench:bench",
     "gains": "sim.commands.gains:gains",
+    "lines": "sim.commands.lines:lines",
 }
 """name -> 'module:function'; the function's `args` annotation is its dataclass of flags."""
 PLUGINS = "floatsim.commands"

@@ -267,7 +267,8 @@ class Assembly(Simulation):
         self.scene, self.system, self.state, self.start, self._frame = scene, system, state, start, None
         self.controllers = self._make_controllers()
         if self.moorings is not None and not (lines or restarted):
-            self.system.held[self.moored] = self.moorings.load.copy()
+            for b in self.attached:
+                self.system.held[b] = (self.moorings.loads[b] if len(self.moorings.bodies) > 1 else self.moorings.load).copy()
         else:
             self.close()
             self.moorings = self._moorings()
@@ -286,11 +287,38 @@ class Assembly(Simulation):
         from .moorings import Moorings
 
         k, s = self.moored, self.start
-        pose = self.system.pose(s)
-        nu = pose.J[k] @ s.v
-        lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
-        self.system.held[k] = lines.load.copy()
+        attach = self.scene.moorings.attach.split()
+        if not attach:  # every fairlead on the one body the lines hold
+            self.attached = [k]
+            pose = self.system.pose(s)
+            nu = pose.J[k] @ s.v
+            lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
+            self.system.held[k] = lines.load.copy()
+            return lines
+        from .moorings import line_file
+
+        names = self.body_names
+        owner = "nearest" if attach == ["nearest"] else [names.index(a) for a in attach]
+        bodies = self._kinematics(s, from_system=True)
+        lines = Moorings(line_file(self.scene).read_text(), *bodies[0], bodies=bodies, owner=owner)
+        self.attached = sorted(set(lines.owner.tolist()))
+        """The bodies the lines hold (scene order)."""
+        for b in self.attached:
+            self.system.held[b] = lines.loads[b].copy()
         return lines
+
+    def _kinematics(self, s: SystemState, from_system: bool = False) -> list:
+        """Each body's (x, R, u, omega) at s, from the kinematics of the step that runs."""
+        out = []
+        for b in range(len(self.system.members)):
+            if getattr(self, "stepper", None) is not None and not from_system:
+                x, R, J = self.stepper.pose(s, self.dt, b)
+            else:
+                pose = self.system.pose(s)
+                x, R, J = pose.x[b], pose.R[b], pose.J[b]
+            nu = J @ s.v
+            out.append((x, R, nu[:3], nu[3:]))
+        return out
 
     def reset(self, state: SystemState | None = None) -> None:
         """Back to the starting state, or to `state` (the system, its coefficients and kernels kept; the lines start afresh)."""
@@ -330,7 +358,11 @@ class Assembly(Simulation):
                 v, absorbed = s.v.copy(), s.absorbed.copy()
                 self._laws_into(s.t, s.theta, v, absorbed, lambda: system.inertia(system.pose(s)))
                 self.state = replace(s, v=v, absorbed=absorbed)
-            if self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
+            if self.moorings is not None and len(self.moorings.bodies) > 1:  # lines on several bodies: each holds its share
+                loads = self.moorings.advance_bodies(self._kinematics(self.state), self.dt)
+                for b in self.attached:
+                    self.system.held[b] = loads[b]
+            elif self.moorings is not None:  # the lines over the step, their mean pull held over it (as for one body)
                 x, R, J = self._moored_pose()
                 nu = J @ self.state.v
                 self.system.held[self.moored] = self.moorings.advance(x, R, nu[:3], nu[3:], self.dt)
@@ -360,7 +392,8 @@ class Assembly(Simulation):
             if self.moorings is not None:
                 lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
                 each = self.moorings.fairlead_tensions()
-                pull = (*self.moorings.load[:3], float(each.max()), *(float(t) for t in each))
+                total = self.moorings.loads[:, :3].sum(axis=0) if len(self.moorings.bodies) > 1 else self.moorings.load[:3]
+                pull = (*total, float(each.max()), *(float(t) for t in each))
             self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
                                             pull, float(s.E_rad), tensions))  # fmt: skip
         return self._frame[1]

@@ -150,6 +150,9 @@ MOORINGS = (
           "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
     Param("moorings", "body", "", "A scene of several bodies: the name of the one the lines hold (default: the first listed)", kind="text",
           name="moored body", flag=False),
+    Param("moorings", "attach", "", "A scene of several bodies with a line_file: the body each Coupled point is on, in the file's order "
+          "(names separated by spaces), or 'nearest' (each on the body whose centre of mass starts nearest it); empty: all on [moorings] "
+          "body. Lines may join two bodies, and several lines share an anchor", kind="text", name="mooring attachments", flag=False),
 )
 CONSTRAINT = (
     Param("constraint", "joint", "free", "A joint to the world (the seabed): free (none), fixed, prismatic (slides along axis, without "
@@ -429,6 +432,13 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
                           "do not apply; set them in the [[bodies]] entries")  # fmt: skip
     if moored(scene) and scene.moorings.body not in ("", *seen):
         raise ConfigError(f"[moorings] body = {scene.moorings.body!r} is not one of the [[bodies]]: {', '.join(seen)}")
+    attach = scene.moorings.attach.split()
+    if attach and attach != ["nearest"]:
+        if not scene.moorings.line_file:
+            raise ConfigError("[moorings] attach names the bodies of a line_file's Coupled points: give a line_file")
+        unknown = [name for name in attach if name not in seen]
+        if unknown:
+            raise ConfigError(f"[moorings] attach: {', '.join(dict.fromkeys(unknown))} is not one of the [[bodies]]: {', '.join(seen)}")
     return tuple(entries)
 
 
@@ -450,6 +460,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
             'set [water] current = [0, 0] or [fluid] radiation = "none"'
         )
     m = checked["moorings"]
+    if m.attach and not scene.bodies:
+        raise ConfigError("[moorings] attach places a line_file's points on several bodies: it is for scenes of [[bodies]]")
     if len(m.anchors) != len(m.fairleads):
         raise ConfigError(f"[moorings] gives {len(m.anchors)} anchors and {len(m.fairleads)} fairleads: one of each per line")
     if m.anchors and m.lines and m.lines != len(m.anchors):

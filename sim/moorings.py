@@ -371,11 +371,13 @@ class Moorings:
     next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
 
     def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0,
-                 at: np.ndarray | None = None, start: tuple | None = None):  # fmt: skip
+                 at: np.ndarray | None = None, start: tuple | None = None, bodies: list | None = None, owner=None):  # fmt: skip
         """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0. `at`: the
         lines settle with the body's centre of mass there instead (the fairleads still those of x0: a file's are where
         the body starts), as the rest pose's stiffness asks. `start`: ((k, 3) positions, (k, 3) velocities) of the
-        coupled points to settle from instead (the lines alone, lines_alone.py)."""
+        coupled points to settle from instead (the lines alone, lines_alone.py). `bodies`: several bodies' (x, R, u, omega) at
+        the start, and `owner`: the body of each Coupled point (indices into `bodies`, or 'nearest': the body whose centre
+        starts nearest it); x0, R0, u0, omega0 are then the first body's."""
         md = moordyn()
         self._md = md
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
@@ -393,8 +395,15 @@ class Moorings:
             self.close()
             raise ConfigError("the mooring input must couple the body through 'Coupled' points (its fairleads) and nothing else")
         world = np.array([md.GetPointPos(p) for p in self._fairleads], float)
-        self.r_body = (world - x0) @ R0
-        """(k, 3) the fairleads in the body frame, m."""
+        self.bodies = [(np.asarray(x0, float), np.asarray(R0, float), u0, omega0)] if bodies is None else list(bodies)
+        try:
+            self.owner = self._owners(world, owner)
+        except ConfigError:
+            self.close()
+            raise
+        """(k,) the body each fairlead is on (0 for one body)."""
+        self.r_body = np.array([(w - self.bodies[b][0]) @ self.bodies[b][1] for w, b in zip(world, self.owner)]).reshape(-1, 3)
+        """(k, 3) the fairleads in their body's frame, m."""
         self._lines = [md.GetLine(self._system, i + 1) for i in range(md.GetNumberLines(self._system))]
         try:
             self._check_input(text, [p for p in points if md.GetPointType(p) == md.POINT_TYPE_FIXED])
@@ -402,7 +411,12 @@ class Moorings:
             self.close()
             raise
         x0 = x0 if at is None else np.asarray(at, float)
-        x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0) if start is None else (np.ravel(start[0]), np.ravel(start[1]))
+        if start is not None:
+            x, v = np.ravel(start[0]), np.ravel(start[1])
+        elif bodies is not None:
+            x, v = self._many_kinematics(self.bodies)
+        else:
+            x, v = self._kinematics(x0, self.r_body @ R0.T, u0, omega0)
         status = _settle(md, self._system, x, v)
         if status:
             self.close()
@@ -417,8 +431,52 @@ class Moorings:
         self.seconds = 0.0
         """Wall time spent in MoorDyn's steps so far, s (the benchmark's split)."""
         self._forces = np.array([md.GetPointForce(p) for p in self._fairleads], float)  # at t, on the fairleads
-        self.load = self._wrench(self._forces, R0)
-        """(6,) the lines' force and moment about the centre of mass on the body, world frame, N and N m."""
+        self.loads = self._wrenches(self._forces, [b[1] for b in self.bodies])
+        """(bodies, 6) the lines' force and moment about each body's centre of mass, world frame, N and N m."""
+        self.load = self.loads[0] if bodies is not None else self._wrench(self._forces, R0)
+        """(6,) the lines' force and moment about the centre of mass on the (first) body, world frame, N and N m."""
+
+    def _owners(self, world: np.ndarray, owner) -> np.ndarray:
+        """The body of each Coupled point: all the first's, the ones given, or each the nearest's."""
+        k = len(world)
+        if owner is None:
+            return np.zeros(k, int)
+        if isinstance(owner, str) and owner == "nearest":
+            centres = np.array([b[0] for b in self.bodies])
+            return np.argmin(np.linalg.norm(world[:, None, :] - centres[None, :, :], axis=2), axis=1)
+        owner = np.asarray(owner, int)
+        if len(owner) != k:
+            raise ConfigError(f"[moorings] attach names {len(owner)} bodies; the mooring file has {k} Coupled points (one body each, in "
+                              "the file's order)")  # fmt: skip
+        return owner
+
+    def _many_kinematics(self, bodies: list) -> tuple[np.ndarray, np.ndarray]:
+        """The fairleads' positions and velocities, flat, from each body's (x, R, u, omega)."""
+        pos, vel = np.empty((len(self.owner), 3)), np.empty((len(self.owner), 3))
+        for b, (x, R, u, omega) in enumerate(bodies):
+            mine = self.owner == b
+            lever = self.r_body[mine] @ np.asarray(R).T
+            pos[mine], vel[mine] = x + lever, u + np.cross(omega, lever)
+        return pos.ravel(), vel.ravel()
+
+    def _wrenches(self, forces: np.ndarray, Rs: list) -> np.ndarray:
+        """(bodies, 6) each body's share of the fairleads' forces, about its centre of mass."""
+        out = np.zeros((len(Rs), 6))
+        for b, R in enumerate(Rs):
+            mine = self.owner == b
+            if mine.any():
+                out[b] = np.concatenate([forces[mine].sum(axis=0), _moment(self.r_body[mine] @ np.asarray(R).T, forces[mine])])
+        return out
+
+    def advance_bodies(self, bodies: list, dt: float) -> np.ndarray:
+        """Move the lines from self.t over dt with every fairlead on its body, each body's (x, R, u, omega) at self.t; return
+        each body's wrench to hold over the step (bodies, 6): the mean of the pull at both ends (as `advance`)."""
+        Rs = [b[1] for b in bodies]
+        now = self._wrenches(self._forces, Rs)
+        self.pull(*self._many_kinematics(bodies), dt)
+        self.loads = self._wrenches(self._forces, Rs)
+        self.load = self.loads[0]
+        return 0.5 * (now + self.loads)
 
     def _check_input(self, text: str, anchors: list) -> None:
         """What scene validation checks of a spread, for a MoorDyn file: anchors in the water, and a start-up within

@@ -638,7 +638,7 @@ def moored_lowest(scene, models: list, starts: list) -> float | None:
     from .rotation import quat_to_matrix
 
     k = moored_body(scene)
-    if k is None:
+    if k is None or scene.moorings.attach:  # (lines on several bodies: the grid is not extended for their slow swing)
         return None
     q = np.asarray(scene.bodies[k].initial.orientation, float)
     return lowest_frequency(

@@ -353,9 +353,14 @@ def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth
     for wv, wf, c in wet:
         h.update(cache_key(wv, wf, rho, g, depth, omega, c).encode())
     needs = "far field" if far_field else "excitation" if excitation else ""
-    return _stored_or_solved(
-        h.hexdigest()[:20], needs, lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)
-    )
+
+    def solve_now() -> Coefficients:
+        from .farm import check_panels
+
+        check_panels(sum(len(f) for _, f, _ in wet), len(wet))  # before the dense matrices are made
+        return solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)
+
+    return _stored_or_solved(h.hexdigest()[:20], needs, solve_now)
 
 
 def _has(c: Coefficients, needs: str) -> bool:

@@ -181,6 +181,13 @@ CONSTRAINT = (
     Param("constraint", "pto_max_force", None, "The largest force (N) or moment (N m) the take-off gives: its controller's law limited "
           "to it", lo=0.0, hi=1e12, lo_open=True, kind="optional", name="PTO force limit"),
 )
+FARM = (
+    Param("farm", "rows", 1, "A farm: rows of copies of the scene's device (sim/farm.py: the scene becomes [[bodies]] d1, d2, ...)", lo=1,
+          hi=100, kind="int", flag=False),
+    Param("farm", "columns", 1, "A farm: copies of the device in each row, along x", lo=1, hi=100, kind="int", flag=False),
+    Param("farm", "spacing", 20.0, "A farm: the distance between neighbouring devices, along x and y", "m", lo=0.0, lo_open=True, hi=1e5,
+          flag=False),
+)
 # fmt: on
 SECTIONS = {
     "body": BODY,
@@ -191,6 +198,7 @@ SECTIONS = {
     "water": WATER,
     "moorings": MOORINGS,
     "constraint": CONSTRAINT,
+    "farm": FARM,
 }
 PARAMS = {f"{p.section}.{p.key}": p for section in SECTIONS.values() for p in section}
 """Every scene parameter by 'section.key'. Keys are unique across sections too: the viewer's commands are named by key."""
@@ -212,6 +220,7 @@ StepConfig = _section("StepConfig", STEP)
 WavesConfig = _section("WavesConfig", WAVES)
 WaterConfig = _section("WaterConfig", WATER)
 MooringsConfig = _section("MooringsConfig", MOORINGS)
+FarmConfig = _section("FarmConfig", FARM)
 ConstraintConfig = _section("ConstraintConfig", CONSTRAINT)
 SECTION_TYPES = {
     "body": BodyConfig,
@@ -222,6 +231,7 @@ SECTION_TYPES = {
     "water": WaterConfig,
     "moorings": MooringsConfig,
     "constraint": ConstraintConfig,
+    "farm": FarmConfig,
 }
 
 
@@ -268,6 +278,8 @@ class SceneConfig:
     water: WaterConfig = field(default_factory=WaterConfig)
     moorings: MooringsConfig = field(default_factory=MooringsConfig)
     constraint: ConstraintConfig = field(default_factory=ConstraintConfig)
+    farm: FarmConfig = field(default_factory=FarmConfig)
+    """[farm]: copies of the device on a grid; validation lays them out as [[bodies]] and sets it back to one (farm.py)."""
     bodies: tuple[BodyEntry, ...] = ()
     """[[bodies]]: several bodies on joints (system.py); empty: the one body of [body], [initial], [constraint]."""
     base_dir: str = "."
@@ -449,6 +461,10 @@ def validate(scene: SceneConfig) -> SceneConfig:
     for name, params in SECTIONS.items():
         section = getattr(scene, name)
         checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
+    if checked["farm"].rows * checked["farm"].columns > 1:  # laid out as [[bodies]] once (the table goes back to one device)
+        from .farm import expand
+
+        return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked)), farm=FarmConfig()))
     _check_body(checked["body"], checked["initial"], checked["constraint"])
     _check_steepness(checked["waves"], checked["fluid"].g, scene.base_dir)
     if checked["waves"].kind == "record" and any(checked["water"].current):

@@ -95,6 +95,20 @@ def test_09_lines_alone_pull_as_the_elastic_catenary():
 
 
 @pytest.mark.slow
+def test_10_farm_power_matrix_grows_with_the_waves_height_squared_and_shares_it_evenly(monkeypatch):
+    """The sweep's matrix: twice the wave height, about four times the farm's power (linear waves); six identical devices
+    without radiation share it evenly."""
+    monkeypatch.setenv("FLOATSIM_BACKEND", "numpy")
+    out = run("10_farm_power_matrix.py", "--heights", "0.05:0.1:2", "--periods", "2.0:2.4:2", "--t-end", "12", "--backend", "serial")
+    lines = out.splitlines()
+    low, high = numbers(lines[-3])[1:], numbers(lines[-2])[1:]
+    for a, b in zip(low, high):
+        assert b / a == pytest.approx(4.0, rel=0.1)
+    shares = [float(v) for v in re.findall(r"d\d (\d+\.\d)%", lines[-1])]
+    assert len(shares) == 6 and all(abs(v - 100 / 6) < 0.5 for v in shares), lines[-1]
+
+
+@pytest.mark.slow
 def test_08_take_off_control_absorbs_what_the_frequency_domain_says():
     """Each run's mean power beside its frequency-domain value: the best damper and the reactive optimum within 2 %, the
     damper as a Python function as the scene's; latching many times the damper's."""

@@ -28,8 +28,8 @@ Any of them takes `pto_max_force`: where the law's force at a step's start passe
 
 From Python a controller is any callable (t, JointState, WaveState) -> force, or a Controller (its own law):
 `Simulation.control(fn)` (one body) or `Simulation.control(fn, "float")`. A callable's force is held over each step
-(explicit: keep its gains well inside the step's stability). Compiled runs call back into Python once a step where a
-controller other than the passive one is set (docs/control.md gives the cost).
+(explicit: keep its gains well inside the step's stability). A law that never changes (passive, reactive) is packed once;
+any other calls back into Python once a step, compiled runs too (docs/control.md gives the cost).
 """
 
 from __future__ import annotations

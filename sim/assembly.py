@@ -39,6 +39,8 @@ class Assembly(Simulation):
         self.start = self.state
         self.check_seconds = 0.0
         self.step_seconds: float | None = None
+        self.stepper = None
+        """The compiled system step (system_compiled.CompiledStep) on the numba backend, else None: System.step."""
         self.moored = moored_body(scene)
         """The index of the body the mooring lines hold (None: no lines)."""
         self.moorings = self._moorings()
@@ -58,8 +60,6 @@ class Assembly(Simulation):
                 f"several bodies step by their own scheme (Stormer-Verlet, damping implicit): integrator '{scene.step.integrator}' is not used"
             )
         self.backend = "numpy"
-        self.stepper = None
-        """The compiled system step (system_compiled.CompiledStep) on the numba backend, else None: System.step."""
         wanted = backend or default_backend()
         if wanted == "numba" and not self.system.has_twin:
             self.notes.append("a body's force model or term has no compiled twin: the scene runs on the numpy reference (slower)")
@@ -311,7 +311,7 @@ class Assembly(Simulation):
         """Each body's (x, R, u, omega) at s, from the kinematics of the step that runs."""
         out = []
         for b in range(len(self.system.members)):
-            if getattr(self, "stepper", None) is not None and not from_system:
+            if self.stepper is not None and not from_system:
                 x, R, J = self.stepper.pose(s, self.dt, b)
             else:
                 pose = self.system.pose(s)

@@ -5,10 +5,9 @@ its body (`WaveState`), and gives the affine law the step holds:
 
     F = f - k theta - c theta_dot      (N on a slide, N m on a hinge)
 
-k and c act inside the step's implicit kick (joints.py, system.py), so a stiff spring, a large damper or a latch's
-brake stays stable at any time step; f is held over the step. The power into the take-off is P = -F theta_dot
-(negative while reactive control gives power back); the energy it has taken, E_pto, adds the damper's c theta_dot^2
-and f's work exactly over each step.
+k and c act inside the step's implicit kick (joints.py, system.py), so a stiff spring, a large damper or a
+latch stays stable at any time step; f is held over the step. The take-off absorbs P = (c theta_dot - f) theta_dot (the
+CSV's P_pto; its spring's power is stored, not absorbed), and E_pto adds that exactly over each step.
 
 Shipped (`[constraint] controller`, the gains beside it):
 - `passive`: the spring and damper (pto_stiffness >= 0, pto_damping), as before controllers existed;

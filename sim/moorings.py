@@ -433,7 +433,7 @@ class Moorings:
         self._forces = np.array([md.GetPointForce(p) for p in self._fairleads], float)  # at t, on the fairleads
         self.loads = self._wrenches(self._forces, [b[1] for b in self.bodies])
         """(bodies, 6) the lines' force and moment about each body's centre of mass, world frame, N and N m."""
-        self.load = self.loads[0] if bodies is not None else self._wrench(self._forces, R0)
+        self.load = self.loads[0]
         """(6,) the lines' force and moment about the centre of mass on the (first) body, world frame, N and N m."""
 
     def _owners(self, world: np.ndarray, owner) -> np.ndarray:

@@ -178,6 +178,11 @@ def _model_energy(f) -> str:
     return f" (exact potential; the model's own {f.E_kin + f.E_grav + f.E_hyd_model:.6g} J)"
 
 
+def _line_energy(energy: tuple) -> str:
+    """The lines' energy where the scene counts it ([moorings] energy): what they store, what they have dissipated."""
+    return f" · lines store {energy[0]:.6g} J, have dissipated **{energy[1]:.4g} J**" if energy else ""
+
+
 def _system(snap: Snapshot) -> list[str]:
     """A scene of several bodies: where each body is, each joint's stroke and take-off, the lines' pull, the energies of all."""
     run = snap.run
@@ -188,6 +193,7 @@ def _system(snap: Snapshot) -> list[str]:
     if run.mooring:
         out.append(
             f"Mooring: pull **{np.linalg.norm(run.mooring[:3]) / 1e3:.4g} kN**, largest fairlead tension **{run.mooring[3] / 1e3:.4g} kN**"
+            + _line_energy(run.line_energy)
         )
     out.append(f"All bodies: E total = **{run.E_total:.6g} J**, with the take-offs' {run.E_pto:.4g} J and the radiated {run.E_rad:.4g} J · "
                f"the numbers above are {snap.settings.focus}'s (choose the body under Body)")  # fmt: skip
@@ -211,7 +217,7 @@ def describe(snap: Snapshot) -> str:
     if f.lines:
         pull = f.mooring_force
         lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
-                     f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**")  # fmt: skip
+                     f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**" + _line_energy(f.line_energy))  # fmt: skip
     if s.joint != "free" and not snap.system:
         lines.append(f"Joint: {s.joint} to the seabed · power take-off ({s.controller}) **{f.F_pto:.4g} N**, "
                      f"**{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")  # fmt: skip

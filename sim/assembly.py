@@ -300,7 +300,8 @@ class Assembly(Simulation):
         names = self.body_names
         owner = "nearest" if attach == ["nearest"] else [names.index(a) for a in attach]
         bodies = self._kinematics(s, from_system=True)
-        lines = Moorings(line_file(self.scene).read_text(), *bodies[0], bodies=bodies, owner=owner)
+        path = line_file(self.scene)
+        lines = Moorings(path.read_text(), *bodies[0], bodies=bodies, owner=owner, folder=path.parent).counting(self.scene.moorings.energy)
         self.attached = sorted(set(lines.owner.tolist()))
         """The bodies the lines hold (scene order)."""
         for b in self.attached:
@@ -388,14 +389,15 @@ class Assembly(Simulation):
                 joints.append(
                     (g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate))
                 )
-            lines, pull, tensions = (), (), ()
+            lines, pull, tensions, energy = (), (), (), ()
             if self.moorings is not None:
+                energy = self.moorings.energy_now()
                 lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
                 each = self.moorings.fairlead_tensions()
                 total = self.moorings.loads[:, :3].sum(axis=0) if len(self.moorings.bodies) > 1 else self.moorings.load[:3]
                 pull = (*total, float(each.max()), *(float(t) for t in each))
             self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
-                                            pull, float(s.E_rad), tensions))  # fmt: skip
+                                            pull, float(s.E_rad), tensions, energy))  # fmt: skip
         return self._frame[1]
 
     def parts(self) -> list:
@@ -438,6 +440,8 @@ class AssemblyFrame:
     """Energy the radiated waves have carried away so far, J (0 without radiation)."""
     line_tensions: tuple = ()
     """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
+    line_energy: tuple = ()
+    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise)."""
 
     @property
     def E_pto(self) -> float:
@@ -459,7 +463,11 @@ class AssemblyFrame:
             cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto", "F_pto")]
         if self.mooring:
             cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max", *(f"T_fair_{i + 1}" for i in range(len(self.mooring) - 4))]
-        return cols + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
+        return (
+            cols
+            + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
+            + (["E_lines", "D_lines"] if self.line_energy else [])
+        )
 
     def row(self) -> list[float]:
         out = [self.t]
@@ -469,7 +477,7 @@ class AssemblyFrame:
             out += values
         out += list(self.mooring)
         e = self.energies
-        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad]
+        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad, *self.line_energy]
 
 
 def _only_take_offs(old: SceneConfig, new: SceneConfig) -> bool:

@@ -150,6 +150,10 @@ MOORINGS = (
           "(as the body is at orientation 1 0 0 0)", "m", lo=-1e4, hi=1e4, kind="points", size=64, flag=False),
     Param("moorings", "body", "", "A scene of several bodies: the name of the one the lines hold (default: the first listed)", kind="text",
           name="moored body", flag=False),
+    Param("moorings", "energy", False, "Count the lines' energy: the CSV's E_lines (what they store: motion, wet weight lifted, "
+          "stretch, the seabed's spring) and D_lines (what their drag, internal damping and the seabed have dissipated), read node "
+          "by node from MoorDyn (a few hundred calls a step; docs/lines.md)", kind="switch", name="line energy",
+          flag_name="line_energy"),
     Param("moorings", "attach", "", "A scene of several bodies with a line_file: the body each Coupled point is on, in the file's order "
           "(names separated by spaces), or 'nearest' (each on the body whose centre of mass starts nearest it); empty: all on [moorings] "
           "body. Lines may join two bodies, and several lines share an anchor", kind="text", name="mooring attachments", flag=False),

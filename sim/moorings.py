@@ -348,6 +348,16 @@ def lines_of(section) -> LineSet | None:
     return LineSet(**{f: getattr(section, f) for f in LineSet.__dataclass_fields__})
 
 
+def _link_named_files(text: str, source: Path | None, into: Path) -> None:
+    """Link into MoorDyn's folder each file of `source` the input names (MoorDyn reads a curve beside its input)."""
+    if source is None:
+        return
+    for token in set(text.split()):
+        found = Path(source) / token
+        if "/" not in token and token not in ("lines.txt", ".", "..") and found.is_file():
+            (into / token).symlink_to(found.resolve())
+
+
 def line_file(scene) -> Path:
     """The scene's MoorDyn file ([moorings] line_file), found beside the scene file or from the working directory."""
     given = Path(scene.moorings.line_file)
@@ -371,17 +381,20 @@ class Moorings:
     next step; `advance` moves the lines over it. Close it (or use `with`) to free MoorDyn."""
 
     def __init__(self, text: str, x0: np.ndarray, R0: np.ndarray, u0: np.ndarray, omega0: np.ndarray, t0: float = 0.0,
-                 at: np.ndarray | None = None, start: tuple | None = None, bodies: list | None = None, owner=None):  # fmt: skip
+                 at: np.ndarray | None = None, start: tuple | None = None, bodies: list | None = None, owner=None,
+                 folder: Path | None = None):  # fmt: skip
         """`text`: a MoorDyn v2 input file's content; the body at x0, R0 (body to world) moving at u0, omega0. `at`: the
         lines settle with the body's centre of mass there instead (the fairleads still those of x0: a file's are where
         the body starts), as the rest pose's stiffness asks. `start`: ((k, 3) positions, (k, 3) velocities) of the
         coupled points to settle from instead (the lines alone, lines_alone.py). `bodies`: several bodies' (x, R, u, omega) at
         the start, and `owner`: the body of each Coupled point (indices into `bodies`, or 'nearest': the body whose centre
-        starts nearest it); x0, R0, u0, omega0 are then the first body's."""
+        starts nearest it); x0, R0, u0, omega0 are then the first body's. `folder`: where the file came from, for the
+        files it names (a nonlinear stiffness's curve)."""
         md = moordyn()
         self._md = md
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
         path = Path(self._folder.name) / "lines.txt"
+        _link_named_files(text, folder, path.parent)
         text, self._silent = _silenced(text)
         path.write_text(text)
         with _quiet():
@@ -430,11 +443,30 @@ class Moorings:
         self.t = float(t0)
         self.seconds = 0.0
         """Wall time spent in MoorDyn's steps so far, s (the benchmark's split)."""
+        self._text = text
+        self.energy = None
+        """line_energy.LineEnergy once `track_energy` is called: the lines' stored energy read from MoorDyn's nodes."""
+        self.work_in = self.dissipated = 0.0
+        """Work the fairleads have done on the lines and energy the lines have dissipated since `track_energy`, J."""
         self._forces = np.array([md.GetPointForce(p) for p in self._fairleads], float)  # at t, on the fairleads
         self.loads = self._wrenches(self._forces, [b[1] for b in self.bodies])
         """(bodies, 6) the lines' force and moment about each body's centre of mass, world frame, N and N m."""
         self.load = self.loads[0]
         """(6,) the lines' force and moment about the centre of mass on the (first) body, world frame, N and N m."""
+
+    def track_energy(self) -> None:
+        """Count, from now on, the work the fairleads do on the lines and the energy the lines dissipate (`balance`):
+        a few hundred MoorDyn calls a step, so only when asked."""
+        from .line_energy import LineEnergy, read_spec
+
+        self.energy = LineEnergy(self._md, self._system, self._lines, read_spec(self._text))
+        self.work_in = self.dissipated = 0.0
+        self._power, self._reached = self.energy.dissipation(), None
+
+    def balance(self) -> dict[str, float]:
+        """The lines' energy now (kinetic, gravity, strain, seabed, J), `dissipated` and `work_in` since `track_energy`:
+        work_in = the change of the stored sum + dissipated, to the trapezoid rule's error at the step."""
+        return {**self.energy.stored(), "dissipated": self.dissipated, "work_in": self.work_in}
 
     def _owners(self, world: np.ndarray, owner) -> np.ndarray:
         """The body of each Coupled point: all the first's, the ones given, or each the nearest's."""
@@ -501,7 +533,8 @@ class Moorings:
         fairleads still those at x0)."""
         m = scene.moorings
         if m.line_file:
-            return cls(line_file(scene).read_text(), x0, R0, u0, omega0, at=at)
+            path = line_file(scene)
+            return cls(path.read_text(), x0, R0, u0, omega0, at=at, folder=path.parent).counting(m.energy)
         spread = lines_of(m)
         if spread is None:
             return None
@@ -511,7 +544,24 @@ class Moorings:
         text = spread.input_file(
             np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g, scene.step.dt
         )
-        return cls(text, x0, R0, u0, omega0, at=at)
+        return cls(text, x0, R0, u0, omega0, at=at).counting(m.energy)
+
+    def counting(self, energy: bool) -> Moorings:
+        """Self, its energy tracked if `energy` ([moorings] energy); closed if it cannot be."""
+        if energy:
+            try:
+                self.track_energy()
+            except ConfigError:
+                self.close()
+                raise
+        return self
+
+    def energy_now(self) -> tuple[float, float] | tuple:
+        """(E_lines, D_lines): the energy the lines store now and have dissipated, J; () when not counted."""
+        if self.energy is None:
+            return ()
+        stored = self.energy.stored()
+        return (float(sum(stored.values())), self.dissipated)
 
     def _kinematics(self, x, lever, u, omega) -> tuple[np.ndarray, np.ndarray]:
         """The fairleads' positions and velocities, flat, from the body's pose and twist and their (k, 3) world levers."""
@@ -538,7 +588,16 @@ class Moorings:
 
             raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments "
                                      f"(a mooring file's dtM: at most {CROSSINGS:g} of an axial wave's crossing of a segment, sqrt(mass / EA) per metre)")  # fmt: skip
-        self._forces, self.t = np.array(ahead, float).reshape(-1, 3), self.t + dt
+        ahead = np.array(ahead, float).reshape(-1, 3)
+        if self.energy is not None:  # MoorDyn moves each fairlead at vel over the step (the lines pull back with -force), from
+            # pos: a jump from where its last step took it, pos + vel dt to second order, does work too
+            jump = 0.0 if self._reached is None else float(np.sum(self._forces.ravel() * (pos - self._reached)))
+            self.work_in -= jump + 0.5 * dt * float(np.sum((self._forces + ahead) * np.reshape(vel, (-1, 3))))
+            self._reached = pos + dt * np.asarray(vel)
+            power = self.energy.dissipation()
+            self.dissipated += 0.5 * dt * (self._power + power)
+            self._power = power
+        self._forces, self.t = ahead, self.t + dt
         return self._forces
 
     def settle(self, R: np.ndarray) -> None:

@@ -74,6 +74,9 @@ class Frame:
     """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
     line_tensions: tuple = ()
     """Each mooring line's tension at those nodes, (segments + 1,), N."""
+    line_energy: tuple = ()
+    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise):
+    E_total + E_lines + D_lines is conserved in still water without damping, drag or radiation."""
     P_pto: float = 0.0
     """The power the joint's take-off absorbs, (c theta_dot - f) theta_dot of its law F = f - k theta - c theta_dot, W (its
     spring's power is stored, not absorbed; 0 without a joint)."""
@@ -101,15 +104,15 @@ class Frame:
         return self.E_kin + self.E_grav + self.E_hyd
 
     def columns(self) -> list[str]:
-        """The CSV's header (CSV_COLUMNS): `row` gives the values."""
-        return list(CSV_COLUMNS)
+        """The CSV's header (CSV_COLUMNS, then E_lines and D_lines where the lines' energy is counted): `row` gives the values."""
+        return list(CSV_COLUMNS) + (["E_lines", "D_lines"] if self.line_energy else [])
 
     def row(self) -> list[float]:
         """Values in CSV_COLUMNS order."""
         return [self.t, *self.x_world, *self.q_world_body, *self.u_world, *self.omega_world, *self.L_world, *self.force_world, *self.torque_world,
                 self.E_kin, self.E_grav, self.E_hyd, self.E_total, self.submerged_area, self.submerged_volume, self.eta, self.E_rad,
                 self.E_hyd_of_model, self.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0)), self.P_pto, self.E_pto,
-                self.F_pto]  # fmt: skip
+                self.F_pto, *self.line_energy]  # fmt: skip
 
 
 def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Frame:
@@ -426,9 +429,8 @@ class Simulation:
         if self._frame_key != key:
             frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
             if self.moorings is not None:
-                frame = dataclasses.replace(
-                    frame, mooring_force=self.moorings.load[:3].copy(), fairlead_tensions=self.moorings.fairlead_tensions()
-                )
+                frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(),
+                                            fairlead_tensions=self.moorings.fairlead_tensions(), line_energy=self.moorings.energy_now())  # fmt: skip
             if self.joint is not None:
                 rate = self.joint.rate(self.body, self.state)
                 j = self.joint
@@ -441,7 +443,7 @@ class Simulation:
 
     def columns(self) -> list[str]:
         """The CSV's header (Frame.row gives a row)."""
-        return list(CSV_COLUMNS)
+        return self.frame().columns()
 
     @property
     def body_names(self) -> list[str]:

@@ -235,6 +235,17 @@ def summarise(sim: Simulation, first, last) -> None:
         n = len(last.lines)
         print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring_force):.4g} N, largest fairlead tension "
               f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
+        if last.line_energy:
+            print(line_energy_summary(first, last, last.E_total + last.E_pto - first.E_total - first.E_pto))
+
+
+def line_energy_summary(first, last, body_change: float) -> str:
+    """The energy balance of bodies and lines in a line: what the lines store and dissipated, and the sum's change."""
+    (e0, _), (e1, d1) = first.line_energy, last.line_energy
+    return (
+        f"lines' energy: stored {e1 - e0:+.4g} J, dissipated {d1:.4g} J; bodies, take-offs and lines together {body_change + e1 - e0 + d1:+.3g} J "
+        "(zero in still water without the bodies' damping, drag or radiation)"
+    )
 
 
 def summarise_bodies(sim: Simulation, first, last) -> None:
@@ -251,6 +262,8 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
         )
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J")
+    if last.line_energy:
+        print(line_energy_summary(first, last, drift))
 
 
 def how_stepped(sim: Simulation) -> tuple[str, float, str]:

@@ -769,6 +769,25 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
     assert not app.scene.joint.visible and not app.readouts.plots["P"].visible
 
 
+def test_latching_from_the_viewer_holds_the_joint_for_the_time_set(make_app):
+    """point-absorber: the Latch time slider, then Control = latching: the running take-off latches for that time (its
+    controller rebuilt live), the readout names it; a time past the slider's range is clamped to it."""
+    app = make_app("point-absorber")
+    app.controls.latch_time.value = 0.4
+    app.controls.controller.value = "latching"
+    snap = app.sync()
+    ctrl = app.loop.sim.controller
+    assert snap.settings.controller == "latching" and ctrl.name == "latching" and ctrl.hold == 0.4
+    assert "power take-off (latching)" in describe(snap)
+    app.controls.latch_time.value = 99.0
+    snap = app.sync()
+    assert snap.settings.latch_time == 30.0 and app.loop.sim.controller.hold == 30.0
+    app.controls.declutch_time.value = 0.25
+    app.controls.controller.value = "declutching"
+    snap = app.sync()
+    assert app.loop.sim.controller.name == "declutching" and app.loop.sim.controller.hold == 0.25
+
+
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
     """A wave's vertices are lighter the higher they lie (or the more the surface there faces the light), in a
     continuous shade (no bands), and the GLB the page gets holds that very mesh; the fine

@@ -79,3 +79,59 @@ def test_a_solve_past_the_memory_is_refused_with_its_numbers(monkeypatch):
     farm.check_panels(3000, 5)  # 288 MB: within 500 MB
     with pytest.raises(ConfigError, match="4000 wet panels: its matrices take about 0.512 GB, over the 0.5 GB"):
         farm.check_panels(4000, 6)
+
+
+def _pair(spacing: float, omega: float | None = None):
+    """point-absorber's farm of two, `spacing` apart along x (the waves' heading), in waves 10 cm high at the solve's
+    frequency nearest 2 pi / 2.2 s (or at `omega`): (system, rest, frequency index)."""
+    from sim.system import build
+
+    system, _ = build(with_overrides(load_scene("point-absorber"), farm__rows=1, farm__columns=2, farm__spacing=spacing))
+    c = system.radiation.coefficients
+    i = int(np.argmin(abs(c.omega - (2 * np.pi / 2.2 if omega is None else omega))))
+    scene = with_overrides(load_scene("point-absorber"), farm__rows=1, farm__columns=2, farm__spacing=spacing,
+                           waves__period=2 * np.pi / float(c.omega[i]), waves__ramp=0.0)  # fmt: skip
+    system, rest = build(scene)
+    return system, rest, i
+
+
+def _mean_powers(system, start, omega: float, periods: int = 6, per_period: int = 110) -> np.ndarray:
+    """Each take-off's mean power over `periods` wave periods from `start`, W."""
+    dt, s = 2 * np.pi / omega / per_period, start
+    for _ in range(periods * per_period):
+        s = system.step(s, dt)
+    return (s.absorbed - start.absorbed) / (s.t - start.t)
+
+
+@pytest.mark.slow
+def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkeypatch, tmp_path):
+    """Two point absorbers 3 m apart in a row along the waves, solved together (the shipped solve: 2560 panels). Started on
+    the pair's linear steady state, six periods of the time-domain run (the radiation memory coupling both devices, the
+    diffraction, the exact hydrostatics) give each device's mean power within 2 % of the frequency-domain solve of the
+    pair. The devices feel each other: each one's interaction factor q = P / P_alone (the lone device's power with its
+    own solve) differs from 1 by more than the 2 % tolerance, the front one's and the back one's differently, and the run's
+    q matches the frequency domain's within 2 %."""
+    import sim.bem as bem
+    from sim.system import build
+    from sim.system_frequency import response, steady_start
+
+    monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
+    monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped farm coefficients were not found"))
+    a = 0.05
+    system, rest, i = _pair(3.0)
+    w = float(system.radiation.coefficients.omega[i])
+    xi = response(system, rest, i)
+    slides = sorted(system.joints, key=lambda g: g.name)
+    expected = np.array([0.5 * g.damping * w * w * abs(a * xi[g.dofs.start]) ** 2 for g in slides])
+    powers = _mean_powers(system, steady_start(system, rest, xi, w, a), w)
+    got = np.array([powers[g.coordinate] for g in slides])
+    alone_system, alone_rest = build(with_overrides(load_scene("point-absorber"), waves__ramp=0.0))
+    c1 = alone_system.radiation.coefficients
+    j = int(np.argmin(abs(c1.omega - w)))
+    assert abs(c1.omega[j] / w - 1) < 1e-3  # the same frequency in both solves
+    alone = 0.5 * alone_system.joints[0].damping * w * w * abs(a * response(alone_system, alone_rest, j)[alone_system.joints[0].dofs.start]) ** 2
+    q_expected, q_got = expected / alone, got / alone
+    print(f"omega {w:.4f}: P alone {alone:.4g} W; pair expected {expected}, run {got}; q expected {q_expected}, run {q_got}")
+    np.testing.assert_allclose(got, expected, rtol=0.02)
+    assert np.all(abs(q_expected - 1) > 0.02) and abs(q_expected[0] - q_expected[1]) > 0.01
+    np.testing.assert_allclose(q_got, q_expected, rtol=0.02)

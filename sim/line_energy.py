@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConfigError
+from .moordyn_input import sections as _sections
+from .moordyn_input import table as _table
 
 DEFAULTS = {"g": 9.80665, "rho": 1025.0, "kb": 3.0e6, "cb": 3.0e5}
 """MoorDyn's defaults for the options read here (MoorDyn2.cpp)."""
@@ -56,29 +58,11 @@ class Spec:
     """g, rho, kb, cb."""
 
 
-def _sections(text: str) -> dict[str, list[list[str]]]:
-    """Each '---- NAME ----' section's rows (split on whitespace), its two heading rows dropped."""
-    out, name = {}, None
-    for raw in text.splitlines():
-        line = raw.strip()
-        if line.startswith("--"):
-            name = " ".join(line.strip("- ").upper().split())
-            out[name] = []
-        elif name is not None and line:
-            out[name].append(line.split())
-    return out
-
-
-def _table(sections: dict, *names: str) -> list[list[str]]:
-    for name in names:
-        if name in sections:
-            return sections[name][2:]
-    return []
-
-
 def read_spec(text: str) -> Spec:
     """The Spec of a MoorDyn v2 input file (sections LINE TYPES, POINTS, LINES, OPTIONS; v1's names too)."""
     sections = _sections(text)
+    if _table(sections, "BODIES", "BODY LIST", "BODY PROPERTIES") or _table(sections, "RODS", "ROD LIST", "ROD PROPERTIES"):
+        raise ConfigError("the mooring file has MoorDyn bodies or rods: the lines' energy balance counts lines and points only")
     kinds = {}
     for row in _table(sections, "LINE TYPES", "LINE DICTIONARY"):
         try:

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError
+from .moordyn_input import coupled_bodies_as_points
 from .rotation import skew
 
 LINE_DRAG = (1.2, 1.0, 0.2, 0.0)
@@ -395,7 +396,7 @@ class Moorings:
         self._folder = tempfile.TemporaryDirectory(prefix="floatsim-moordyn-")  # MoorDyn reads a file and writes its outputs beside it
         path = Path(self._folder.name) / "lines.txt"
         _link_named_files(text, folder, path.parent)
-        text, self._silent = _silenced(text)
+        text, self._silent = _silenced(coupled_bodies_as_points(text))
         path.write_text(text)
         with _quiet():
             self._system = md.Create(str(path))

@@ -129,7 +129,13 @@ def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkey
     c1 = alone_system.radiation.coefficients
     j = int(np.argmin(abs(c1.omega - w)))
     assert abs(c1.omega[j] / w - 1) < 1e-3  # the same frequency in both solves
-    alone = 0.5 * alone_system.joints[0].damping * w * w * abs(a * response(alone_system, alone_rest, j)[alone_system.joints[0].dofs.start]) ** 2
+    alone = (
+        0.5
+        * alone_system.joints[0].damping
+        * w
+        * w
+        * abs(a * response(alone_system, alone_rest, j)[alone_system.joints[0].dofs.start]) ** 2
+    )
     q_expected, q_got = expected / alone, got / alone
     print(f"omega {w:.4f}: P alone {alone:.4g} W; pair expected {expected}, run {got}; q expected {q_expected}, run {q_got}")
     np.testing.assert_allclose(got, expected, rtol=0.02)

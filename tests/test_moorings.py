@@ -452,3 +452,52 @@ def test_a_moordyn_file_holds_the_body_as_stiffly_as_the_spread_it_writes(tmp_pa
     mass = 900.0  # the buoy's (1 m cube, 900 kg/m^3)
     lows = [lowest_frequency(s, mass, at, np.eye(3)) for s in (scene, given)]
     assert None not in lows and abs(math.log2(lows[1] / lows[0])) <= 0.25, lows
+
+
+def _as_coupled_body(text: str, place, angles_deg) -> str:
+    """A MoorDyn file's Coupled points hung instead on a MoorDyn body of type Coupled at `place`, turned by `angles_deg`
+    (roll, pitch, yaw): each point given relative to the body, as WEC-Sim's and OpenFAST's files give fairleads."""
+    from sim.moordyn_input import _rotation
+
+    place = np.asarray(place, float)
+    R = _rotation(*np.radians(angles_deg))
+
+    def relative(m):
+        p = R.T @ (np.array([float(m[2]), float(m[3]), float(m[4])]) - place)
+        return f"{m[1]} Body1 {float(p[0])!r} {float(p[1])!r} {float(p[2])!r} "
+
+    text = re.sub(r"^(\d+) Coupled (\S+) (\S+) (\S+) ", relative, text, flags=re.M)
+    body = "1 Coupled " + " ".join(repr(float(v)) for v in (*place, *angles_deg)) + " 0 0 0 0 0 0"
+    return text.replace("---------------------- POINTS", "---------------------- BODIES ----------------------\nID Attachment X0 Y0 Z0 r0 p0 y0 "
+                        f"Mass CG I Volume CdA Ca\n(#) (-) (m) (m) (m) (deg) (deg) (deg) (kg) (m) (kg-m^2) (m^3) (m^2) (-)\n{body}\n"
+                        "---------------------- POINTS", 1)  # fmt: skip
+
+
+def test_fairleads_on_a_coupled_moordyn_body_move_with_the_body(tmp_path):
+    """rm3-wecsim-moorings with its fairleads hung on a MoorDyn body of type Coupled (turned 5 deg in roll and 30 in
+    yaw, the points given in its frame) runs as the same fairleads given as Coupled points: the same rows to 1e-9
+    (the body's points are placed once, at the start, to round-off). A Coupled body with a mass of its own is refused
+    in one line."""
+    moorings = ROOT / "assets" / "moorings"
+    points_form = (moorings / "rm3_wecsim.txt").read_text()
+    (tmp_path / "body.txt").write_text(_as_coupled_body(points_form, (0.0, 0.0, -21.5), (5.0, 0.0, 30.0)))
+    scene = (ROOT / "assets" / "scenes" / "rm3-wecsim-moorings.toml").read_text().replace('"../', f'"{ROOT / "assets"}/')
+    rows = {}
+    for form, lines in (("points", moorings / "rm3_wecsim.txt"), ("body", tmp_path / "body.txt")):
+        path = tmp_path / f"{form}.toml"
+        path.write_text(scene.replace(f'line_file = "{moorings}/rm3_wecsim.txt"', f'line_file = "{lines}"'))
+        out = tmp_path / f"{form}.csv"
+        done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(path), "--t-end", "1", "--every", "10", "--out", str(out)],
+                              capture_output=True, text=True, timeout=300)  # fmt: skip
+        assert done.returncode == 0, done.stderr[-2000:]
+        rows[form] = np.genfromtxt(out, delimiter=",", names=True)
+    assert rows["points"]["T_fair_max"].max() > 5e4  # the chains pull
+    for name in rows["points"].dtype.names:
+        np.testing.assert_allclose(rows["body"][name], rows["points"][name], rtol=1e-9, atol=1e-9 * (1 + abs(rows["points"][name]).max()))
+    heavy = _as_coupled_body(points_form, (0.0, 0.0, -21.5), (0.0, 0.0, 0.0)).replace(
+        "1 Coupled 0.0 0.0 -21.5 0.0 0.0 0.0 0 ", "1 Coupled 0.0 0.0 -21.5 0.0 0.0 0.0 5000 "
+    )
+    (tmp_path / "body.txt").write_text(heavy)
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(tmp_path / "body.toml"), "--t-end", "0.1"], capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 2 and "Coupled with its own mass" in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr

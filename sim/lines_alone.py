@@ -100,10 +100,13 @@ def coupled_points(text: str) -> np.ndarray:
     return np.array(rows)
 
 
-def run(text: str, motion: Motion, dt: float, t_end: float | None = None, every: int = 1, progress=None) -> dict[str, np.ndarray]:
+def run(text: str, motion: Motion, dt: float, t_end: float | None = None, every: int = 1, progress=None, energy: bool = False,
+        folder: Path | None = None) -> dict[str, np.ndarray]:  # fmt: skip
     """The lines of MoorDyn input `text` under `motion`, stepped at dt from its first time to t_end (default its last):
     columns t, each coupled point's position and the lines' pull on it, each line's tension at its fairlead (end B)
-    and anchor (end A) as OpenFAST's MoorDyn reports them (Moorings.end_forces), every `every` steps."""
+    and anchor (end A) as OpenFAST's MoorDyn reports them (Moorings.end_forces), every `every` steps. `energy`: also
+    E_lines (what the lines store), D_lines (what they have dissipated) and W_in (the work the moved points have done
+    on them), J: W_in = E_lines - E_lines(start) + D_lines. `folder`: where the input came from (the files it names)."""
     from .moorings import Moorings
 
     start = float(motion.t[0])
@@ -111,16 +114,27 @@ def run(text: str, motion: Motion, dt: float, t_end: float | None = None, every:
     if not motion.t[0] < end <= motion.t[-1] + 1e-9:
         raise ConfigError(f"t_end {end:g} s must lie within the motion's times ({motion.t[0]:g} to {motion.t[-1]:g} s)")
     pos, vel = motion.at(start)
-    lines = Moorings(text, np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3), t0=start, start=(pos, np.zeros_like(vel)))  # at rest
+    lines = Moorings(text, np.zeros(3), np.eye(3), np.zeros(3), np.zeros(3), t0=start, start=(pos, np.zeros_like(vel)), folder=folder)
+    lines.counting(energy)  # (settled at rest)
     names = range(1, len(pos) + 1)
     n_lines = len(lines.lines())
     columns = ["t", *(f"{p}{i}" for i in names for p in ("x_", "y_", "z_", "Fx_", "Fy_", "Fz_")),
                *(f"T_fair_{i}" for i in range(1, n_lines + 1)), *(f"T_anch_{i}" for i in range(1, n_lines + 1))]  # fmt: skip
+    columns += ["E_lines", "D_lines", "W_in"] if energy else []
     rows = []
 
     def record(t: float, pos: np.ndarray) -> None:
         anchor, fairlead = lines.end_forces()
-        rows.append([t, *np.column_stack([pos, lines._forces]).ravel(), *fairlead, *anchor])
+        rows.append(
+            [
+                t,
+                *np.column_stack([pos, lines._forces]).ravel(),
+                *fairlead,
+                *anchor,
+                *lines.energy_now(),
+                *([lines.work_in] if energy else []),
+            ]
+        )
 
     steps = max(1, round((end - start) / dt))
     try:

@@ -28,10 +28,14 @@ class LinesArgs:
     """Write one row every K steps."""
     out: str = ""
     """CSV file to write (default: a summary only)."""
+    energy: bool = False
+    """Add the lines' energy: E_lines (stored), D_lines (dissipated by drag, internal damping and the seabed) and W_in (the
+    work the moved points did), J (docs/lines.md; a few hundred MoorDyn calls a step)."""
 
 
 def lines(args: LinesArgs) -> int:
     from ..lines_alone import coupled_points, motion_of, read_table, run
+    from ..moordyn_input import coupled_bodies_as_points
     from .output import write_whole
     from .progress import progress_bar
 
@@ -40,11 +44,11 @@ def lines(args: LinesArgs) -> int:
             raise ConfigError(f"{name}: no such file: {value}")
     if not args.dt > 0 or args.every < 1:
         raise ConfigError("--dt must be > 0 and --every >= 1")
-    text = Path(args.lines).read_text()
+    text = coupled_bodies_as_points(Path(args.lines).read_text())
     motion = motion_of(read_table(Path(args.motion)), coupled_points(text), where=args.motion)
     end = float(motion.t[-1]) if args.t_end is None else args.t_end
     with progress_bar(round((end - motion.t[0]) / args.dt), "lines") as bar:
-        result = run(text, motion, args.dt, args.t_end, args.every, progress=lambda i, n: bar.update(1))
+        result = run(text, motion, args.dt, args.t_end, args.every, lambda i, n: bar.update(1), args.energy, Path(args.lines).parent)
     names = list(result)
     if args.out:
         table = np.column_stack(list(result.values()))
@@ -56,6 +60,11 @@ def lines(args: LinesArgs) -> int:
         T = result[c]
         print(
             f"line {c.rsplit('_', 1)[1]}: fairlead tension mean {T.mean() / 1e3:.6g} kN, min {T.min() / 1e3:.6g}, max {T.max() / 1e3:.6g}"
+        )
+    if args.energy:
+        stored, lost, done = result["E_lines"][-1] - result["E_lines"][0], result["D_lines"][-1], result["W_in"][-1]
+        print(
+            f"energy: the moved points did {done:.6g} J on the lines = {stored:+.6g} J stored + {lost:.6g} J dissipated, to {done - stored - lost:+.3g} J"
         )
     sys.stdout.flush()
     return 0

@@ -125,7 +125,22 @@ def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkey
     expected = np.array([0.5 * g.damping * w * w * abs(a * xi[g.dofs.start]) ** 2 for g in slides])
     powers = _mean_powers(system, steady_start(system, rest, xi, w, a), w)
     got = np.array([powers[g.coordinate] for g in slides])
-    alone_system, alone_rest = build(with_overrides(load_scene("point-absorber"), waves__ramp=0.0))
+    from dataclasses import replace
+
+    from sim.config import BodyEntry, ConstraintConfig, InitialConfig, validate
+
+    one = with_overrides(load_scene("point-absorber"), waves__period=2 * np.pi / w, waves__ramp=0.0)  # the lone device as a system of one
+    alone_system, alone_rest = build(
+        validate(
+            replace(
+                one,
+                bodies=(BodyEntry("d1", "world", one.body, one.initial, one.constraint),),
+                initial=InitialConfig(),
+                constraint=ConstraintConfig(),
+                body=type(one.body)(),
+            )
+        )
+    )
     c1 = alone_system.radiation.coefficients
     j = int(np.argmin(abs(c1.omega - w)))
     assert abs(c1.omega[j] / w - 1) < 1e-3  # the same frequency in both solves

@@ -51,6 +51,7 @@ t_end = 20.0
     return path
 
 
+@pytest.mark.slow
 def test_a_moored_body_and_its_lines_keep_their_energy(tmp_path):
     """The buoy released off its rest in still water (no damping, no radiation): what the body loses the lines store or
     dissipate. E_total + E_lines + D_lines stays within 1 % of what the lines dissipate in 20 s (100 J: a balance without
@@ -72,6 +73,7 @@ def test_a_moored_body_and_its_lines_keep_their_energy(tmp_path):
     assert "lines' energy: stored" in done.stdout and "bodies, take-offs and lines together" in done.stdout
 
 
+@pytest.mark.slow
 def test_bodies_joined_by_lines_through_buoys_keep_their_energy(tmp_path):
     """absorber-pair in still water without the floats' damping: two bodies on sliding take-offs, a line between them,
     anchors they share and Free buoys. The bodies' energy, the take-offs' and the lines' together stay within 2 % of the

@@ -50,6 +50,7 @@ def test_the_oc4_semis_lines_under_openfasts_motion_pull_as_openfasts_moordyn(tm
     np.testing.assert_allclose(np.interp(ref["t"], run["t"], run["x_1"]), ref["P4PX"], atol=1e-6)
 
 
+@pytest.mark.slow
 def test_the_oc4_semis_lines_close_their_energy_with_what_they_dissipate(tmp_path):
     """The same case with --energy: the work OpenFAST's motion does on the chains (1.7 MJ at most, W_in) is what they
     store (E_lines: their motion, wet weight lifted, stretch and seabed spring) plus what their drag, internal damping

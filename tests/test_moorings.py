@@ -473,6 +473,7 @@ def _as_coupled_body(text: str, place, angles_deg) -> str:
                         "---------------------- POINTS", 1)  # fmt: skip
 
 
+@pytest.mark.slow
 def test_fairleads_on_a_coupled_moordyn_body_move_with_the_body(tmp_path):
     """rm3-wecsim-moorings with its fairleads hung on a MoorDyn body of type Coupled (turned 5 deg in roll and 30 in
     yaw, the points given in its frame) runs as the same fairleads given as Coupled points: the same rows to 1e-9

@@ -120,18 +120,6 @@ class RadiationMemory:
     def states(self) -> int:
         return self.F.shape[0]
 
-    def misfit_note(self, tol: float = 0.02) -> str | None:
-        """A line for a run's summary when the fit misses `tol` (fit_memory's): how far its B and A are from the BEM's
-        somewhere on the grid, each against its entry's peak; None when it holds."""
-        error_B, error_A = self.error
-        if max(error_B, error_A) <= tol:
-            return None
-        return (
-            f"radiation memory: the fit ({self.states} states) misses the BEM's damping by up to {error_B:.0%} and its added mass by "
-            f"up to {error_A:.0%} of their peaks somewhere on the grid (asked {tol:.0%}): the time-domain radiation is that far off "
-            "at those frequencies (bodies apart, as in a farm: their interaction oscillates with frequency; docs/farms.md)"
-        )
-
     def response(self, omega) -> np.ndarray:
         """(n, d, d) K(i omega) of the whole fitted memory (omega may be complex)."""
         omega = np.atleast_1d(np.asarray(omega, complex))

@@ -237,3 +237,16 @@ def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray) -> np.ndar
         stiffness += joint.stiffness * (J @ J.T)
         damping = damping + joint.damping * (J @ J.T)
     return body_rao(c, mass, stiffness, damping, J)
+
+
+def misfit_note(memory, tol: float = 0.02) -> str | None:
+    """A line for a run's summary when the memory's fit misses `tol` (fit_memory's): how far its B and A are from the
+    BEM's somewhere on the grid, each against its entry's peak; None when it holds."""
+    error_B, error_A = memory.error
+    if max(error_B, error_A) <= tol:
+        return None
+    return (
+        f"radiation memory: the fit ({memory.states} states) misses the BEM's damping by up to {error_B:.0%} and its added mass by "
+        f"up to {error_A:.0%} of their peaks somewhere on the grid (asked {tol:.0%}): the time-domain radiation is that far off "
+        "at those frequencies (bodies apart, as in a farm: their interaction oscillates with frequency; docs/farms.md)"
+    )

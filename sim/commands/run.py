@@ -224,7 +224,9 @@ def summarise(sim: Simulation, first, last) -> None:
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
           f"inertia {inertia_source(scene, sim.body)}")  # fmt: skip
     print(f"at rest: {describe_rest(sim.body, sim.params)}")
-    if sim.model.radiation is not None and (note := sim.model.radiation.memory.misfit_note()):
+    from ..radiation import misfit_note
+
+    if sim.model.radiation is not None and (note := misfit_note(sim.model.radiation.memory)):
         print(note)
     print(f"t = {last.t:.6g} s: z = {last.x_world[2]:.6f} m, |u| = {np.linalg.norm(last.u_world):.3g} m/s, "
           f"|F| = {np.linalg.norm(last.force_world):.3g} N, |L| = {np.linalg.norm(last.L_world):.6g} kg m^2/s, "
@@ -256,7 +258,9 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
     names = ", ".join(f"{m.name} ({m.body.mass:.6g} kg, {m.body.n_samples} samples)" for m in system.members)
     print(f"scene {sim.scene.name}: {len(system.members)} bodies: {names}; {len(system.groups)} rigid groups, {system.n_dofs} degrees of freedom; "
           "{}, dt {:g} s; the bodies' loads {}".format(*how_stepped(sim)))  # fmt: skip
-    if system.radiation is not None and (note := system.radiation.memory.misfit_note()):
+    from ..radiation import misfit_note
+
+    if system.radiation is not None and (note := misfit_note(system.radiation.memory)):
         print(note)
     for b in last.bodies:
         print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")

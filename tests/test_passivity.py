@@ -14,13 +14,10 @@ from sim.memory_fit import fit_memory, transfer
 from sim.radiation import misfit_note
 from sim.system import build
 from sim.system_linear import exact_linear
-from studies.accuracy.passivity import lowest_damping, scene_length, still_rm3
+from studies.accuracy.passivity import MISFITS, lowest_damping, scene_length, still_rm3
 from tests.scenes import shipped_solve
 
 SOLVES = sorted(SHIPPED.glob("*.npz"))
-MISFITS = {"85f92b9aecb0610382e7": 0.5 * 3**0.5}
-"""Shipped solves whose fit misses its tolerance, by key, with the body radius the scene fits with: two point
-absorbers 3 m apart (docs/farms.md: their cross terms oscillate with frequency)."""
 
 
 @pytest.mark.parametrize(
@@ -34,7 +31,7 @@ def test_every_shipped_solve_fits_a_passive_memory(path):
     F3OF platform's three bodies (18 dofs) within 3 %: its 9-dof block, with the near-trapped wave between the flaps,
     fits passively to 1.7 % in B and 2.6 % in A at ten pole pairs."""
     c = Coefficients.load(path)
-    memory = fit_memory(c, length=MISFITS.get(Path(path).stem) or scene_length(c))
+    memory = fit_memory(c, length=scene_length(c, Path(path).stem))
     low, where = lowest_damping(memory, c.omega.max())
     assert low >= -1e-12 * np.abs(c.damping).max(), (low, where)
     assert np.linalg.eigvals(memory.F).real.max() < 0

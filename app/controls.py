@@ -1,4 +1,4 @@
-"""The GUI inputs, one per declared parameter with a control (sim.config.PARAMS with `gui`), plus the
+"""The GUI inputs, one per declared parameter with a control (sim.scene.config.PARAMS with `gui`), plus the
 viewer's own. Callbacks only post commands; `show_setting` puts back the value the loop actually used.
 
 viser runs `def` callbacks on a thread pool, concurrently with the simulation thread and possibly

@@ -143,7 +143,7 @@ class HullView:
             self.wet.visible = False
         if not (line or wet) or not (due or now - self._sent >= 1.0 / self.hz):
             return
-        from sim.rotation import quat_to_matrix
+        from sim.bodies.rotation import quat_to_matrix
 
         segments, vertices, faces = self.hull.cut(quat_to_matrix(frame.q_world_body), frame.x_world, water, frame.t)
         if line:

@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 
 import sim
-from sim.bem import no_solves
-from sim.body import printable
+from sim.bodies.body import printable
+from sim.bodies.rotation import quat_to_matrix
 from sim.compiling import Compiler, Loader, kernels_ready
-from sim.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, body_own, entry_value, in_effect, load_scene
-from sim.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
+from sim.hydro.bem import no_solves
+from sim.hydro.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
-from sim.rotation import quat_to_matrix
+from sim.scene.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, body_own, entry_value, in_effect, load_scene
 from sim.simulation import default_backend, initial_state
 
 NOTICE_SECONDS = 10.0
@@ -134,7 +134,7 @@ class Snapshot(Posed):
     parts: tuple = ()
     """Every body (Part), in the scene's order (one body: itself)."""
     run_frame: object = None
-    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.assembly.AssemblyFrame)."""
+    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.system.assembly.AssemblyFrame)."""
 
     @property
     def run(self):

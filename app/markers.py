@@ -1,5 +1,5 @@
 """Why it floats, in the scene: the centre of buoyancy B and the metacentre M (calm-water hydrostatics of
-the current pose, sim/hydrostatics.py); the waterline is the hull's (hull.py). Sent at most `MARKER_HZ`
+the current pose, sim/hydro/hydrostatics.py); the waterline is the hull's (hull.py). Sent at most `MARKER_HZ`
 times a second and only while shown."""
 
 from __future__ import annotations

@@ -15,8 +15,8 @@ from urllib.parse import parse_qsl, urlencode
 import viser
 from viser import _messages
 
-from sim.config import body_own, entry_value, in_effect, load_scene, with_overrides
 from sim.errors import ConfigError
+from sim.scene.config import body_own, entry_value, in_effect, load_scene, with_overrides
 
 from .loop import CONTROLLED, DERIVED, SPEED, Settings
 

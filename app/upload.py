@@ -1,5 +1,5 @@
 """Load your own body: an upload control for STL, OBJ or PLY. The file is read and checked on the
-callback's thread (sim.body.load_mesh: a mesh, closed, at most 200 000 triangles, a plausible size in
+callback's thread (sim.bodies.body.load_mesh: a mesh, closed, at most 200 000 triangles, a plausible size in
 the unit chosen); a good one is kept on disk and handed to the simulation thread as a command, a bad
 one gets its one-line reason in the panel and the running scene is untouched. The bytes are capped
 as they arrive (app/upload_guard.py) and the folder kept uploads go to is bounded (`prune_uploads`)."""
@@ -14,7 +14,7 @@ from typing import Any
 
 import viser
 
-from sim.body import MAX_MESH_BYTES, MAX_TRIANGLES, MESH_FORMATS, UNITS, load_mesh, printable
+from sim.bodies.body import MAX_MESH_BYTES, MAX_TRIANGLES, MESH_FORMATS, UNITS, load_mesh, printable
 from sim.errors import ConfigError
 
 UPLOADS = Path.home() / ".cache" / "floatsim" / "uploads"

@@ -13,11 +13,11 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def parameter_table() -> str:
     """Every scene parameter by table: key, default, unit, valid range, CLI flag and what it does."""
-    from sim.config import SECTIONS
+    from sim.scene.config import SECTIONS
 
     out = ["# Parameter reference", "",
            "Every key a scene file takes, by table, with its command-line flag (`python -m sim run --help` lists the same).",
-           "Generated from the `Param` declarations in `sim/config.py` when the docs are built.", ""]  # fmt: skip
+           "Generated from the `Param` declarations in `sim/scene/config.py` when the docs are built.", ""]  # fmt: skip
     for section, params in SECTIONS.items():
         out += [f"## [{section}]", "", "| key | default | unit | valid | flag | what it does |", "| --- | --- | --- | --- | --- | --- |"]
         for p in params:

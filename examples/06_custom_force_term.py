@@ -1,6 +1,6 @@
 """A force term of your own: a horizontal tether
 
-A term is a function (body, water, fluid, wet, twist, t) -> Load and its line in `sim.forces.TERMS`; every model, the
+A term is a function (body, water, fluid, wet, twist, t) -> Load and its line in `sim.hydro.forces.TERMS`; every model, the
 CLI and the viewer then include it (docs: Developer guide, Adding a force term). Its compiled twin, the same function
 in `sim/kernels/terms.py`, makes it fast; until it has one, a scene using it runs on the numpy reference and says so
 (a force is never dropped silently). Here a tether pulls the body's centre back to the vertical through the origin
@@ -15,7 +15,7 @@ import tyro
 
 import sim
 from sim import Simulation, load_scene, with_overrides
-from sim.forces import Load, Term
+from sim.hydro.forces import Load, Term
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """Take-off control: the point absorber off resonance, passive, reactive, latched, and driven by your own function
 
 The ice cube on its heave slide in waves 3.5 s long (it rings at 2.2 s). The frequency domain gives what each control
-can take (sim.control_gains, the numbers `python -m sim gains` prints): the best damper alone, complex-conjugate control
+can take (sim.control.gains, the numbers `python -m sim gains` prints): the best damper alone, complex-conjugate control
 (a negative spring that tunes the cube to the waves: |F a|^2 / 8 Re Z), latching for (T - T_n) / 2 at each stop. Each
 run's mean power over its last ten periods is printed beside it, and a damper written as a Python function beside the
 scene's own.
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import tyro
 
 from sim import Simulation, load_scene, with_overrides
-from sim.control_gains import body_port
+from sim.control.gains import body_port
 
 
 @dataclass

@@ -3,7 +3,7 @@
 No body and no water loads: MoorDyn moves the three 835 m chains of the OC4 semi (OpenFAST's r-test file, shipped in
 assets/moorings) with their fairleads on a platform that surges slowly from rest to an offset, and gives their
 tensions (what `python -m sim lines` writes to CSV). A slow pull is quasi-static, so each fairlead's tension is the
-elastic catenary's at that offset (sim.catenary): printed side by side.
+elastic catenary's at that offset (sim.lines.catenary): printed side by side.
 """
 
 from dataclasses import dataclass
@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import tyro
 
-from sim.catenary import fairlead_tension
-from sim.lines_alone import Motion, coupled_points, rotation, run
+from sim.lines.catenary import fairlead_tension
+from sim.lines.lines_alone import Motion, coupled_points, rotation, run
 
 LINES = Path(__file__).resolve().parents[1] / "assets" / "moorings" / "md_5MW_OC4Semi.dat"
 ANCHORS = np.array([(418.8, 725.383, -200.0), (-837.6, 0.0, -200.0), (418.8, -725.383, -200.0)])

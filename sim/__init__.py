@@ -6,15 +6,25 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from .body import Body, make_body  # noqa: E402
-from .config import PARAMS, BodyConfig, FluidConfig, InitialConfig, SceneConfig, StepConfig, WavesConfig, load_scene, with_overrides
-from .errors import ConfigError, SimulationDiverged
-from .forces import TERMS, Model
-from .integrators import INTEGRATORS, make_integrator
-from .parameters import Param
-from .simulation import CSV_COLUMNS, Frame, Simulation, observe
-from .state import State
-from .water import StillWater
+from sim.bodies.body import Body, make_body  # noqa: E402
+from sim.bodies.integrators import INTEGRATORS, make_integrator
+from sim.bodies.state import State
+from sim.errors import ConfigError, SimulationDiverged
+from sim.hydro.forces import TERMS, Model
+from sim.parameters import Param
+from sim.scene.config import (
+    PARAMS,
+    BodyConfig,
+    FluidConfig,
+    InitialConfig,
+    SceneConfig,
+    StepConfig,
+    WavesConfig,
+    load_scene,
+    with_overrides,
+)
+from sim.simulation import CSV_COLUMNS, Frame, Simulation, observe
+from sim.water.seas import StillWater
 
 __all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "BodyConfig", "FluidConfig", "InitialConfig", "StepConfig", "WavesConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
            "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip

@@ -25,11 +25,11 @@ COMMAND_ENV = "FLOATSIM_COMPILER"
 def kernels_ready(spec) -> bool:
     """Whether the compiled kernels for `spec` (kernels.Spec) can be used at once: numba is the backend and
     this machine compiled them before."""
-    from .simulation import default_backend
+    from sim.simulation import default_backend
 
     if default_backend() != "numba":
         return False
-    from .kernels import cached
+    from sim.kernels import cached
 
     return cached(spec)
 
@@ -51,7 +51,7 @@ def spec_argument(spec) -> str:
 
 
 def parse_spec(word: str):
-    from .kernels import Spec
+    from sim.kernels import Spec
 
     scheme, model, terms, waves, radiating, current, held, system = word.split(",")
     return Spec(
@@ -131,7 +131,7 @@ class Loader:
 
 def load(spec) -> float:
     """Load the kernels of `spec` from the disk cache into this process (compiling what is missing); seconds taken."""
-    from .kernels import warm_up
+    from sim.kernels import warm_up
 
     return warm_up(spec)
 
@@ -139,8 +139,8 @@ def load(spec) -> float:
 def preset_specs() -> list:
     """The kernels.Spec of every preset scene with a compiled twin, as shipped (a scene of several bodies: its bodies'
     loads and the system step's)."""
-    from .config import available_scenes, load_scene
-    from .simulation import Simulation
+    from sim.scene.config import available_scenes, load_scene
+    from sim.simulation import Simulation
 
     specs = []
     for name in available_scenes():
@@ -153,7 +153,7 @@ def preset_specs() -> list:
 def _main(parent: int, specs: list[str]) -> int:
     """Compile the kernels of each spec given (spec_argument), or of every preset scene; `-`: of each spec read from
     stdin, a line each, until it closes (so that a parent hands the next to whichever child is free)."""
-    from .sweeps.backends import _die_with
+    from sim.sweeps.backends import _die_with
 
     _die_with(parent)  # a viewer stopped by SIGKILL leaves no compiler behind
     words = (line.strip() for line in sys.stdin) if specs == ["-"] else iter(specs or [spec_argument(s) for s in preset_specs()])

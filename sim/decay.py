@@ -8,9 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .equilibrium import rest_height
-from .rotation import quat_multiply
-from .simulation import Simulation, initial_state
+from sim.bodies.rotation import quat_multiply
+from sim.hydro.equilibrium import rest_height
+from sim.simulation import Simulation, initial_state
 
 
 @dataclass(frozen=True)

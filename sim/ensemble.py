@@ -6,10 +6,10 @@ import dataclasses
 
 import numpy as np
 
-from .body import make_body
-from .config import ConfigError, SceneConfig
-from .simulation import Frame, SimulationDiverged, body_mass, with_mass
-from .state import State
+from sim.bodies.body import make_body
+from sim.bodies.state import State
+from sim.scene.config import ConfigError, SceneConfig
+from sim.simulation import Frame, SimulationDiverged, body_mass, with_mass
 
 SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.samples", "body.centre_of_mass", "body.inertia", "fluid.rho", "fluid.g", "fluid.forces",
           "step.integrator", "step.dt")  # fmt: skip
@@ -29,7 +29,7 @@ class Ensemble:
             if any(s.value(key) != base.value(key) for key in SHARED):
                 raise ConfigError("ensemble bodies must share shape, water, force model, integrator and dt; they may differ in density, "
                                   "force coefficients and initial state")  # fmt: skip
-        from .simulation import Simulation, default_backend, exact_inertia
+        from sim.simulation import Simulation, default_backend, exact_inertia
 
         # unit mass: each body's inertia is then this times its own mass, whatever the other bodies (bit for bit)
         shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir, exact_inertia(base))
@@ -73,13 +73,13 @@ class Ensemble:
     def spec(self, live: list[int] | None = None):
         """The kernels.Spec that steps the bodies `live` together (default: all): every term any of them uses
         (a term some body leaves out has a zero coefficient there: it adds nothing)."""
-        from .kernels import compiled_terms
+        from sim.kernels import compiled_terms
 
         sims = self.sims if live is None else [self.sims[i] for i in live]
         return sims[0].spec._replace(terms=compiled_terms({name for s in sims for name in s.model.term_names}))
 
     def _step_compiled(self, live: list[int], n: int, check_energy: bool = True) -> None:
-        from . import kernels
+        from sim import kernels
 
         sims = [self.sims[i] for i in live]
         Y = np.array([s.state.as_vector() for s in sims])

@@ -1,8 +1,8 @@
 """One declaration per user-facing parameter: its section, key, default, unit, valid range, label and help.
 
-Everything else reads these declarations: the TOML scene schema and its validation (config.py), the
+Everything else reads these declarations: the TOML scene schema and its validation (scene/config.py), the
 command-line flags (commands/run.py), the viewer's controls and their clamps (app/controls.py), and
-the summary. A force term declares its own parameters next to its function (forces.py).
+the summary. A force term declares its own parameters next to its function (hydro/forces.py).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from .errors import ConfigError
+from sim.errors import ConfigError
 
 KINDS = ("float", "int", "choice", "text", "vector", "optional", "switch", "points")
 """float: a finite number; int: a whole number; choice: one of `choices`; text: any string;

@@ -9,17 +9,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import stability
-from .body import Body, make_body, make_mesh_body
-from .config import SceneConfig, diffracting, moored, validate, with_overrides
-from .errors import ConfigError, SimulationDiverged
-from .forces import Model, hydrostatic_energy
-from .hydrostatics import sampled_model_warning
-from .integrators import make_integrator
-from .rotation import normalized, quat_multiply
-from .state import State, angular_momentum, angular_velocity
-from .surface import wet_panels
-from .water import make_water
+from sim.bodies.body import Body, make_body, make_mesh_body
+from sim.bodies.integrators import make_integrator
+from sim.bodies.rotation import normalized, quat_multiply
+from sim.bodies.state import State, angular_momentum, angular_velocity
+from sim.bodies.surface import wet_panels
+from sim.errors import ConfigError, SimulationDiverged
+from sim.hydro.forces import Model, hydrostatic_energy
+from sim.hydro.hydrostatics import sampled_model_warning
+from sim.scene.config import SceneConfig, diffracting, moored, validate, with_overrides
+from sim.system import stability
+from sim.water.seas import make_water
 
 CSV_COLUMNS = (
     "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff,"
@@ -134,8 +134,8 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
     if kernels is not None:
-        from .kernels import Model as Packed
-        from .kernels import pack, sea_pack
+        from sim.kernels import Model as Packed
+        from sim.kernels import pack, sea_pack
 
         wet = np.empty(body.n_samples, dtype=bool)
         packed = Packed(body.packed, body.mass, body.inertia, pack(model)[1])
@@ -230,7 +230,7 @@ class Simulation:
 
     def __new__(cls, scene: SceneConfig, *args, **kwargs):
         if cls is Simulation and getattr(scene, "bodies", ()):
-            from .assembly import Assembly
+            from sim.system.assembly import Assembly
 
             return super().__new__(Assembly)
         return super().__new__(cls)
@@ -297,13 +297,13 @@ class Simulation:
         fluid = self.scene.fluid
         water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current, self.scene.base_dir)
         if self.scene.waves.kind == "record":
-            from .records import describe
+            from sim.water.records import describe
 
             if (note := describe(water, self.scene.waves)) not in self.notes:
                 self.notes.append(note)
         radiation = None
         if fluid.radiation == "bem":
-            from .radiation import make_radiation
+            from sim.hydro.radiation import make_radiation
 
             start = initial_state(body, self.scene)
             drift = water if self.scene.waves.drift and not water.flat else None
@@ -318,7 +318,7 @@ class Simulation:
 
     def _join(self) -> None:
         """The joint to the world about the scene's starting pose; the state put on it (its velocity projected)."""
-        from .joints import WorldJoint
+        from sim.bodies.joints import WorldJoint
 
         start = initial_state(self.body, self.scene)
         self.joint = WorldJoint.of_scene(self.scene, start.x_world, start.R_world_body)
@@ -333,7 +333,7 @@ class Simulation:
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
-        from .joints import WorldJoint
+        from sim.bodies.joints import WorldJoint
 
         old = self.joint
         start = (old.x0, old.R0) if old is not None else (self.state.x_world, self.state.R_world_body)
@@ -346,10 +346,10 @@ class Simulation:
         self._check_backend()
 
     def _make_controller(self) -> None:
-        """The joint's take-off control: the one `control` gave, else the scene's (control.py), a negative spring checked
+        """The joint's take-off control: the one `control` gave, else the scene's (control/laws.py), a negative spring checked
         against the joint's own stiffness."""
-        from .control import Law, of_constraint, stiffness_check
-        from .joints import stiffness_along
+        from sim.bodies.joints import stiffness_along
+        from sim.control.laws import Law, of_constraint, stiffness_check
 
         j = self.joint
         self._law = Law()
@@ -367,7 +367,7 @@ class Simulation:
     def control(self, controller) -> None:
         """Drive the joint's take-off by `controller`: a callable (t, control.JointState, control.WaveState) -> force
         (N or N m, held over each step), or a control.Controller; None: back to the scene's [constraint] controller."""
-        from .control import wrap
+        from sim.control.laws import wrap
 
         if self.joint is None or not self.joint.dofs:
             raise ConfigError("a take-off controller needs the body on a prismatic or revolute joint ([constraint] joint)")
@@ -376,7 +376,7 @@ class Simulation:
 
     def _next_law(self, s: State):
         """The controller's law for the step from s."""
-        from .control import JointState, WaveState
+        from sim.control.laws import JointState, WaveState
 
         if self.controller.linear is not None:  # a spring and damper: nothing to ask
             self._law = self.controller.linear
@@ -393,7 +393,7 @@ class Simulation:
             self.moorings = None
         if not moored(self.scene):
             return
-        from .moorings import Moorings
+        from sim.lines.moorings import Moorings
 
         s, R = self.state, self.state.R_world_body
         self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
@@ -477,7 +477,7 @@ class Simulation:
     @property
     def kernels_ready(self) -> bool:
         """Whether the compiled kernels can be used at once: a twin exists and this machine compiled it before."""
-        from .compiling import kernels_ready
+        from sim.compiling import kernels_ready
 
         return self.has_twin and kernels_ready(self.spec)
 
@@ -494,25 +494,25 @@ class Simulation:
     @property
     def has_twin(self) -> bool:
         """Whether the scene has a compiled twin: a fixed-step integrator with one, a force model it covers in this water, every term compiled."""
-        from .kernels import SCHEMES, missing_terms
+        from sim.kernels import SCHEMES, missing_terms
 
         return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model) and self.joint is None
 
     @property
     def spec(self):
         """What the compiled kernels specialise on for this scene (kernels.Spec)."""
-        from .kernels import spec_of
+        from sim.kernels import spec_of
 
         return spec_of(self.model, self.integrator.name)
 
     def kernels(self):
         """The compiled kernels for this scene (kernels.specialised: loaded from the disk cache, or compiled now)."""
-        from .kernels import specialised
+        from sim.kernels import specialised
 
         return specialised(self.spec)
 
     def _check_backend(self) -> None:
-        from .kernels import SCHEMES, missing_terms
+        from sim.kernels import SCHEMES, missing_terms
 
         integ = self.integrator
         notes = []
@@ -577,9 +577,9 @@ class Simulation:
         return state
 
     def _advance_coupled(self, n: int) -> State:
-        """Step by step: the mooring lines advanced over each and their mean pull held over it (moorings.py);
-        a jointed body stepped on its joint's coordinate (joints.py)."""
-        from .joints import step as joint_step
+        """Step by step: the mooring lines advanced over each and their mean pull held over it (lines/moorings.py);
+        a jointed body stepped on its joint's coordinate (bodies/joints.py)."""
+        from sim.bodies.joints import step as joint_step
 
         if self.joint is None and self.compiled:
             return self._advance_moored(n)
@@ -606,8 +606,8 @@ class Simulation:
 
     def _packs(self) -> tuple:
         """(kernels, the model packed for them, the sea, the radiation), each rebuilt only when what it packs changed."""
-        from . import kernels
-        from .kernels.layout import HELD
+        from sim import kernels
+        from sim.kernels.layout import HELD
 
         body, model = self.body, self.model
         if self._packed[0] is not model or self._packed[1] != self.integrator.name:  # a step at a time costs 40 us less
@@ -638,7 +638,7 @@ class Simulation:
         """The compiled body and MoorDyn in turn, a step each: the kernels keep their carry and scratch from step to step
         (schemes.step_held, which also takes the lines' pull into the held load and gives the fairleads' next kinematics),
         so a step is one compiled call and one MoorDyn call. The same steps as the one-step-a-call loop, to round-off."""
-        from .kernels import entry_point
+        from sim.kernels import entry_point
 
         compiled, packed, sea, rad = self._packs()
         lines, dt, t = self.moorings, self.dt, self.state.t
@@ -679,7 +679,7 @@ class Simulation:
         self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin + carried
 
     def stability_numbers(self) -> dict[str, float]:
-        """The step's dimensionless numbers against the integrator's stability limits (sim/stability.py)."""
+        """The step's dimensionless numbers against the integrator's stability limits (sim/system/stability.py)."""
         return stability.numbers(self.model, self.dt)
 
     def validity_notes(self) -> list[str]:

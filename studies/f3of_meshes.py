@@ -193,7 +193,7 @@ def flap():
 
 def report(name: str, mesh, water: float) -> None:
     """Print the mesh's measures; `water`: the water line's z in the mesh's frame."""
-    from sim.surface import clip_triangles
+    from sim.bodies.surface import clip_triangles
 
     T = np.asarray(mesh.vertices)[mesh.faces] - (0, 0, water)
     W, _ = clip_triangles(T, T[:, :, 2])

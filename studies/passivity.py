@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.bem import SHIPPED, Coefficients
-from sim.config import load_scene, with_overrides
-from sim.radiation import fit_memory
-from sim.system import build
-from sim.system_linear import exact_linear
+from sim.hydro.bem import SHIPPED, Coefficients
+from sim.hydro.radiation import fit_memory
+from sim.scene.config import load_scene, with_overrides
+from sim.system.linear import exact_linear
+from sim.system.tree import build
 from studies.accuracy.passivity import lowest_damping, misfits, scene_length, still_rm3
 
 

@@ -15,14 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim import INTEGRATORS, Frame, Simulation, State, load_scene
-from sim.body import Body, make_box
+from sim.bodies.body import Body, make_box
+from sim.bodies.rotation import quat_multiply, quat_to_matrix, rotation_quat
 from sim.commands import dispatch  # noqa: F401 -- re-exported: `python -m studies` uses the same dispatcher
 from sim.commands.progress import progress_bar  # noqa: F401 -- re-exported for studies.common
-from sim.config import FluidConfig
-from sim.forces import Model
-from sim.rotation import quat_multiply, quat_to_matrix, rotation_quat
+from sim.hydro.forces import Model
+from sim.scene.config import FluidConfig
 from sim.simulation import observe
-from sim.water import StillWater
+from sim.water.seas import StillWater
 
 # ---- reading a body or a simulation -------------------------------------------------------------------
 
@@ -131,13 +131,13 @@ def quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def leak_margin(sim: Simulation) -> float | None:
-    """sim.hydrostatics.leak_margin of `sim`'s body and fluid: below LEAK_BAND the points model warns."""
-    from sim.hydrostatics import leak_margin as margin
+    """sim.hydro.hydrostatics.leak_margin of `sim`'s body and fluid: below LEAK_BAND the points model warns."""
+    from sim.hydro.hydrostatics import leak_margin as margin
 
     return margin(sim.model.body, sim.params)
 
 
 def leak_band() -> float:
-    from sim.hydrostatics import LEAK_BAND
+    from sim.hydro.hydrostatics import LEAK_BAND
 
     return LEAK_BAND

@@ -43,7 +43,7 @@ def _outline(corners, step: float = 3.0) -> np.ndarray:
 
 
 def main() -> None:
-    from sim.bem import wet_mesh
+    from sim.hydro.bem import wet_mesh
 
     parts = {
         "rm3_float": revolved(_outline([(5.0, -3.1), (10.0, -3.1), (10.0, 1.7), (5.0, 1.7), (5.0, -3.1)])),

@@ -9,8 +9,8 @@ each written by a subcommand from the other projects' files (none of those files
   bottom at -2 m at the rim sloping to -3 m at r = 5 m; the spar a column 6 m across, 29 m draft, on a plate 30 m
   across and 0.1 m thick; 72 sections round (WAMIT's waterplanes to 0.02 %).
 - `coefficients PATH/rm3.out`: WEC-Sim's WAMIT run of the two bodies (WEC-Sim's examples/RM3/hydroData/rm3.out,
-  Apache-2.0, commit a23d299; infinite depth, 260 periods, heading 0) read by sim/wamit.py and split over these
-  meshes (sim/bem_file.py), into assets/coefficients/imported/rm3_wecsim.npz. A Capytaine solve cannot stand in:
+  Apache-2.0, commit a23d299; infinite depth, 260 periods, heading 0) read by sim/io/wamit.py and split over these
+  meshes (sim/io/bem_file.py), into assets/coefficients/imported/rm3_wecsim.npz. A Capytaine solve cannot stand in:
   its constant panels resolve a 0.1 m plate only slowly (heave added mass 8.3e6 kg at 9760 panels against WAMIT's
   9.0e6, itself the thin disc's 8/3 rho a^3).
 - `record PATH/TO/SEA-Stack`: the sea WEC-Sim ran, its elevation at the origin (data/verification/rm3_mooring/
@@ -45,7 +45,7 @@ WINDOW = (100.0, 400.0)
 
 
 def meshes() -> None:
-    from sim.bem import wet_mesh
+    from sim.hydro.bem import wet_mesh
     from studies.rm3_meshes import _outline, revolved
 
     parts = {
@@ -65,8 +65,8 @@ def coefficients(out: str) -> None:
     """The preset's bodies with the WAMIT file, through the same path a scene naming the .out takes."""
     import dataclasses
 
-    from sim.config import load_scene
-    from sim.system import build
+    from sim.scene.config import load_scene
+    from sim.system.tree import build
 
     scene = load_scene("rm3-wecsim-moorings")
     scene = dataclasses.replace(scene, fluid=dataclasses.replace(scene.fluid, bem_file=str(Path(out).resolve())),

@@ -1,9 +1,9 @@
 """`python -m studies.ship_solves`: solve again every BEM case floatsim ships in assets/coefficients (needs the
-.[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.memory_fit`).
+.[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.hydro.memory_fit`).
 
 The cases: each preset with radiation as it builds (its rest pose, moorings included, its grid, the excitation when
 it has waves, a sphere in waves too), the cross-code checks' scenes (assets/scenes/*/), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
-change to how solves are made (sim.bem.SOLVER_VERSION, the lid, the wet mesh) or to a preset's body: the old files'
+change to how solves are made (sim.hydro.bem.SOLVER_VERSION, the lid, the wet mesh) or to a preset's body: the old files'
 keys no longer match, so the presets would otherwise solve on every machine.
 """
 
@@ -18,11 +18,11 @@ import numpy as np
 def main() -> None:
     import trimesh
 
-    import sim.bem as bem
+    import sim.hydro.bem as bem
     from sim import Simulation
-    from sim.config import SCENES_DIR, available_scenes, load_scene, with_overrides
-    from sim.memory_fit import main as fit_all
-    from sim.system import build
+    from sim.hydro.memory_fit import main as fit_all
+    from sim.scene.config import SCENES_DIR, available_scenes, load_scene, with_overrides
+    from sim.system.tree import build
 
     shipped, work = bem.SHIPPED, bem.user_cache().parent / "ship-solves"  # kept: a run stopped half way resumes
     os.environ[bem.CACHE_ENV] = str(work)

@@ -5,7 +5,7 @@ ratio r = rho_body / rho_water, two independent ways.
   orientations, on the exact panel model with damping, run until at rest; the final tilt of the face
   normal nearest the vertical (0: face up, 45: edge up, 54.7: corner up).
 - Static: at each r, the orientation of least potential U = M g (z_G - z_B) over all orientations
-  (sim/hydrostatics.py: Nelder-Mead from face-, edge- and corner-up and random starts), with no
+  (sim/hydro/hydrostatics.py: Nelder-Mead from face-, edge- and corner-up and random starts), with no
   dynamics at all.
 
 Each dynamic case is a dot, coloured by how it settled: at rest in the lowest-energy state the sweep
@@ -26,8 +26,8 @@ import numpy as np
 
 from sim.commands.sweep import SweepArgs
 from sim.commands.sweep import sweep as run_sweep
-from sim.config import FluidConfig
 from sim.errors import ConfigError
+from sim.scene.config import FluidConfig
 
 REPORTS = Path(__file__).resolve().parent.parent / "reports"
 
@@ -67,9 +67,9 @@ def starts() -> list[np.ndarray]:
 
 def static_tilts(ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Tilt (degrees) and potential (J) of the least-energy orientation of the 1 m cube at each ratio."""
-    from sim.body import make_box
-    from sim.hydrostatics import lowest_orientation
-    from sim.rotation import matrix_to_quat
+    from sim.bodies.body import make_box
+    from sim.bodies.rotation import matrix_to_quat
+    from sim.hydro.hydrostatics import lowest_orientation
     from sim.sweeps.chunk import nearest_face_tilt
 
     fluid = FluidConfig()

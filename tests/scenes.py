@@ -3,7 +3,7 @@
 import functools
 from pathlib import Path
 
-from sim.config import BodyConfig, FluidConfig, InitialConfig, SceneConfig, StepConfig
+from sim.scene.config import BodyConfig, FluidConfig, InitialConfig, SceneConfig, StepConfig
 
 
 def box_scene(integrator="splitting", dt=0.01, *, damping=50.0, g=9.81, rho=1000.0, z=-5.0, omega=(0.3, 2.0, 0.1), n=4, **step):
@@ -24,7 +24,7 @@ def shipped_solve(scene: str) -> Path:
     import numpy as np
 
     from sim import Simulation, load_scene
-    from sim.bem import SHIPPED
+    from sim.hydro.bem import SHIPPED
 
     c = Simulation(load_scene(scene), backend="numpy").model.radiation.coefficients
     return next(p for p in sorted(SHIPPED.glob("*.npz")) if np.array_equal(np.load(p)["damping"], c.damping))

@@ -628,7 +628,7 @@ def test_a_recording_replays_the_sea_rising_over_its_ramp(tmp_path):
     """`run --record` of the waves preset with a 2 s ramp: every sea surface the replay page sends is the run's sea at
     that time (float32), flat at the start, r(t) of its height on the ramp and full after it."""
     from sim import load_scene, with_overrides
-    from sim.water import make_water
+    from sim.water.seas import make_water
 
     page = tmp_path / "run.html"
     done = subprocess.run([sys.executable, "-m", "app.record", "run", "--scene", "waves", "--wave-ramp", "2", "--t-end", "3", "--record",
@@ -795,7 +795,7 @@ def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has
     only what its cells cannot show; the mesh covers its square once with no T-junction (a crack the sky shows
     through): every edge inside it is shared by exactly two triangles, all facing up."""
     from app.water import LIGHT, SeaGrid, linear, sea_glb, shade, shade_colours, vertex_normals
-    from sim.water import Waves
+    from sim.water.seas import Waves
 
     rng = np.random.default_rng(3)
     omega = np.array([0.7, 2.5])  # 126 m and 9.9 m long
@@ -833,7 +833,7 @@ def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has
 def test_the_waterline_lies_on_the_hull_and_on_the_waves(make_app):
     """The cube in the `waves` preset: every vertex of the waterline the page gets lies on the cube's surface and on
     the instantaneous wave surface within 1 mm, at several instants; the wet part drawn lies under the surface."""
-    from sim.rotation import quat_to_matrix
+    from sim.bodies.rotation import quat_to_matrix
 
     app = make_app("waves")
     seen, checked = set(), 0
@@ -867,7 +867,7 @@ def test_follow_moves_the_world_under_the_pages_cameras_and_reset_view_restores_
 
     from app.page import Page
     from app.scene import ROOT
-    from sim.config import SCENES_DIR
+    from sim.scene.config import SCENES_DIR
 
     waves = tmp_path / "waves.toml"
     waves.write_text((SCENES_DIR / "waves.toml").read_text().replace("[waves]\n", "[waves]\nramp = 0.0\n"))

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import trimesh
 
-import sim.bem as bem
-from sim.bem import Coefficients, radiation_coefficients, wet_mesh
+import sim.hydro.bem as bem
 from sim.errors import ConfigError
+from sim.hydro.bem import Coefficients, radiation_coefficients, wet_mesh
 
 # Hulme (1982), J. Fluid Mech. 121: 443-463: a floating hemisphere of radius a in deep water, heave
 KA = np.array([0.05, 0.3, 0.5, 1.0, 2.0, 5.0])

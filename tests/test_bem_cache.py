@@ -17,13 +17,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.bem import Coefficients, check, verify_digest
+from sim.hydro.bem import Coefficients, check, verify_digest
 from tests.scenes import shipped_solve
 
 ROOT = Path(__file__).resolve().parent.parent
 RUN = ["run", "--scene", "sphere", "--density", "400", "--t-end", "0.1"]
 """The sphere preset made lighter: a rest pose whose coefficients are not shipped, so the cache is asked."""
-FAKE_SOLVE = ("import sys, sim.bem as bem\n"
+FAKE_SOLVE = ("import sys, sim.hydro.bem as bem\n"
               f"bem.solve = lambda *a, **k: bem.Coefficients.load(bem.SHIPPED / '{shipped_solve('sphere').name}')\n"
               "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
 
@@ -145,7 +145,7 @@ def test_a_tampered_cache_file_is_refused_in_one_line_without_a_solver(key_name,
     )
 
 
-NO_SOLVE = ("import sys, sim.bem as bem\n"
+NO_SOLVE = ("import sys, sim.hydro.bem as bem\n"
             "bem.solve_parts = lambda *a, **k: sys.exit('the test failed: a BEM solve started')\n"
             "from sim.commands import main\nsys.exit(main(sys.argv[1:]))")  # fmt: skip
 
@@ -173,10 +173,10 @@ def test_every_preset_with_radiation_finds_its_shipped_solve(monkeypatch, tmp_pa
     """A fresh machine solves nothing for the presets: each one with radiation (still water, and in waves with the
     diffraction) finds its coefficients shipped. (The sphere's key once hashed a -0.0 on its water line: every new
     machine re-solved it, and a viewer switching the sphere to waves waited on the solve.)"""
-    import sim.bem as bem
-    from sim.config import available_scenes, load_scene, with_overrides
+    import sim.hydro.bem as bem
+    from sim.scene.config import available_scenes, load_scene, with_overrides
     from sim.simulation import Simulation
-    from sim.system import build
+    from sim.system.tree import build
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("a preset's coefficients were solved, not found shipped"))

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.bem import Coefficients
-from sim.bem_file import matched, moved
 from sim.errors import ConfigError
-from sim.wamit import read_out
+from sim.hydro.bem import Coefficients
+from sim.io.bem_file import matched, moved
+from sim.io.wamit import read_out
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO, G = 1000.0, 9.81
@@ -188,8 +188,8 @@ def test_rm3_runs_the_same_from_its_solve_written_as_a_wamit_file(tmp_path):
     """rm3's shipped Capytaine solve written as WAMIT prints it (whole-degree phases, its Froude-Krylov force and
     diffraction summed as WAMIT gives them): read back, split over floatsim's own wet surfaces and fitted anew, the
     float's and spar's heave over 60 s of regular waves within 2 % of the float's amplitude of the run from the solve."""
-    from sim.config import load_scene
-    from sim.system import build
+    from sim.scene.config import load_scene
+    from sim.system.tree import build
 
     system, _ = build(load_scene("rm3"))
     c = system.radiation.coefficients

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim.body import make_box, make_mesh_body
-from sim.config import BodyConfig, ConfigError, SceneConfig, validate
+from sim.bodies.body import make_box, make_mesh_body
+from sim.scene.config import BodyConfig, ConfigError, SceneConfig, validate
 
 
 @pytest.mark.parametrize("n", [1, 3, 10])

@@ -20,7 +20,7 @@ def start_viewer(scene: str, **kwargs):
 
 def storm_at_full_height(tmp_path) -> str:
     """The storm preset with its sea at full height from the start (its ramp would take 31.5 s): a scene file."""
-    from sim.config import SCENES_DIR
+    from sim.scene.config import SCENES_DIR
 
     path = tmp_path / "storm.toml"
     path.write_text((SCENES_DIR / "storm.toml").read_text().replace("[waves]\n", "[waves]\nramp = 0.0\n"))
@@ -89,7 +89,7 @@ def settled(read, quiet: float = 1.0, timeout: float = 20.0) -> np.ndarray:
 def projected(camera, x: np.ndarray) -> np.ndarray:
     """Where the point x falls in the page's frame, in half-widths and half-heights from its centre (viser's
     cameras are OpenCV's: +z forward, +y down; fov is vertical)."""
-    from sim.rotation import quat_to_matrix
+    from sim.bodies.rotation import quat_to_matrix
 
     p = quat_to_matrix(np.asarray(camera.wxyz, float)).T @ (x - np.asarray(camera.position, float))
     tan = math.tan(0.5 * camera.fov)

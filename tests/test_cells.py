@@ -9,8 +9,8 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, Simulation, State, StillWater, load_scene, with_overrides
-from sim.body import make_box, make_mesh_body
-from sim.hydrostatics import hydrostatics
+from sim.bodies.body import make_box, make_mesh_body
+from sim.hydro.hydrostatics import hydrostatics
 from sim.simulation import CSV_COLUMNS, observe
 
 RHO_G = 1000.0 * 9.81
@@ -149,7 +149,7 @@ def rested(mesh, **changes):
     """A Simulation of `mesh` (default force model for a mesh unless changed) placed at its rest height, at rest."""
     import dataclasses
 
-    from sim.hydrostatics import at_rest
+    from sim.hydro.hydrostatics import at_rest
 
     sim = Simulation(with_overrides(load_scene("rest"), body__density=500.0, fluid__damping=0.0, **changes), mesh=mesh)
     sim.state = dataclasses.replace(sim.state, x_world=np.array([0.0, 0.0, at_rest(sim.body, sim.params)[0]]))
@@ -180,7 +180,7 @@ def test_mesh_samples_are_at_least_the_count_asked_and_keep_the_symmetry():
     """Edges longer than a threshold are halved, all alike: at least the count asked, at most about
     twice it, and a mirror-symmetric mesh keeps symmetric samples (their area-weighted centroid stays
     at the mesh's centre)."""
-    from sim.body import make_mesh_body
+    from sim.bodies.body import make_mesh_body
 
     box = trimesh.creation.box(extents=(1.0, 0.6, 0.3))
     for n in (20, 600, 1500):

@@ -137,7 +137,7 @@ def test_help_says_where_unset_flags_come_from(capsys):
 @pytest.mark.parametrize("command", ["run", "sweep"])
 def test_help_lists_every_preset(command):
     """`python -m sim run --help` (and sweep's) names the presets --scene takes, each one (issue 39)."""
-    from sim.config import available_scenes
+    from sim.scene.config import available_scenes
 
     done = subprocess.run(
         [sys.executable, "-m", "sim", command, "--help"], capture_output=True, text=True, env={**os.environ, "COLUMNS": "400"}

@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import sim.forces
+import sim.hydro.forces
 from sim import FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
-from sim.body import make_box
-from sim.forces import TERMS, Load, Term
+from sim.bodies.body import make_box
+from sim.hydro.forces import TERMS, Load, Term
 from sim.kernels import COMPILED_TERMS, Spec, pack, sea_pack, specialised
 from sim.kernels import Model as Packed
 from sim.kernels.layout import Scratch
-from sim.water import regular_waves
+from sim.water.seas import regular_waves
 
 POSES = list(zip(Rotation.random(4, random_state=3).as_quat(scalar_first=True), np.linspace(-0.3, 0.25, 4)))
 TWISTS = np.random.default_rng(7).normal(size=(4, 6))
@@ -74,12 +74,12 @@ def test_a_term_without_a_compiled_twin_runs_on_numpy_and_says_so(monkeypatch):
     def push(body, water, fluid, wet, twist, t) -> Load:
         return Load(np.array([3.0, 0.0, 0.0]), np.zeros(3))
 
-    monkeypatch.setattr(sim.forces, "TERMS", TERMS + (Term("push", push, used=lambda fluid: True),))
+    monkeypatch.setattr(sim.hydro.forces, "TERMS", TERMS + (Term("push", push, used=lambda fluid: True),))
     scene = with_overrides(load_scene("damped"), step__t_end=1.0)
     pushed = Simulation(scene, backend="numba")
     assert not pushed.compiled and any("push" in note and "numpy" in note for note in pushed.notes), pushed.notes
     pushed.step(100)
-    monkeypatch.setattr(sim.forces, "TERMS", TERMS)
+    monkeypatch.setattr(sim.hydro.forces, "TERMS", TERMS)
     plain = Simulation(scene, backend="numba")
     assert plain.compiled
     plain.step(100)

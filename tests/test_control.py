@@ -1,4 +1,4 @@
-"""Take-off control (sim/control.py, control_gains.py): the frequency domain's optimum, the latched oscillator's periodic
+"""Take-off control (sim/control/laws.py, control_gains.py): the frequency domain's optimum, the latched oscillator's periodic
 orbit, the PI loop's limit, a Python callable, a system of one against one body, and the one-line refusals."""
 
 from __future__ import annotations
@@ -56,8 +56,8 @@ def test_reactive_control_of_the_point_absorber_absorbs_the_complex_conjugate_op
     complex-conjugate control's k and c and its power, which is |X3|^2 a^2 / (8 B33) of the BEM solve; the run with those
     gains absorbs it within 2 % (measured 0.1 %), and the best damper alone a twelfth of it."""
     from sim import Simulation
-    from sim.config import load_scene, with_overrides
-    from sim.diffraction import transfer_at
+    from sim.hydro.diffraction import transfer_at
+    from sim.scene.config import load_scene, with_overrides
 
     T, H = 3.5, 0.004  # small waves: the motion at the optimum stays well inside the cube's 0.1 m freeboard
     gains = _gains("--scene", "point-absorber", "--wave-period", str(T), "--wave-height", str(H))
@@ -84,9 +84,9 @@ def test_reactive_control_of_rm3_absorbs_the_two_body_optimum(tmp_path):
     from dataclasses import replace
 
     from sim import Simulation
-    from sim.config import load_scene, with_overrides
-    from sim.control_gains import system_port
-    from sim.system_frequency import response
+    from sim.control.gains import system_port
+    from sim.scene.config import load_scene, with_overrides
+    from sim.system.frequency import response
 
     T, H = 5.5, 0.2
     gains = _gains("--scene", "rm3", "--body", "float", "--wave-period", str(T), "--wave-height", str(H))
@@ -198,7 +198,7 @@ def test_a_latched_decay_keeps_the_energy_balance(tmp_path):
     share of the kinetic energy counted) stays the starting energy to the scheme's order, and the lock held the joint
     for part of the time."""
     from sim import Simulation
-    from sim.config import load_scene, with_overrides
+    from sim.scene.config import load_scene, with_overrides
 
     path = tmp_path / "latched-system.toml"
     path.write_text(SYSTEM_OF_ONE)
@@ -237,7 +237,7 @@ def test_a_python_callable_drives_the_take_off():
     the scene's damper does (implicit) within 1 %; the wave state it reads is the sea's surface over the body (the CSV's
     eta where the body started)."""
     from sim import Simulation
-    from sim.config import load_scene
+    from sim.scene.config import load_scene
 
     scene = load_scene("point-absorber")
     reference = Simulation(scene, backend="numpy")

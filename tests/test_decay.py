@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from sim import Simulation, load_scene, with_overrides
+from sim.bodies.surface import wet_panels
 from sim.decay import analyse, release, signal
-from sim.surface import wet_panels
-from sim.water import StillWater
+from sim.water.seas import StillWater
 from studies.__main__ import main as studies_main
 
 

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import sim.bem as bem
+import sim.hydro.bem as bem
 from sim import Simulation, State, load_scene, with_overrides
-from sim.body import make_box
-from sim.diffraction import transfer_at
+from sim.bodies.body import make_box
+from sim.hydro.diffraction import transfer_at
 from studies.accuracy.drifting import heave_rao, sphere_in_waves, wavelength
 from studies.accuracy.excitation import frequency_domain_rao, time_domain_rao
 
@@ -202,7 +202,7 @@ def test_the_csv_carries_the_diffraction_power(tmp_path):
     """`run` writes P_diff = F_d . (u, omega): here recomputed from the sphere's shipped excitation, the CSV's own
     positions and velocities and a ramp of 1 s (the force grows with the waves); zero with diffraction off."""
     from sim.simulation import CSV_COLUMNS
-    from sim.water import regular_waves
+    from sim.water.seas import regular_waves
 
     def run(*extra: str) -> np.ndarray:
         out = tmp_path / "run.csv"

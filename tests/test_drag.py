@@ -9,8 +9,8 @@ from scipy.spatial.transform import Rotation
 
 from sim import Simulation, load_scene, with_overrides
 from sim.commands import main
-from sim.config import FluidConfig
-from sim.forces import drag
+from sim.hydro.forces import drag
+from sim.scene.config import FluidConfig
 from tests.covering import cases, still
 
 RHO, G = 1000.0, 9.81

@@ -1,4 +1,4 @@
-"""The mean wave drift force (sim/drift.py): Maruo's far-field relation from the solve's Kochin functions, checked
+"""The mean wave drift force (sim/hydro/drift.py): Maruo's far-field relation from the solve's Kochin functions, checked
 against the momentum the waves carry through a control surface around the body, and the energy they carry off."""
 
 import math
@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from sim import bem
-from sim.drift import flux_coefficient, mean_drift
+from sim.hydro import bem
+from sim.hydro.drift import flux_coefficient, mean_drift
 
 RHO, G = 1025.0, 9.81
 OMEGA = np.array([1.5, 2.5, 3.5])
@@ -157,7 +157,7 @@ def _run(tmp_path, name, *flags, backend="numba"):
 def _drift_of(scene_name: str, **overrides):
     """The run's own drift model (Simulation's radiation.drift) and coefficients, for the scene with `overrides`."""
     from sim import Simulation
-    from sim.config import load_scene, with_overrides
+    from sim.scene.config import load_scene, with_overrides
 
     sim = Simulation(with_overrides(load_scene(scene_name), waves__drift=True, **overrides), backend="numpy")
     return sim, sim.model.radiation.drift, sim.model.radiation.coefficients
@@ -215,7 +215,7 @@ def test_the_moored_buoy_carries_the_drift_force_on_its_lines(tmp_path):
     within 3 % (measured 0.3 %: 3.433 N of 3.444 N), and the buoy's mean offset by that force over the lines'
     horizontal stiffness within 10 % (0.8 %: 40.1 mm of 40.4 mm)."""
     pytest.importorskip("moordyn")
-    from sim.equilibrium import pull_stiffness
+    from sim.hydro.equilibrium import pull_stiffness
 
     sea = {"waves__kind": "regular", "waves__height": 0.1, "waves__period": 2.0}
     sim, drift, _ = _drift_of("moored-buoy", **sea)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sim import Simulation, load_scene, with_overrides
-from sim.rotation import rotation_quat
+from sim.bodies.rotation import rotation_quat
 
 
 def test_rest_scene_stays_put_without_any_initial_velocity():

@@ -138,7 +138,7 @@ def test_explicit_schemes_past_their_limit_stop_clearly(name):
 def test_implicit_is_stable_for_light_spinning_tilted_bodies_at_any_damping(d, dt, forces):
     """Stable for any damping, also where rotation and damping couple hardest: a light cube (1 and 100
     kg/m^3) tilted and spinning at 50 rad/s, half in the water. The energy only falls and the spin dies."""
-    from sim.rotation import rotation_quat
+    from sim.bodies.rotation import rotation_quat
 
     for density in (1.0, 100.0):
         scene = with_overrides(load_scene("rest"), body__density=density, fluid__damping=d, fluid__forces=forces, step__dt=dt,

@@ -1,4 +1,4 @@
-"""Farms ([farm], sim/farm.py): the grid laid out as [[bodies]], each device's power (without radiation: the one
+"""Farms ([farm], sim/scene/farm.py): the grid laid out as [[bodies]], each device's power (without radiation: the one
 device's), the refusals and the BEM solve's memory limit."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.config import load_scene, with_overrides
 from sim.errors import ConfigError
+from sim.scene.config import load_scene, with_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -73,7 +73,7 @@ def test_a_farm_it_cannot_build_is_one_line(tmp_path):
 
 def test_a_solve_past_the_memory_is_refused_with_its_numbers(monkeypatch):
     """The joint solve's dense matrices, 32 N^2 bytes: refused past half the memory available, before any is made."""
-    from sim import farm, limits
+    from sim.scene import farm, limits
 
     monkeypatch.setattr(limits, "available_bytes", lambda: 1.0e9)
     farm.check_panels(3000, 5)  # 288 MB: within 500 MB
@@ -84,7 +84,7 @@ def test_a_solve_past_the_memory_is_refused_with_its_numbers(monkeypatch):
 def _pair(spacing: float, omega: float | None = None):
     """point-absorber's farm of two, `spacing` apart along x (the waves' heading), in waves 10 cm high at the solve's
     frequency nearest 2 pi / 2.2 s (or at `omega`): (system, rest, frequency index)."""
-    from sim.system import build
+    from sim.system.tree import build
 
     system, _ = build(with_overrides(load_scene("point-absorber"), farm__rows=1, farm__columns=2, farm__spacing=spacing))
     c = system.radiation.coefficients
@@ -111,9 +111,9 @@ def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkey
     pair. The devices feel each other: each one's interaction factor q = P / P_alone (the lone device's power with its
     own solve) differs from 1 by more than the 2 % tolerance, the front one's and the back one's differently, and the run's
     q matches the frequency domain's within 2 %."""
-    import sim.bem as bem
-    from sim.system import build
-    from sim.system_frequency import response, steady_start
+    import sim.hydro.bem as bem
+    from sim.system.frequency import response, steady_start
+    from sim.system.tree import build
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped farm coefficients were not found"))
@@ -127,7 +127,7 @@ def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkey
     got = np.array([powers[g.coordinate] for g in slides])
     from dataclasses import replace
 
-    from sim.config import BodyEntry, ConstraintConfig, InitialConfig, validate
+    from sim.scene.config import BodyEntry, ConstraintConfig, InitialConfig, validate
 
     one = with_overrides(load_scene("point-absorber"), waves__period=2 * np.pi / w, waves__ramp=0.0)  # the lone device as a system of one
     alone_system, alone_rest = build(

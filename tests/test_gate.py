@@ -265,7 +265,7 @@ def test_a_change_that_needs_a_boundary_element_solve_is_refused_not_solved_on_t
     """A density from a page moves the moored buoy to another draft, whose radiation is in no shipped or cached solve: the
     viewer says so and keeps the density it had, instead of stopping the run for the ~35 s solve (it did, for everyone)."""
     pytest.importorskip("moordyn")
-    monkeypatch.setattr("sim.bem.user_cache", lambda: tmp_path)  # nothing cached: the shipped preset's solve only
+    monkeypatch.setattr("sim.hydro.bem.user_cache", lambda: tmp_path)  # nothing cached: the shipped preset's solve only
     with viewer("moored-buoy") as app:
         before = app.sync().density
         asked = time.monotonic()

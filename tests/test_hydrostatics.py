@@ -6,10 +6,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, StillWater
-from sim.body import make_box, make_mesh_body
-from sim.config import SCENES_DIR
-from sim.forces import pressure
-from sim.hydrostatics import hydrostatics
+from sim.bodies.body import make_box, make_mesh_body
+from sim.hydro.forces import pressure
+from sim.hydro.hydrostatics import hydrostatics
+from sim.scene.config import SCENES_DIR
 
 
 @pytest.mark.parametrize("r", [0.2, 0.5, 0.9])
@@ -90,9 +90,9 @@ def test_the_sphere_preset_is_upright_stable_about_every_axis():
     """The sphere preset's faceted icosphere (vertex up: a five-fold symmetric waterplane) has GM > 0 about both
     waterplane axes, so it rights itself; with an edge up, as it was shipped before, GM was -1.1e-4 m about one axis and
     it tipped to 33 degrees in 1000 s. A perfect sphere's GM is 0 (neutral): the facets decide the sign."""
-    from sim.body import make_body
-    from sim.config import load_scene
-    from sim.hydrostatics import at_rest
+    from sim.bodies.body import make_body
+    from sim.hydro.hydrostatics import at_rest
+    from sim.scene.config import load_scene
 
     scene = load_scene("sphere")
     for exact in (True, False):

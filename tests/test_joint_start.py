@@ -80,9 +80,9 @@ def test_a_long_bem_max_period_keeps_the_solve_grid_above_zero():
     for 100 s waves: its spacing is 0.17 rad/s); shorter asks reach past 2 pi / T."""
     import math
 
-    from sim.bem import default_frequencies
-    from sim.config import FluidConfig
-    from sim.radiation import longest_wave
+    from sim.hydro.bem import default_frequencies
+    from sim.hydro.radiation import longest_wave
+    from sim.scene.config import FluidConfig
 
     for length, period in ((1.0, 100.0), (28.0, 500.0), (28.0, 60.0)):
         w = default_frequencies(length, lowest=longest_wave(FluidConfig(bem_max_period=period), None))

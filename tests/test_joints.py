@@ -206,8 +206,8 @@ def test_a_heaving_converter_absorbs_the_frequency_domain_power():
     solve, in 1 cm regular waves: the heave amplitude and the mean absorbed power (1/2) c omega^2 |xi|^2 a^2
     match the one-dof frequency-domain solution xi = X_3 / (-omega^2 (m + A_33) - i omega (B_33 + c) + rho g A_wp)
     within 2 % (the run starts on the linear steady state, its radiation memory's too)."""
-    import sim.bem as bem
-    from sim.body import make_box
+    import sim.hydro.bem as bem
+    from sim.bodies.body import make_box
 
     c_pto, a, z_rest = 2000.0, 0.01, -0.4
     box = make_box((1.0, 1.0, 1.0), 10, 900.0)

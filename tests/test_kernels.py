@@ -8,11 +8,11 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from sim import FluidConfig, Model, Simulation, SimulationDiverged, State, StillWater, load_scene, make_integrator, with_overrides
-from sim.body import make_box, make_mesh_body
+from sim.bodies.body import make_box, make_mesh_body
 from sim.kernels import NO_RADIATION, SCHEMES, Spec, pack, sea_pack, spec_of, specialised
 from sim.kernels.layout import Model as Packed
 from sim.kernels.layout import Scratch
-from sim.water import jonswap_waves, regular_waves
+from sim.water.seas import jonswap_waves, regular_waves
 from tests.covering import EVERY, LINEAR, cases, still
 
 WATER_KIND = {"still": False, "regular": True, "jonswap": True, "spread": True}
@@ -360,8 +360,8 @@ def test_compiled_radiation_with_a_turned_rest_pose(monkeypatch):
     from them. Kernel and reference agree, and the heave is the unturned cube's."""
     import dataclasses
 
-    import sim.bem as bem
-    from sim.body import make_box
+    import sim.hydro.bem as bem
+    from sim.bodies.body import make_box
 
     cube = make_box((1.0, 1.0, 1.0), 10, 900.0)
     upright = bem.radiation_coefficients(cube.mesh_vertices + [0.0, 0.0, -0.4], cube.mesh_faces, progress=False, center=(0.0, 0.0, -0.4))

@@ -1,4 +1,4 @@
-"""The lids the BEM solves get against irregular frequencies (sim/lid.py): the whole section of every hull just under
+"""The lids the BEM solves get against irregular frequencies (sim/hydro/lid.py): the whole section of every hull just under
 the water line, whatever its outline (issue 38: Capytaine's generate_lid as called covered 2.52 of a cylinder's 3.14 m2,
 110 of the rm3 float's 233 m2 and nothing of the spar). Read from the bodies the solve is handed, the solve stopped
 before it starts."""
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim import bem
-from sim.hydrostatics import hydrostatics
+from sim.hydro import bem
+from sim.hydro.hydrostatics import hydrostatics
 
 
 class Handed(Exception):
@@ -62,8 +62,8 @@ def test_a_cylinders_lid_covers_its_whole_section(monkeypatch, tmp_path):
 def test_rm3s_lids_cover_the_float_annulus_and_the_spar(monkeypatch, tmp_path):
     """rm3 as its scene builds it: the float's lid is its annulus (its waterplane, about 233 m2, the hole where the spar
     passes left open) and the spar's its column; together the two bodies' waterplane areas, from floatsim's hydrostatics."""
-    from sim.config import load_scene, with_overrides
-    from sim.system import build
+    from sim.scene.config import load_scene, with_overrides
+    from sim.system.tree import build
 
     scene = with_overrides(load_scene("rm3"), waves__kind="still")
     body = handed_body(monkeypatch, tmp_path, lambda: build(scene))
@@ -86,10 +86,10 @@ def test_every_one_body_preset_with_radiation_gets_a_whole_lid(monkeypatch, tmp_
     cube free and moored: each lid covers its hull's section at its depth (floatsim's hydrostatics, the body raised so
     that plane is the water line), at 1 % of the draft under the water line."""
     from sim import Simulation
-    from sim.body import make_body
-    from sim.config import load_scene
-    from sim.equilibrium import scene_rest
-    from sim.rotation import quat_to_matrix
+    from sim.bodies.body import make_body
+    from sim.bodies.rotation import quat_to_matrix
+    from sim.hydro.equilibrium import scene_rest
+    from sim.scene.config import load_scene
 
     config = load_scene(scene)
     body = handed_body(monkeypatch, tmp_path, lambda: Simulation(config, backend="numpy"))

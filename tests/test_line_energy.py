@@ -1,4 +1,4 @@
-"""The mooring lines' energy ([moorings] energy, sim/line_energy.py): what the lines store and dissipate closes the energy of
+"""The mooring lines' energy ([moorings] energy, sim/lines/line_energy.py): what the lines store and dissipate closes the energy of
 the bodies and lines together, through the CLI's CSV."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def released_buoy(tmp_path: Path, dtm_divisor: int) -> Path:
     """moored-buoy's spread as a MoorDyn file (MoorDyn's own step divided by dtm_divisor), without waves or radiation,
     the buoy released 1 m downstream and 0.1 m high of where it rests."""
     from sim import load_scene
-    from sim.moorings import lines_of
+    from sim.lines.moorings import lines_of
 
     scene = load_scene("moored-buoy")
     start = np.array([1.0, 0.3, -0.3])

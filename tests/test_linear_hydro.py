@@ -1,4 +1,4 @@
-"""Linear hydrostatics and Froude-Krylov force (`[fluid] hydro = "linear"`, sim/linear_hydro.py): the loads are the
+"""Linear hydrostatics and Froude-Krylov force (`[fluid] hydro = "linear"`, sim/hydro/linear_hydro.py): the loads are the
 exact model's to first order about rest, the Froude-Krylov force is the BEM solve's, and a run is linear theory itself."""
 
 import dataclasses
@@ -10,12 +10,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 from test_rm3 import _shipped_only, kicked_float, time_domain  # noqa: F401  (the fixture: the shipped coefficients, no solve)
 
-from sim.config import load_scene, with_overrides
-from sim.forces import Model
-from sim.linear_hydro import LinearLoads, moved, rotation_vector
-from sim.system import build
-from sim.system_frequency import response, steady_start
-from sim.water import StillWater, regular_waves
+from sim.hydro.forces import Model
+from sim.hydro.linear_hydro import LinearLoads, moved, rotation_vector
+from sim.scene.config import load_scene, with_overrides
+from sim.system.frequency import response, steady_start
+from sim.system.tree import build
+from sim.water.seas import StillWater, regular_waves
 
 
 def rm3(**changes):
@@ -120,7 +120,7 @@ def test_a_linear_system_on_slides_is_stepped_exactly():
     stepper gives the same joint coordinates at dt = 0.4 s as at 0.0125 s and at 0.32 s (a step across the ramp's end,
     split there), to 1e-12 m, and Stormer-Verlet (the general scheme) converges to it at second order, the take-off's
     absorbed energy too."""
-    from sim.system_linear import exact_linear
+    from sim.system.linear import exact_linear
 
     system, s0 = build(rm3())
     exact = exact_linear(system, s0)
@@ -151,7 +151,7 @@ def test_the_exact_stepper_keeps_the_frequency_domains_steady_state(period):
     i = int(np.argmin(abs(c.omega - 2 * np.pi / period)))
     w, a = float(c.omega[i]), 0.5
     system, rest = build(rm3(waves__height=2 * a, waves__period=2 * np.pi / w, waves__ramp=0.0))  # (started on the steady state)
-    from sim.system_linear import exact_linear
+    from sim.system.linear import exact_linear
 
     exact = exact_linear(system, rest)
     xi = response(system, rest, i, froude_krylov=np.concatenate([loads.X[0] for loads in system.loads]) / a)

@@ -1,4 +1,4 @@
-"""Mooring lines alone under a prescribed motion (`python -m sim lines`, sim/lines_alone.py): against OpenFAST's MoorDyn
+"""Mooring lines alone under a prescribed motion (`python -m sim lines`, sim/lines/lines_alone.py): against OpenFAST's MoorDyn
 on its own r-test case, the elastic catenary at rest and under a slow motion, and the one-line refusals."""
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ def test_the_oc4_semis_lines_close_their_energy_with_what_they_dissipate(tmp_pat
 
 
 def _catenary_tension(anchor, fairlead) -> float:
-    from sim.catenary import fairlead_tension
+    from sim.lines.catenary import fairlead_tension
 
     w = (113.35 - 1025.0 * np.pi * 0.0766**2 / 4) * 9.80665  # the file's chain in its water
     gap = np.asarray(fairlead) - np.asarray(anchor)
@@ -77,7 +77,7 @@ def _catenary_tension(anchor, fairlead) -> float:
 
 def test_a_slow_surge_pulls_as_the_elastic_catenary(tmp_path):
     """The OC4 semi's spread moved as a rigid body 8 m in surge over 400 s (a quasi-static pull): the fairlead tensions
-    MoorDyn gives (its net force on the fairlead node) are the elastic catenary's (sim.catenary) within 1 % all the way
+    MoorDyn gives (its net force on the fairlead node) are the elastic catenary's (sim.lines.catenary) within 1 % all the way
     (measured 0.8 %), up-wave and down-wave lines alike."""
     t = np.linspace(0.0, 400.0, 81)
     surge = 4.0 * (1 - np.cos(np.pi * t / 400.0))  # from rest to rest

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from sim.catenary import fairlead_tension
-from sim.rotation import quat_to_matrix
+from sim.bodies.rotation import quat_to_matrix
+from sim.lines.catenary import fairlead_tension
 
 ROOT = Path(__file__).resolve().parents[1]
 W = (1.0 - 1000.0 * np.pi * 0.02**2 / 4) * 9.81
@@ -76,8 +76,8 @@ def test_one_body_scenes_refuse_attachments_in_one_line():
     done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", "moored-buoy", "--t-end", "0.1"], cwd=ROOT, capture_output=True,
                           text=True, timeout=300, input="")  # fmt: skip
     assert done.returncode == 0, done.stderr  # (as shipped: no attach)
-    from sim.config import load_scene, with_overrides
     from sim.errors import ConfigError
+    from sim.scene.config import load_scene, with_overrides
 
     with pytest.raises(ConfigError, match="it is for scenes of \\[\\[bodies\\]\\]"):
         with_overrides(load_scene("moored-buoy"), moorings__attach="body")

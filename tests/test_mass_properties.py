@@ -79,8 +79,8 @@ def test_a_sweep_and_a_live_density_change_keep_the_given_inertia(tmp_path):
     """Given moments are the body's whatever its mass: an ensemble of two densities (a sweep's cases) and a live
     density change keep them, where a shell's inertia scales with the mass."""
     from sim import Simulation
-    from sim.config import load_scene, with_overrides
     from sim.ensemble import Ensemble
+    from sim.scene.config import load_scene, with_overrides
 
     scene = load_scene(_scene(tmp_path, "inertia = [50.0, 40.0, 60.0]"))
     ensemble = Ensemble([with_overrides(scene, body__density=d) for d in (400.0, 600.0)], backend="numpy")

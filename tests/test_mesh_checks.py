@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from sim.body import MAX_TRIANGLES, load_mesh, make_mesh_body
+from sim.bodies.body import MAX_TRIANGLES, load_mesh, make_mesh_body
 from sim.errors import ConfigError
 
 DEGENERATE_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n"

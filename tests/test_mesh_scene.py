@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sim import Simulation, load_scene, with_overrides
-from sim.rotation import quat_to_matrix
+from sim.bodies.rotation import quat_to_matrix
 
 
 def metacentric_height_upright(radius=0.25, length=1.5, density=600.0):

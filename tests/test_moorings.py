@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from sim import ConfigError, Simulation, load_scene, with_overrides
-from sim.catenary import catenary, surge_stiffness
-from sim.moorings import Moorings, lines_of
+from sim.lines.catenary import catenary, surge_stiffness
+from sim.lines.moorings import Moorings, lines_of
 
 ROOT = Path(__file__).resolve().parents[1]
 RHO, G = 1000.0, 9.81
@@ -34,7 +34,7 @@ def run_cli(tmp_path, *args: str) -> tuple[subprocess.CompletedProcess, np.ndarr
 def test_a_line_at_rest_pulls_as_the_elastic_catenary(tmp_path, segments):
     """One line of the moored-buoy preset, as `run` writes its pull at t = 0 (MoorDyn's rest shape for the
     starting pose): the horizontal and vertical tension at the fairlead against the closed-form elastic
-    catenary with seabed contact (sim/catenary.py), within 1 %, closer with more segments."""
+    catenary with seabed contact (sim/lines/catenary.py), within 1 %, closer with more segments."""
     done, rows = run_cli(
         tmp_path,
         "--scene",
@@ -83,7 +83,7 @@ def test_the_catenary_holds_a_heavy_chain_at_every_offset_and_meets_the_slack_li
     """rm3-moored's chain (92 kg/m in water, EA 500 MN, 260 m from 70 m down) over 41 m of fairlead travel: each (H, V)
     puts the fairlead where it is to 1e-10 of the line's length, H grows with the span; and where the line just lifts
     off the seabed the taut solution meets the slack one, a line hanging straight down stretched by its own weight."""
-    from sim.catenary import _ends
+    from sim.lines.catenary import _ends
 
     scene = load_scene("rm3-moored")
     chain = lines_of(scene.moorings)
@@ -268,7 +268,7 @@ def test_a_recording_draws_the_lines_where_the_run_had_them():
 def test_anchors_and_fairleads_given_point_by_point_are_the_spread_they_describe(tmp_path):
     """[moorings] anchors and fairleads (a scene file's lists) in place of the spread's parameters: the same
     three lines pull the same; a count that does not match, or an anchor under the seabed, is one line and exit 2."""
-    from sim.moorings import LineSet
+    from sim.lines.moorings import LineSet
 
     base = load_scene("moored-buoy")
     lines = lines_of(base.moorings)
@@ -306,7 +306,7 @@ def test_lines_whose_moordyn_start_up_would_take_too_long_are_refused_before_it(
     import re
     import time
 
-    from sim.moorings import check_start
+    from sim.lines.moorings import check_start
 
     flags = [a for k, v in given.items() for a in (f"--{k.replace('_', '-')}", f"{v:g}")]
     started = time.monotonic()
@@ -392,7 +392,7 @@ def test_the_start_up_in_a_child_leaves_moordyn_as_the_start_up_here_would(monke
     steps, to the bit, as MoorDyn's Init in this process (where there is no fork)."""
     import os
 
-    from sim.moorings import Moorings
+    from sim.lines.moorings import Moorings
 
     scene = load_scene("moored-buoy")
     x0 = np.array(scene.initial.position)
@@ -439,8 +439,8 @@ def test_a_moordyn_file_holds_the_body_as_stiffly_as_the_spread_it_writes(tmp_pa
     BEM solve's grid reaches down past the same surge frequency (to the quarter octave) whichever way the lines are given."""
     import math
 
-    from sim.equilibrium import pull_stiffness
-    from sim.radiation import lowest_frequency
+    from sim.hydro.equilibrium import pull_stiffness
+    from sim.hydro.radiation import lowest_frequency
 
     scene = with_overrides(load_scene("moored-buoy"), fluid__radiation="none")
     path = tmp_path / "lines.txt"
@@ -457,7 +457,7 @@ def test_a_moordyn_file_holds_the_body_as_stiffly_as_the_spread_it_writes(tmp_pa
 def _as_coupled_body(text: str, place, angles_deg) -> str:
     """A MoorDyn file's Coupled points hung instead on a MoorDyn body of type Coupled at `place`, turned by `angles_deg`
     (roll, pitch, yaw): each point given relative to the body, as WEC-Sim's and OpenFAST's files give fairleads."""
-    from sim.moordyn_input import _rotation
+    from sim.lines.moordyn_input import _rotation
 
     place = np.asarray(place, float)
     R = _rotation(*np.radians(angles_deg))

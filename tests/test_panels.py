@@ -7,9 +7,9 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from sim import Simulation, load_scene, with_overrides
-from sim.forces import hydrostatic_energy
-from sim.rotation import quat_to_matrix, rotate_world
-from sim.surface import wet_panels
+from sim.bodies.rotation import quat_to_matrix, rotate_world
+from sim.bodies.surface import wet_panels
+from sim.hydro.forces import hydrostatic_energy
 
 
 def clipped_hull(vertices_world: np.ndarray, edges) -> tuple[float, np.ndarray]:
@@ -140,7 +140,7 @@ def test_sampled_model_converges_to_the_panel_model():
 def test_panels_use_the_exact_shell_inertia_and_no_longer_depend_on_n():
     """The panel model's body has the mesh shell's exact inertia ((5/18) M s^2 for the cube, whatever N),
     so its trajectories are the same for every N; the points model keeps the samples' (the report's)."""
-    from sim.body import make_box, shell_inertia
+    from sim.bodies.body import make_box, shell_inertia
 
     for n in (1, 4, 10):
         cube = make_box((1.3, 1.3, 1.3), n, 900.0, exact=True)

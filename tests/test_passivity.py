@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.bem import SHIPPED, Coefficients
-from sim.config import load_scene, with_overrides
-from sim.memory_fit import fit_memory, transfer
-from sim.radiation import misfit_note
-from sim.system import build
-from sim.system_linear import exact_linear
+from sim.hydro.bem import SHIPPED, Coefficients
+from sim.hydro.memory_fit import fit_memory, transfer
+from sim.hydro.radiation import misfit_note
+from sim.scene.config import load_scene, with_overrides
+from sim.system.linear import exact_linear
+from sim.system.tree import build
 from studies.accuracy.passivity import MISFITS, lowest_damping, scene_length, still_rm3
 from tests.scenes import shipped_solve
 
@@ -47,12 +47,13 @@ def test_every_shipped_solve_fits_a_passive_memory(path):
 def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path):
     """Each preset with radiation builds without fitting (a fit of rm3 takes 7-30 s): its fit is in
     assets/coefficients/memory under a key that covers memory_fit.py's source, so a changed fit cannot be read stale
-    (after a change: `python -m sim.memory_fit`)."""
-    from sim import Simulation, memory_fit
-    from sim.config import SCENES_DIR, available_scenes
+    (after a change: `python -m sim.hydro.memory_fit`)."""
+    from sim import Simulation
+    from sim.hydro import memory_fit
+    from sim.scene.config import SCENES_DIR, available_scenes
 
     def refuse(*args):
-        raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.memory_fit` and commit the files")
+        raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.hydro.memory_fit` and commit the files")
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(memory_fit, "_FITS", {})
@@ -69,7 +70,7 @@ def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path)
 def test_a_stored_fit_is_the_fit_it_stands_for(tmp_path):
     """The sphere's shipped fit read back is what fitting its solve now gives (the same K(i omega) to round-off), and a
     damaged cache file is fitted again, not trusted."""
-    from sim import memory_fit
+    from sim.hydro import memory_fit
 
     c = Coefficients.load(shipped_solve("sphere"))
     stored = memory_fit._read(memory_fit.STORED / f"{memory_fit.fit_key(c, 0.02, 10, 1.0)}.npz")

@@ -5,9 +5,9 @@ import pytest
 from scipy.integrate import trapezoid
 from scipy.linalg import expm
 
-import sim.bem as bem
-from sim.body import make_box
-from sim.radiation import fit_memory, transfer
+import sim.hydro.bem as bem
+from sim.bodies.body import make_box
+from sim.hydro.radiation import fit_memory, transfer
 
 
 @pytest.fixture(scope="module")
@@ -76,8 +76,8 @@ def test_fitted_memory_reproduces_added_mass_and_damping(cube):
 def test_a_fit_neither_shipped_nor_cached_is_refused_where_solves_are(cube, monkeypatch, tmp_path):
     """Inside bem.no_solves (the live viewer's simulation thread) a memory fit not on disk is a one-line ConfigError
     naming why, not seconds of fitting; outside the block the fit is made and cached, and then read inside it."""
-    from sim import memory_fit
     from sim.errors import ConfigError
+    from sim.hydro import memory_fit
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(memory_fit, "_FITS", {})

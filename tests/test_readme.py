@@ -171,7 +171,7 @@ QUOTED = re.compile(r"`(?:floatsim: error: )?((\w+) must be [^`]*?, got (-?[\d.e
 def test_the_docs_quote_the_messages_the_code_gives():
     """Every "KEY must be ..., got VALUE" the README and the docs quote is the message that value gets from the code, word
     for word (issue 39: the API page quoted "density must be > 0" where the code says "density must be >= 0.001")."""
-    from sim.config import PARAMS, ConfigError, load_scene, with_overrides
+    from sim.scene.config import PARAMS, ConfigError, load_scene, with_overrides
 
     pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
     quoted = [(page.name, *m) for page in pages for m in QUOTED.findall(page.read_text())]
@@ -186,7 +186,7 @@ def test_the_docs_quote_the_messages_the_code_gives():
 def test_the_tours_lines_say_which_extra_a_moored_scene_needs():
     """A tour line running a scene with mooring lines says it needs `.[moorings]` (issue 39: the moored buoy's did not;
     MoorDyn stays optional, see pyproject.toml)."""
-    from sim.config import load_scene
+    from sim.scene.config import load_scene
 
     block = README.split("## A tour")[1].split("```bash")[1].split("```")[0]
     moored = [line for line in block.splitlines() if (m := re.search(r"--scene (\S+)", line)) and load_scene(m.group(1)).moorings.lines]

@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from sim.config import load_scene
-from sim.water import jonswap_waves, make_water, wavenumber
+from sim.scene.config import load_scene
+from sim.water.seas import jonswap_waves, make_water, wavenumber
 
 G = 9.81
 POINT = (3.0, -2.0)

@@ -5,15 +5,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sim.config import load_scene, with_overrides
-from sim.system import build
-from sim.system_frequency import response, steady_start
+from sim.scene.config import load_scene, with_overrides
+from sim.system.frequency import response, steady_start
+from sim.system.tree import build
 
 
 @pytest.fixture(autouse=True)
 def _shipped_only(monkeypatch, tmp_path):
     """The preset's coefficients come from the shipped file: no user cache, no solve."""
-    import sim.bem as bem
+    import sim.hydro.bem as bem
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped rm3 coefficients were not found"))
@@ -122,7 +122,7 @@ def test_the_moored_rm3_solve_reaches_below_its_slowest_swing():
     two bodies swinging together, 2 pi / T with T = 2 pi sqrt((M + A_11(omega_n)) / k_11) (A_11 of both bodies' surge, k_11
     the chains' catenary stiffness): A_11 there is read inside the grid, not extrapolated (rm3's own grid starts at
     three times that frequency), and the fitted memory's surge added mass there meets the solve's within 1 %."""
-    from sim.equilibrium import pull_stiffness
+    from sim.hydro.equilibrium import pull_stiffness
 
     scene = load_scene("rm3-moored")
     system, _ = build(scene)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from sim.rotation import matrix_to_quat, quat_to_matrix, rotation_quat
+from sim.bodies.rotation import matrix_to_quat, quat_to_matrix, rotation_quat
 
 
 @pytest.mark.parametrize("angle", [0.0, 1e-12, 1e-6, 1e-4, 1e-3, 0.1, 1.0, 3.0])

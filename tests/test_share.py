@@ -17,8 +17,8 @@ from app.share import link_query, parse_link
 from app.take import Take, shot_of
 from app.upload import check_upload
 from sim import ConfigError, FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
-from sim.forces import pressure
-from sim.rotation import matrix_to_quat, quat_to_matrix
+from sim.bodies.rotation import matrix_to_quat, quat_to_matrix
+from sim.hydro.forces import pressure
 from sim.simulation import CSV_COLUMNS
 
 
@@ -192,7 +192,7 @@ def test_closed_meshes_load_in_each_format_and_unit(kind):
     content = box.export(file_type=kind)
     content = content.encode() if isinstance(content, str) else content
     check_upload(f"box.{kind}", content, "mm")
-    from sim.body import load_mesh
+    from sim.bodies.body import load_mesh
 
     assert load_mesh(content, f"box.{kind}", "mm").volume == pytest.approx(0.24, rel=1e-9)
 
@@ -274,7 +274,7 @@ def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):
         snap = app.sync()
         assert snap.body.volume == pytest.approx(0.24, rel=1e-9) and snap.settings.config.body.mesh_unit == "mm"
         # it starts a quarter of its height (0.5 m, upright as in the file) above its rest height
-        from sim.hydrostatics import at_rest
+        from sim.hydro.hydrostatics import at_rest
 
         z_rest = at_rest(snap.body, snap.params, quat_to_matrix(snap.body.q_input_body))[0]
         assert "draft 0.45" in snap.notice and snap.frame.t < 1.0

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from sim import PARAMS, TERMS, FluidConfig, Model, Simulation, StillWater, load_scene
-from sim.body import make_box
+from sim.bodies.body import make_box
 from sim.commands.run import RunArgs
 from sim.kernels.layout import coefficients, slot
 

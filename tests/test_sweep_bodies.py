@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 from test_rm3 import _shipped_only  # noqa: F401  (the fixture: the shipped coefficients, no solve)
 
-from sim.config import load_scene, with_overrides
+from sim.scene.config import load_scene, with_overrides
 from sim.sweeps.grid import case_scene
-from sim.system import build
-from sim.system_frequency import response
+from sim.system.frequency import response
+from sim.system.tree import build
 
 
 def sweep(*flags: str, timeout: float = 600) -> subprocess.CompletedProcess:

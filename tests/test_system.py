@@ -1,4 +1,4 @@
-"""Several bodies on joints (sim/system.py): checked against one-body runs, closed forms and the energy balance."""
+"""Several bodies on joints (sim/system/tree.py): checked against one-body runs, closed forms and the energy balance."""
 
 import dataclasses
 import textwrap
@@ -6,11 +6,11 @@ import textwrap
 import numpy as np
 import pytest
 
-from sim.body import Body
-from sim.config import load_scene
-from sim.forces import Model
+from sim.bodies.body import Body
+from sim.hydro.forces import Model
+from sim.scene.config import load_scene
 from sim.simulation import Simulation
-from sim.system import Member, System, body_frames, build
+from sim.system.tree import Member, System, body_frames, build
 
 
 def scene_file(tmp_path, text: str, name: str = "system.toml"):
@@ -204,7 +204,7 @@ def test_joints_hold_to_round_off(tmp_path):
     stays on its slide (the line through its start, fixed in the barge) without turning against it."""
     scene = scene_file(tmp_path, CHAIN)
     _, _, _, frames = run_chain(scene, 0.02, 2.0)
-    from sim.rotation import quat_to_matrix
+    from sim.bodies.rotation import quat_to_matrix
 
     barge0, flap0, buoy0, pivot0 = (
         np.array([0.0, 0.0, 0.05]),

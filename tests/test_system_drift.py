@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.config import load_scene
-from sim.system import build
+from sim.scene.config import load_scene
+from sim.system.tree import build
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -79,7 +79,7 @@ def test_one_body_as_a_system_of_one_feels_the_drift_the_body_does(tmp_path):
     """The sphere on a surge slide in regular waves, as the one-body scene and as one [[bodies]] entry: the same mean
     drift force (their motions from two codes: drift.body_rao and system_frequency.raos) within 1e-6."""
     from sim import Simulation
-    from sim.config import with_overrides
+    from sim.scene.config import with_overrides
 
     sea = {"waves__kind": "regular", "waves__height": 0.05, "waves__period": 1.5, "waves__drift": True, "constraint__joint": "prismatic",
            "constraint__axis": (1.0, 0.0, 0.0), "initial__position": (0.0, 0.0, 0.0)}  # fmt: skip

@@ -1,5 +1,5 @@
-"""The compiled system step (sim/kernels/system.py, kinematics.py, expm.py; sim/system_compiled.py) against the numpy
-reference (sim/system.py): each stage to round-off, then whole trajectories, and an Assembly switching between them."""
+"""The compiled system step (sim/kernels/system.py, kinematics.py, expm.py; sim/system/compiled.py) against the numpy
+reference (sim/system/tree.py): each stage to round-off, then whole trajectories, and an Assembly switching between them."""
 
 import dataclasses
 
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from sim.config import load_scene, with_overrides
+from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
-from sim.system import build
-from sim.system_compiled import CompiledStep
+from sim.system.compiled import CompiledStep
+from sim.system.tree import build
 from tests.test_system import CHAIN, MOORED, scene_file
 
 

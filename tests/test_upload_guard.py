@@ -134,10 +134,10 @@ def test_a_body_the_loop_cannot_build_never_replaces_the_running_one(app, monkey
     """With the file checks switched off, the zero-volume mesh reaches the simulation thread (as it did
     before this fix, when the body was swapped before the failure and every publish then raised
     ZeroDivisionError): the new simulation fails while it is built, and the running one goes on."""
-    import sim.body
+    import sim.bodies.body
 
-    monkeypatch.setattr(sim.body, "check_closed", lambda mesh, name: None)
-    monkeypatch.setattr(sim.body, "check_body", lambda body: body)
+    monkeypatch.setattr(sim.bodies.body, "check_closed", lambda mesh, name: None)
+    monkeypatch.setattr(sim.bodies.body, "check_body", lambda body: body)
     body = app.sync().body.name
     upload(app, "flat.obj", DEGENERATE_OBJ)
     snap = wait_for(app, lambda s: "Mesh not loaded" in s.notice, what="the loop's refusal")

@@ -13,9 +13,9 @@ import pytest
 import trimesh
 
 from sim import FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
-from sim.body import make_mesh_body
-from sim.config import ConfigError
-from sim.water import jonswap_waves, ramp_factor, regular_waves, wavenumber
+from sim.bodies.body import make_mesh_body
+from sim.scene.config import ConfigError
+from sim.water.seas import jonswap_waves, ramp_factor, regular_waves, wavenumber
 from studies.accuracy.drifting import kick_drift, period_means, wavelength
 
 RHO, G = 1000.0, 9.81
@@ -183,7 +183,7 @@ def test_panels_converge_under_refinement_and_points_converge_to_panels():
         model = Model(body, waves, FluidConfig(forces=forces))
         return np.concatenate(model.pose_loads(model.wetted(x, R, t), t))
 
-    from sim.body import make_box
+    from sim.bodies.body import make_box
 
     reference = load(box_model(edge=0.02), "panels")
     panels = [np.abs(load(box_model(edge=e), "panels") - reference).max() for e in (0.5, 0.25, 0.125, 0.0625)]

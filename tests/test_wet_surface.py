@@ -5,18 +5,18 @@ against the direct sum over components, which is the numpy reference's definitio
 import numpy as np
 import pytest
 
-from sim.body_loads import BodyLoads
-from sim.clusters import LEAF, bisection_tree
-from sim.config import load_scene, with_overrides
+from sim.bodies.clusters import LEAF, bisection_tree
 from sim.kernels import sea_pack
 from sim.kernels import water as kw
+from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
+from sim.system.body_loads import BodyLoads
 
 
 @pytest.fixture(autouse=True)
 def _shipped_only(monkeypatch, tmp_path):
     """rm3's coefficients come from the shipped file: no user cache, no solve."""
-    import sim.bem as bem
+    import sim.hydro.bem as bem
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(bem, "solve_parts", lambda *a, **k: pytest.fail("the shipped rm3 coefficients were not found"))
@@ -98,8 +98,8 @@ def test_a_short_crested_sea_s_series_matches_the_direct_sum(spreading, componen
     series of about P^3 / 6 terms a point), a long-crested sea does."""
     from dataclasses import replace
 
-    from sim.body import make_box
-    from sim.water import jonswap_waves
+    from sim.bodies.body import make_box
+    from sim.water.seas import jonswap_waves
 
     water = replace(jonswap_waves(1000.0, 9.81, 3.0, 9.0, components=components, seed=1, spreading=spreading, direction_deg=20.0), ramp=0.0)
     body = make_box((1.0, 1.0, 1.0), 10, 900.0)

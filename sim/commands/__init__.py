@@ -15,8 +15,9 @@ from typing import Annotated
 
 import tyro
 
-from ..errors import ConfigError
-from ..parameters import Param
+from sim.errors import ConfigError
+from sim.parameters import Param
+
 from .tyro_errors import parse
 
 _TYPES = {"float": float, "int": int, "choice": str, "text": str, "optional": float, "switch": bool}

@@ -14,10 +14,11 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from ..config import PARAMS, load_scene, with_overrides
-from ..errors import ConfigError
-from ..integrators import INTEGRATORS
-from ..simulation import Simulation
+from sim.bodies.integrators import INTEGRATORS
+from sim.errors import ConfigError
+from sim.scene.config import PARAMS, load_scene, with_overrides
+from sim.simulation import Simulation
+
 from . import FROM_SCENE, declared_flags, overrides
 from .progress import progress_bar
 

@@ -1,4 +1,4 @@
-"""`python -m sim gains`: a take-off's best gains in the scene's regular waves, from the frequency domain (control_gains.py):
+"""`python -m sim gains`: a take-off's best gains in the scene's regular waves, from the frequency domain (control/gains.py):
 complex-conjugate (reactive) control and its power |F a|^2 / 8 Re Z, the best damper alone, and a latching time."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..config import load_scene, with_overrides
-from ..errors import ConfigError
+from sim.errors import ConfigError
+from sim.scene.config import load_scene, with_overrides
 
 
 @dataclass
@@ -26,8 +26,8 @@ class GainsArgs:
 
 
 def gains(args: GainsArgs) -> int:
-    from ..control_gains import body_port, system_port
-    from ..simulation import Simulation
+    from sim.control.gains import body_port, system_port
+    from sim.simulation import Simulation
 
     scene = load_scene(args.scene)
     changes = {k: v for k, v in (("waves__period", args.wave_period), ("waves__height", args.wave_height)) if v is not None}

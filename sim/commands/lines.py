@@ -1,4 +1,4 @@
-"""`python -m sim lines`: mooring lines alone under a prescribed motion (lines_alone.py): MoorDyn's tensions to CSV."""
+"""`python -m sim lines`: mooring lines alone under a prescribed motion (lines/lines_alone.py): MoorDyn's tensions to CSV."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
+from sim.errors import ConfigError
 
 
 @dataclass
@@ -34,8 +34,9 @@ class LinesArgs:
 
 
 def lines(args: LinesArgs) -> int:
-    from ..lines_alone import coupled_points, motion_of, read_table, run
-    from ..moordyn_input import coupled_bodies_as_points
+    from sim.lines.lines_alone import coupled_points, motion_of, read_table, run
+    from sim.lines.moordyn_input import coupled_bodies_as_points
+
     from .output import write_whole
     from .progress import progress_bar
 

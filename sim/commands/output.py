@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
-from ..errors import WriteFailed
+from sim.errors import WriteFailed
 
 T = TypeVar("T")
 TEMPORARY = re.compile(r"_.+\.[0-9a-f]{8}\.partial(\.[a-z0-9]+)?")

@@ -15,7 +15,7 @@ import sys
 import tempfile
 import time
 
-from ..config import ConfigError, available_scenes
+from sim.scene.config import ConfigError, available_scenes
 
 
 def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, str]:
@@ -25,9 +25,9 @@ def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, 
 
 def timed_compile(scene: str, cache: str) -> tuple[float, float, int, str]:
     """timed_run of compiling the kernels the preset needs (its kernels.Spec) in a fresh process."""
-    from ..compiling import spec_argument
-    from ..config import load_scene
-    from ..simulation import Simulation
+    from sim.compiling import spec_argument
+    from sim.scene.config import load_scene
+    from sim.simulation import Simulation
 
     run = Simulation(load_scene(scene), backend="numpy")
     specs = run.specs if run.has_twin else []

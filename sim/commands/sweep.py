@@ -19,11 +19,12 @@ from typing import Annotated, Literal
 
 import tyro
 
-from ..config import available_scenes
-from ..errors import ConfigError, WriteFailed
-from ..limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
-from ..sweeps.backends import WorkerLost, run
-from ..sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
+from sim.errors import ConfigError, WriteFailed
+from sim.scene.config import available_scenes
+from sim.scene.limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
+from sim.sweeps.backends import WorkerLost, run
+from sim.sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
+
 from .interrupt import EXIT, Interrupted, StopOnCtrlC
 from .output import reason, temporaries, write_whole
 from .progress import progress_bar

@@ -30,7 +30,7 @@ _HERE = Path(__file__).resolve().parent
 
 
 def _cache_dir() -> str:
-    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "forces.py", _HERE.parent / "integrators.py"]
+    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "hydro/forces.py", _HERE.parent / "bodies/integrators.py"]
     digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()[:16]
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "floatsim")
     return os.path.join(root, f"kernels-{digest}")
@@ -52,7 +52,7 @@ class Spec(NamedTuple):
     held: bool = False
     """Whether another model gives the body a load held over each step (the mooring lines)."""
     system: bool = False
-    """Whether the body is one of several on joints (system.py): only its loads are compiled, no scheme's step."""
+    """Whether the body is one of several on joints (system/tree.py): only its loads are compiled, no scheme's step."""
 
     @property
     def key(self) -> str:
@@ -73,7 +73,7 @@ class Spec(NamedTuple):
 
 
 SYSTEM_STEP = Spec("system-step", "any", (), False, False, False, False, True)
-"""The kernels of the step of several bodies (system_compiled.py): one set for every scene, compiled and loaded as a
+"""The kernels of the step of several bodies (system/compiled.py): one set for every scene, compiled and loaded as a
 Spec is (in a child while the numpy reference runs, then from the disk cache)."""
 
 
@@ -88,7 +88,7 @@ def spec_of(model, scheme: str) -> Spec:
 
 def compiled_terms(used) -> tuple[str, ...]:
     """The terms kernels compile for a scene using the terms `used`: every linear one, and the nonlinear ones used."""
-    from ..forces import TERMS
+    from sim.hydro.forces import TERMS
 
     return tuple(t.name for t in TERMS if t.name in COMPILED_TERMS and (t.linear or t.name in used))
 
@@ -170,7 +170,7 @@ _import_shared()
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
     if spec == SYSTEM_STEP:
-        from ..system_compiled import ready
+        from sim.system.compiled import ready
 
         return ready()
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
@@ -190,7 +190,7 @@ def warm_up(spec: Spec) -> float:
     import time
 
     if spec == SYSTEM_STEP:
-        from ..system_compiled import warm
+        from sim.system.compiled import warm
 
         return warm()
     start = time.perf_counter()

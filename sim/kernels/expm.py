@@ -1,4 +1,4 @@
-"""Compiled twin of scipy.linalg.expm for the system's kicks (system.py: System.kick): Pade approximants of degree
+"""Compiled twin of scipy.linalg.expm for the system's kicks (system/tree.py: System.kick): Pade approximants of degree
 3, 5, 7, 9 or 13 with scaling and squaring (Higham 2005, "The scaling and squaring method for the matrix exponential
 revisited"), and the small dense algebra it needs, written out as loops: at 10 x 10 a BLAS or LAPACK call costs
 more than its arithmetic."""

@@ -1,4 +1,4 @@
-"""Compiled twin of system.py's kinematics (System.group_poses, _pose_of, drifted, mass_matrix, inertia, bias): the
+"""Compiled twin of system/tree.py's kinematics (System.group_poses, _pose_of, drifted, mass_matrix, inertia, bias): the
 tree packed as system_layout.Tree, each body's pose and twist Jacobian, the mass matrix with the radiation's added
 mass, and the velocity-product load b(v) with its Jacobian. J_dot is analytic (`rates`: the forward kinematics
 differentiated along each turning unit velocity, omega x r terms down the tree), the limit of the reference's central

@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..forces import TERMS
+from sim.hydro.forces import TERMS
 
 A, OMEGA, KX, KY, K, PHASE, COS, SIN = range(8)
 """Columns of the sea's components array (sea_pack)."""

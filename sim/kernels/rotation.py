@@ -1,4 +1,4 @@
-"""Compiled twin of rotation.py (and of the small vector helpers the kernels need), written out as
+"""Compiled twin of bodies/rotation.py (and of the small vector helpers the kernels need), written out as
 scalar code: numba's @ calls BLAS, which costs more than the arithmetic at 3x3."""
 
 from __future__ import annotations

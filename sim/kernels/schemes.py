@@ -280,7 +280,8 @@ def advance_many(Y, t0, n_steps, dt, geom, masses, inertias, coefs, sea, rad):
 
 def warm_up() -> None:
     """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
-    from ..body import make_box
+    from sim.bodies.body import make_box
+
     from .layout import COEF_SIZE
     from .simulation import linearised_loads, observe
     from .spec import RADIATING, SPEC

@@ -31,7 +31,7 @@ def observe(x, R, t, u, w, model, sea, wet):
 @njit(**JIT)
 def linearised_loads(x, R, t, u, w, model, sea):
     """(f, D): one body's loads near its twist (u, w) as f - D (u, w), at a pose and time, as forces.Model.linearised
-    (the kick of several bodies on joints, system.py)."""
+    (the kick of several bodies on joints, system/tree.py)."""
     s = Scratch(np.zeros(model.geom[0].shape[0], dtype=np.bool_), np.zeros(34), workspace(model.geom))
     F, T, D, is_wet = pose_loads(x, R, t, model, s, sea)
     return linearised(x, R, u, w, model, F, T, D, is_wet, s)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import sys
 
-from ..forces import TERMS
+from sim.hydro.forces import TERMS
+
 from .layout import MODELS, SCHEMES, bit
 
 SPEC = getattr(sys.modules[__package__], "SPEC", None)

@@ -1,4 +1,4 @@
-"""Compiled twin of state.py."""
+"""Compiled twin of bodies/state.py."""
 
 from __future__ import annotations
 

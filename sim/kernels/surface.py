@@ -1,4 +1,4 @@
-"""Compiled twin of surface.py: in still water the integrals every term needs, straight from the pose.
+"""Compiled twin of bodies/surface.py: in still water the integrals every term needs, straight from the pose.
 
 The reference hands out quadrature nodes; here the same integrals are summed in place: the wet area
 A, integral of z nu dA (zn), of (z r) x nu dA (zt), of r dA (S) and of r r^T dA (rr), r the lever

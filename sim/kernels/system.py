@@ -1,4 +1,4 @@
-"""Compiled twin of system.py's step (System.affine, kick, step; SystemRadiation.load and drift) and of the bodies'
+"""Compiled twin of system/tree.py's step (System.affine, kick, step; SystemRadiation.load and drift) and of the bodies'
 linear loads (linear_hydro.LinearLoads): Stormer-Verlet on the tree, each half kick solved exactly by a matrix
 exponential (expm.py) with Van Loan's integral for the take-offs' absorbed energy.
 

@@ -1,4 +1,4 @@
-"""The array contract of the compiled system step (kinematics.py, system.py): a system.System packed once into
+"""The array contract of the compiled system step (kinematics.py, system/tree.py): a system.System packed once into
 arrays. Plain Python, no numba.
 
 `Tree`: the groups in tree order (a parent before its children) and the bodies in the scene's order. `Linear`: the
@@ -44,7 +44,7 @@ class Tree(NamedTuple):
     damping: np.ndarray
     """(g,) the take-off's damper, N s/m or N m s/rad."""
     force: np.ndarray
-    """(g,) the take-off's force held over the step, N or N m (a controller's: control.py)."""
+    """(g,) the take-off's force held over the step, N or N m (a controller's: control/laws.py)."""
     held: np.ndarray
     """(g,) 1.0 where the joint is locked over the step (a latch), else 0.0."""
     joints: np.ndarray
@@ -167,7 +167,7 @@ def tree_pack(system) -> Tree:
 
 def linear_pack(system) -> Linear:
     """The bodies' linear loads where every body has them (`[fluid] hydro = "linear"`), else an empty pack."""
-    from ..linear_hydro import LinearLoads
+    from sim.hydro.linear_hydro import LinearLoads
 
     loads, k = system.loads, len(system.loads)
     if not all(isinstance(lo, LinearLoads) for lo in loads):
@@ -183,7 +183,7 @@ def linear_pack(system) -> Linear:
 
 def memory_pack(system, dt: float) -> Memory:
     """The radiation's arrays for drifts of dt (an empty pack without radiation)."""
-    from ..radiation import held_step
+    from sim.hydro.radiation import held_step
 
     rad, k = system.radiation, len(system.members)
     none = sparse_rows(np.zeros((0, 0)))

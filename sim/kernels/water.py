@@ -116,7 +116,7 @@ def _banded_degree(weight, top, rho, limit):
 
 @njit(**JIT)
 def _cut(x, R, spans, spheres, reach, size):
-    """The parts of a body's tree (clusters.py) at a pose, the elevation everywhere within +-reach: (node, status, world
+    """The parts of a body's tree (bodies/clusters.py) at a pose, the elevation everywhere within +-reach: (node, status, world
     centre) of each. A part lies wholly above every crest (dropped), or is cut from the tree where it is a leaf or,
     with size > 0, no wider than size; with size 0, where it lies wholly below every trough (status 2: no clipping to
     do, no vertex elevations) rather than across the water line (1)."""
@@ -161,7 +161,7 @@ def _scales(comps, r):
 
 @njit(**JIT)
 def clusters(sea, t, x, R, spans, spheres, need_flow):
-    """The body's tree of triangles (clusters.py) cut at this pose (_cut), and a local expansion about each part.
+    """The body's tree of triangles (bodies/clusters.py) cut at this pose (_cut), and a local expansion about each part.
 
     In an expandable sea the parts are no wider than KR / k_max, and each gets the sharper bounds of its own
     elevation and the sea's slope: dry (dropped), wet (status 2) or crossing (1), and its series' degrees from the

@@ -1,5 +1,5 @@
 """The wet surface's integrals at a pose and time, which the force terms (kernels/terms.py) read: the twin of
-the reference's wet surface (surface.py), summed in place instead of handed out as quadrature nodes.
+the reference's wet surface (bodies/surface.py), summed in place instead of handed out as quadrature nodes.
 
 Still water: the closed forms of kernels/surface.py (the pressure is rho g times the depth). Waves: the
 water (kernels/water.py) asked at the wet nodes, its pressure and velocity integrated there.

@@ -12,7 +12,8 @@ import logging
 import os
 from collections.abc import Callable, Iterable
 
-from ..errors import ConfigError
+from sim.errors import ConfigError
+
 from .grid import Sweep
 
 BACKENDS = ("serial", "local", "dask")
@@ -26,12 +27,13 @@ class WorkerLost(RuntimeError):
 def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
     """Load (or compile, once per machine) the kernels of the cases `indices` of `sweep` (those of one chunk:
     the cases of a sweep share their scheme, force model and water)."""
-    from ..simulation import default_backend
+    from sim.simulation import default_backend
 
     if sweep is None or not indices or default_backend() != "numba":
         return
-    from ..ensemble import Ensemble
-    from ..kernels import warm_up
+    from sim.ensemble import Ensemble
+    from sim.kernels import warm_up
+
     from .chunk import case_scene
 
     base = sweep.base()
@@ -129,7 +131,7 @@ def _die_with(parent: int) -> None:
 
 def _check(stop) -> None:
     if stop is not None and stop.asked:
-        from ..commands.interrupt import Interrupted
+        from sim.commands.interrupt import Interrupted
 
         raise Interrupted
 

@@ -4,9 +4,9 @@ The sphere preset (radiation and diffraction from its shipped BEM solve) in smal
 - placed a quarter wave down-wave of where the scene starts it (before the waves rise, as a drift would carry it),
   free, its heave RAO against the same sphere on a vertical slide at its start (a prismatic joint) and against the
   linear frequency-domain RAO of the same coefficients (the diffraction force is phased at the body's current
-  position, sim/diffraction.py: without that the free body's heave was off by -10 % and +12 % at T = 1.2 and 2.5 s);
+  position, sim/hydro/diffraction.py: without that the free body's heave was off by -10 % and +12 % at T = 1.2 and 2.5 s);
 - started at rest in waves at full height from t = 0 (`[waves] ramp = 0`, floatsim before the ramp) and with the
-  default ramp (3.5 periods, a half-cosine: sim/water.py), its horizontal motion: the part that flips with the wave's
+  default ramp (3.5 periods, a half-cosine: sim/water/seas.py), its horizontal motion: the part that flips with the wave's
   sign (a run started half a wave down-wave subtracted) is the first-order start-up kick; its drift per period after
   the ramp, against the wave amplitude.
 
@@ -151,7 +151,7 @@ def _start_run(scene, x0: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
 def start_up(cfg: DriftSettings, ramp: float | None, tick) -> StartUp:
     """The sphere started at rest at x = 0 and half a wave down-wave, with the ramp `ramp` (None: the default): the
     first-order part of its period-mean surge and its drift after the ramp."""
-    from sim.config import wave_ramp
+    from sim.scene.config import wave_ramp
 
     T = cfg.ramp_period
     scene = sphere_in_waves(T, cfg.ramp_height, **({} if ramp is None else {"waves__ramp": ramp}))

@@ -94,7 +94,7 @@ class Excitation:
 
 def coefficients(body: Body):
     """The body's shipped BEM coefficients with the excitation, about its centre of mass at rest."""
-    import sim.bem as bem
+    import sim.hydro.bem as bem
 
     b = Simulation(body.base(), backend="numpy").body
     return bem.radiation_coefficients(b.mesh_vertices + [0.0, 0.0, body.rest_z], b.mesh_faces, progress=False, center=(0.0, 0.0, body.rest_z),
@@ -117,7 +117,7 @@ def frequency_domain_rao(c, body, rest_z: float, i: int, diffraction: bool = Tru
 def linear_rao(c, body, rest_z: float, w: float, diffraction: bool = True, rho: float = 1000.0, g: float = 9.81) -> np.ndarray:
     """frequency_domain_rao at any omega w in the solve's grid: A, B and X interpolated linearly between its
     frequencies (exactly the solve's at them)."""
-    from sim.hydrostatics import hydrostatics
+    from sim.hydro.hydrostatics import hydrostatics
 
     h = hydrostatics(body, np.array([0.0, 0.0, rest_z]), np.eye(3))
     C = np.zeros((6, 6))

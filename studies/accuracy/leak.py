@@ -73,7 +73,7 @@ class Settled:
     t_end: float = 0.0
     """When the watch ended, s."""
     warned: bool = False
-    """Whether the points model's warning (sim.hydrostatics.sampled_model_warning's band) covers this body."""
+    """Whether the points model's warning (sim.hydro.hydrostatics.sampled_model_warning's band) covers this body."""
 
     @property
     def tilt(self) -> float:

@@ -1,10 +1,10 @@
 """Part 8 of the accuracy report: radiation that cannot create energy (the radiation memory's passivity, issue 38).
 
-For every shipped BEM solve (sim.bem.SHIPPED), its memory as the scenes fit it (sim.radiation.fit_memory): the
+For every shipped BEM solve (sim.hydro.bem.SHIPPED), its memory as the scenes fit it (sim.hydro.radiation.fit_memory): the
 smallest eigenvalue of the fitted damping B_fit(omega) (the Hermitian part of K_fit(i omega), Re K for a reciprocal
 fit) on a dense grid from 0 to 10x the solve's top frequency, against the solve's peak damping; the fit's misfits of
 B and A against each entry's own peak; its states. In time: rm3 without its take-off's damper, the float kicked
-upwards at 0.5 m/s in still water, linear hydro stepped exactly (sim.system_linear.exact_linear): the mechanical
+upwards at 0.5 m/s in still water, linear hydro stepped exactly (sim.system.linear.exact_linear): the mechanical
 energy, E_total + E_pto + E_rad, and the largest real part of the linear system's eigenvalues.
 
 The helpers are also `python -m studies.passivity`'s and tests/test_passivity.py's. They use only what the fit
@@ -162,8 +162,8 @@ def scene_length(c, name: str = "") -> float:
     bodies = c.damping.shape[1] // 6
     if bodies == 1:
         return 1.0
-    from sim.body import make_body
-    from sim.config import SCENES_DIR, load_scene
+    from sim.bodies.body import make_body
+    from sim.scene.config import SCENES_DIR, load_scene
 
     scene = load_scene({2: "rm3", 3: str(SCENES_DIR / "f3of" / "dt1.toml")}[bodies])
     return max(make_body(e.body, scene.base_dir, True).radius for e in scene.bodies)
@@ -172,7 +172,7 @@ def scene_length(c, name: str = "") -> float:
 def still_rm3(hydro: str, stiffness: float = 0.0):
     """rm3 in still water, its take-off without a damper (a spring of `stiffness`, N/m, or nothing), the float kicked
     upwards at KICK m/s."""
-    from sim.config import load_scene, with_overrides
+    from sim.scene.config import load_scene, with_overrides
 
     scene = with_overrides(load_scene("rm3"), waves__kind="still", fluid__hydro=hydro)
     f = scene.bodies[1]
@@ -185,15 +185,15 @@ def still_rm3(hydro: str, stiffness: float = 0.0):
 
 
 def _shipped() -> list[Path]:
-    from sim.bem import SHIPPED
+    from sim.hydro.bem import SHIPPED
 
     return sorted(SHIPPED.glob("*.npz"))
 
 
 def solve_fit(path: Path, points: int) -> SolveFit:
     """One shipped solve's fit: its damping's floor over the dense grid, its misfits, its states."""
-    from sim.bem import Coefficients
-    from sim.radiation import fit_memory
+    from sim.hydro.bem import Coefficients
+    from sim.hydro.radiation import fit_memory
 
     c = Coefficients.load(path)
     memory = fit_memory(c, length=scene_length(c, path.stem))
@@ -205,8 +205,8 @@ def solve_fit(path: Path, points: int) -> SolveFit:
 
 def kicked_rm3(horizon: float, every: float) -> KickedRm3:
     """rm3 without a damper (still_rm3), linear hydro stepped exactly for `horizon` s, sampled every `every` s."""
-    from sim.system import build
-    from sim.system_linear import exact_linear
+    from sim.system.linear import exact_linear
+    from sim.system.tree import build
 
     system, s = build(still_rm3("linear"))
     stepper = exact_linear(system, s)

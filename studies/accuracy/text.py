@@ -484,7 +484,7 @@ def _leak_discussion(lk) -> str:
 
 
 def _warning_coverage(lk) -> str:
-    """How well the points model's warning rule (sim.hydrostatics.LEAK_BAND) covers the map."""
+    """How well the points model's warning rule (sim.hydro.hydrostatics.LEAK_BAND) covers the map."""
     from .. import probes
 
     points = [r for r in lk.runs if r.forces == "points"]

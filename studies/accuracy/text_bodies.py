@@ -19,7 +19,7 @@ def passivity(data: ReportData) -> list[str]:
     p = data.passivity
     L = ["## 8. Radiation that cannot create energy", ""]
     L.append("A body's radiation memory (the convolution of its past velocity with the retardation kernel) is fitted as a "
-             "state space, K(s) = H (sI - F)^-1 G, to each BEM solve's damping B(ω) and added mass A(ω) (sim/memory_fit.py). "
+             "state space, K(s) = H (sI - F)^-1 G, to each BEM solve's damping B(ω) and added mass A(ω) (sim/hydro/memory_fit.py). "
              "The waves a body makes can only take energy from it when the fitted damping B_fit(ω) = Re K(iω) is positive "
              "semi-definite at every frequency, the grid's and beyond it: otherwise some motion pumps energy in. For every "
              f"shipped solve, the fit the scenes use: the smallest eigenvalue of B_fit(ω) over {2 * p.settings.points} frequencies "
@@ -47,7 +47,7 @@ def passivity(data: ReportData) -> list[str]:
     if p.rm3 is not None:
         r = p.rm3
         L.append(f"**In time.** rm3 (float and spar) without its take-off's damper, in still water, the float kicked upwards at {KICK:g} m/s "
-                 f"({r.kick / 1e3:.4g} kJ), linear hydro stepped exactly (sim/system_linear.py) for {r.t[-1]:.0f} s: the largest real part "
+                 f"({r.kick / 1e3:.4g} kJ), linear hydro stepped exactly (sim/system/linear.py) for {r.t[-1]:.0f} s: the largest real part "
                  f"of an eigenvalue of the linear system is {r.eig_max:+.2g} 1/s; the mechanical energy "
                  + ("never rose above its start" if r.rise <= 0 else f"rose at most {r.rise / r.kick:.2g} of the kick above its start")
                  + f" and ended {r.energy[-1] / r.kick:+.3f} of the kick from it; the radiated waves "
@@ -66,7 +66,7 @@ def drifting(data: ReportData) -> list[str]:
     d = data.drifting
     cfg = d.settings
     L = ["## 9. Drifting bodies: excitation where the body is, and the wave ramp", ""]
-    L.append("A body that drifts meets the wave's phase where it is: the diffraction force (sim/diffraction.py) is phased at the "
+    L.append("A body that drifts meets the wave's phase where it is: the diffraction force (sim/hydro/diffraction.py) is phased at the "
              "body's current position, as the Froude-Krylov pressure is. The sphere preset, placed a quarter wave down-wave of "
              f"where the scene starts it (before the waves rise, as a drift would carry it), free, in {cfg.height * 1000:g} mm waves: "
              "its heave RAO (the first harmonic of the last "

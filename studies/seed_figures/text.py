@@ -48,7 +48,7 @@ def samples(cube: Cube, rows: dict, n: dict, fig1: str, fig2: str, n_ex: int = 1
 ## Figures 1-2: the point-sampled cube
 
 **Settings.** No time stepping: each grid is turned into a `sim.Body` (the report's with `report_grid` in
-`studies/seed_figures/compute.py`, ours with `sim.body.make_box`) and its forces at the report's rest pose (face up, centre at
+`studies/seed_figures/compute.py`, ours with `sim.bodies.body.make_box`) and its forces at the report's rest pose (face up, centre at
 z = {fmt(cube.z_rest)} m, draft {fmt(cube.draft)} m) and at a 1° tilt come from `sim.observe`. The exact values are
 rho g V_sub = {fmt(cube.buoyancy, 5)} N, the righting moment rho g V_sub GM sin(1°) with GM = {fmt(cube.GM, 4)} m (see
 figures 7-9), and the thin-shell inertia (5/18) M s^2 = {fmt(cube.inertia, 5)} kg m^2.
@@ -109,7 +109,7 @@ moves between {fmt(n["spin_dz_min"])} and {fmt(n["spin_dz_max"])} m about -0.4.
 **Where and why they differ.** The oscillation is the report's own doing, not physics: its rotation formula
 divides by |Omega|, so it needed a non-zero spin, and the spin rocks the cube. Rocking changes the displaced volume
 only at second order in the tilt, which is why z moves so little. floatsim's exact rotation uses a series for
-small |Omega| dt (`sim.rotation.rotation_quat`), so w = 0 is an ordinary case and no trick is needed.
+small |Omega| dt (`sim.bodies.rotation.rotation_quat`), so w = 0 is an ordinary case and no trick is needed.
 """
 
 

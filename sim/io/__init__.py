@@ -1,0 +1,1 @@
+"""Coefficient files in: WAMIT's output and floatsim's own solves."""

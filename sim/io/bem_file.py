@@ -1,0 +1,181 @@
+"""A scene's bodies' coefficients from a file (`[fluid] bem_file`) instead of a Capytaine solve.
+
+The file is WAMIT's output (`.out`, read by sim/io/wamit.py) or floatsim's own coefficients file (`.npz`, as
+`bem.Coefficients.save` writes it). Either is taken to the scene's bodies:
+
+- its bodies are the scene's [[bodies]] by where they are: each entry takes the file's body whose centre of mass is
+  nearest its own at the start, one each (one-line error when the counts differ or two entries want one body);
+- its matrices and forces are about each body's centre of mass, and ride with it (as WEC-Sim takes them): a body may
+  start a little below the pose it was solved at (a mooring's pull), not elsewhere in the horizontal (the waves'
+  phases are the file's). WAMIT's, about each body's origin XBODY, are first moved to its centre of gravity XBODY +
+  (Xg, Yg, Zg) as the file gives it (a rigid shift: A -> T^T A T, X -> T^T X with T = [[I, -[d]x], [0, I]], d the old
+  point less the new, per body);
+- WAMIT's damping is made symmetric and positive semi-definite (reciprocal and passive, as Capytaine's is here:
+  bem.passive), its added mass symmetric; a note says by how much they changed;
+- WAMIT's excitation is the whole linear wave force; floatsim adds the incident wave's part itself (exactly, or
+  linearly about rest), so the file's is split: the Froude-Krylov force of the scene's own wet surfaces at rest
+  (linear_hydro.LinearLoads' integration, per unit wave at each frequency and heading) and the rest, the
+  diffraction force. The bodies' wet surfaces must be the ones the file was solved for: the split checks this
+  where it can (the heave force of the longest waves: `split_excitation`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from sim.errors import ConfigError
+from sim.hydro.bem import Coefficients, note, passive
+from sim.io.wamit import read_out
+
+HORIZONTAL_SLACK = 0.01
+"""m: a body must start this near, horizontally, the file's centre of mass (the excitation's phases are the file's)."""
+
+
+def bem_file_path(name: str, base_dir: str) -> Path:
+    """The file a scene names: relative to the scene file, else to the working directory."""
+    from sim.water.records import record_path  # (the same rule as a wave record's)
+
+    path = record_path(name, base_dir)
+    if not path.is_file():
+        raise ConfigError(f"[fluid] bem_file {name!r}: no such file (beside the scene or from the working directory)")
+    return path
+
+
+def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coefficients:
+    """The coefficients in `path` for the bodies `models` (forces.Model) starting at `starts` (their poses), with the
+    excitation of the sea `water` (None: radiation only)."""
+    if path.suffix == ".npz":
+        try:
+            c = Coefficients.load(path)
+        except ValueError as e:
+            raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
+    else:
+        run = read_out(path, fluid.rho)
+        if abs(run.g - fluid.g) > 1e-6 * fluid.g:
+            raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved with g = {run.g:g} m/s^2, the scene has {fluid.g:g}")
+        not_yet = np.zeros_like(run.excitation)  # (split_excitation below)
+        size = max(float(np.ptp(m.body.mesh_vertices, axis=0).max()) for m in models)
+        A, B, change = passive(
+            np.concatenate([run.added_mass, run.added_mass_inf[None]]), np.concatenate([run.damping, run.damping[-1:]]), size
+        )
+        if change > 0.01:
+            note(f"note: {path.name}'s radiation damping made symmetric and passive, as a Capytaine solve's is: entries changed by up "
+                 f"to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
+        c = Coefficients(run.omega, A[:-1], B[:-1], A[-1], fluid.rho, run.depth, run.panels, run.centers, run.headings, run.excitation,
+                         not_yet)  # fmt: skip
+        c = moved(c, run.gravity_centers)
+    bodies = c.added_mass.shape[1] // 6
+    if bodies != len(models):
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} holds {bodies} bodies, the scene {len(models)}: one per [[bodies]] entry")
+    if abs(c.rho - fluid.rho) > 1e-9 * fluid.rho:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} is for water of density {c.rho:g} kg/m^3, the scene has {fluid.rho:g}")
+    if water is not None:
+        _check_sea(path, c, water)
+    c = matched(c, np.array([s.x_world for s in starts]), path)
+    centers = np.atleast_2d(c.center).reshape(-1, 3)
+    for b, s in enumerate(starts):
+        if np.hypot(*(centers[b, :2] - s.x_world[:2])) > HORIZONTAL_SLACK:
+            raise ConfigError(f"body {b + 1} starts at x, y = ({s.x_world[0]:g}, {s.x_world[1]:g}) m, the bem_file has its centre of "
+                              f"mass at ({centers[b, 0]:g}, {centers[b, 1]:g}): place it where the file does")  # fmt: skip
+    if path.suffix != ".npz" and c.has_excitation:
+        c = split_excitation(c, models, starts, fluid)
+    return c
+
+
+def _check_sea(path: Path, c: Coefficients, water) -> None:
+    """One line unless the file can excite the scene's bodies in its sea: excitation at the sea's depth, and at its
+    headings where the file has only one (a file of several is interpolated between them)."""
+    if not c.has_excitation:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} has no wave excitation: the scene's waves need it")
+    if not (c.depth == water.depth or abs(c.depth - water.depth) <= 1e-6 * water.depth):
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved for water {c.depth:g} m deep, the scene's waves are "
+                          f"{water.depth:g} m deep ([waves] depth)")  # fmt: skip
+    if len(c.headings) == 1:
+        off = np.abs(np.angle(np.exp(1j * (np.asarray(water.direction) - c.headings[0])))).max(initial=0.0)
+        if off > 1e-6:
+            raise ConfigError(f"[fluid] bem_file {str(path)!r} has the excitation of waves travelling at {math.degrees(c.headings[0]):g} "
+                              f"degrees only: set [waves] direction = {math.degrees(c.headings[0]):g} (and no spreading)")  # fmt: skip
+
+
+def matched(c: Coefficients, starts: np.ndarray, path: Path) -> Coefficients:
+    """`c` with its bodies in the scene's order: each the file's body nearest the scene body's start ((k, 3))."""
+    centers = np.atleast_2d(c.center).reshape(-1, 3)
+    nearest = np.linalg.norm(starts[:, None, :] - centers[None, :, :], axis=2).argmin(axis=1)
+    if len(set(nearest.tolist())) != len(nearest):
+        raise ConfigError(f"[fluid] bem_file {str(path)!r}: two [[bodies]] start nearest the same body of the file; start each "
+                          "body where the file has it")  # fmt: skip
+    if np.array_equal(nearest, np.arange(len(nearest))):
+        return c
+    dofs = (6 * nearest[:, None] + np.arange(6)).ravel()
+    square = lambda M: M[..., dofs, :][..., dofs]  # noqa: E731
+    X = {} if not c.has_excitation else {"diffraction": c.diffraction[..., dofs], "froude_krylov": c.froude_krylov[..., dofs]}
+    return replace(c, added_mass=square(c.added_mass), damping=square(c.damping), added_mass_inf=square(c.added_mass_inf),
+                   center=centers[nearest], **X)  # fmt: skip
+
+
+def _shift(d: np.ndarray) -> np.ndarray:
+    """(6, 6) T: a body's twist about the new point to its twist about the old one, d = old - new."""
+    T = np.eye(6)
+    T[:3, 3:] = -np.array([[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]])
+    return T
+
+
+def moved(c: Coefficients, centers: np.ndarray) -> Coefficients:
+    """`c` about `centers` ((k, 3), world) instead of its own reference points."""
+    old = np.atleast_2d(c.center).reshape(-1, 3)
+    d = old - centers
+    if not np.any(d):
+        return c
+    T = np.zeros((6 * len(d), 6 * len(d)))
+    for b, offset in enumerate(d):
+        T[6 * b : 6 * b + 6, 6 * b : 6 * b + 6] = _shift(offset)
+    turn = lambda M: T.T @ M @ T  # noqa: E731
+    X = {} if not c.has_excitation else {"diffraction": c.diffraction @ T, "froude_krylov": c.froude_krylov @ T}
+    return replace(c, added_mass=turn(c.added_mass), damping=turn(c.damping), added_mass_inf=turn(c.added_mass_inf),
+                   center=centers.copy() if len(centers) > 1 else centers[0].copy(), **X)  # fmt: skip
+
+
+def froude_krylov(c: Coefficients, models: list, starts: list, fluid) -> np.ndarray:
+    """(n, m, 6k) the incident wave's linear force on each body's wet surface at rest, per unit wave of each of the
+    solve's frequencies and headings (phase zero at the origin), about the bodies' centres of mass, as floatsim
+    integrates it (linear_hydro.LinearLoads)."""
+    from sim.hydro.forces import Model
+    from sim.hydro.linear_hydro import LinearLoads
+    from sim.water.seas import Waves, wavenumber
+
+    n, m = len(c.omega), len(c.headings)
+    omega = np.repeat(c.omega, m)
+    waves = Waves(fluid.rho, fluid.g, np.ones(n * m), omega, wavenumber(omega, fluid.g, c.depth), np.tile(c.headings, n),
+                  np.zeros(n * m), c.depth)  # fmt: skip
+    forces = [LinearLoads(Model(model.body, waves, fluid), s.x_world, s.R_world_body).X for model, s in zip(models, starts)]
+    return np.concatenate([f.reshape(n, m, 6) for f in forces], axis=2)
+
+
+LONG_WAVE_SLACK = 0.05
+"""The heave force of the file's longest waves and that of the scene's wet surfaces may differ by this fraction of
+the larger part: more, and the bodies are not the ones solved for (a mesh at another draft, another body order)."""
+
+
+def split_excitation(c: Coefficients, models: list, starts: list, fluid) -> Coefficients:
+    """`c` whose `diffraction` holds the whole excitation, split into the scene's Froude-Krylov force and the rest.
+    Checked in the file's longest waves, where the rest is the body's added mass times the water's acceleration
+    (Taylor's long-wave limit: sum over the bodies c of -omega^2 A_3c e^(k z_c) per unit amplitude in heave, z_c
+    their centres of mass's depths)."""
+    fk = froude_krylov(c, models, starts, fluid)
+    total = c.diffraction
+    w, k = c.omega[0], c.omega[0] ** 2 / fluid.g
+    heaves = 6 * np.arange(len(starts)) + 2
+    accelerations = -(w**2) * np.exp(k * np.minimum([float(s.x_world[2]) for s in starts], 0.0))
+    for b in range(len(starts)):
+        j = 6 * b + 2
+        scattered = float(c.added_mass[0, j, heaves] @ accelerations)
+        expected, found = fk[0, 0, j].real + scattered, total[0, 0, j]
+        if abs(found - expected) > LONG_WAVE_SLACK * max(abs(fk[0, 0, j]), abs(scattered), 1e-30):
+            raise ConfigError(f"body {b + 1}'s heave force in the bem_file's longest waves ({2 * math.pi / w:.4g} s) is {abs(found):.4g} N/m, "
+                              f"its mesh at rest gives {abs(expected):.4g} N/m (Froude-Krylov and added mass): the mesh or its pose "
+                              "is not the one the file was solved for")  # fmt: skip
+    return replace(c, diffraction=total - fk, froude_krylov=fk)

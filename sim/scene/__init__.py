@@ -1,0 +1,1 @@
+"""The scene description: TOML presets, overrides and validation, the stated limits, farms."""

@@ -1,0 +1,65 @@
+"""Farms: copies of a scene's device on a grid, as one scene of several bodies.
+
+`[farm] rows, columns, spacing` turns a scene into rows x columns devices, 'd1', 'd2', ... row by row, each moved by
+(column x spacing, row x spacing) in x and y from where the scene places it. The device is the scene's one body (its
+[body], [initial] and [constraint] tables), named d1, d2, ...; or all its [[bodies]], each named dN_NAME, with their
+joints to one another copied. Every device keeps its own joint and take-off, so the run's CSV has each one's power.
+
+With `[fluid] radiation = "bem"` the devices are solved together (system.SystemRadiation): their radiated and scattered
+waves act on one another (the farm's interactions). Capytaine's dense solve costs about 2 x 16 (N panels)^2 bytes and
+grows as N^3 in time: `check_panels` refuses a farm whose solve would pass a share of the memory, before meshing
+anything more. Mooring lines per device are not built (one line file cannot be copied): a farm with [moorings] is
+refused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from sim.errors import ConfigError
+
+BYTES_PER_PANEL_PAIR = 32.0
+"""Capytaine's two dense complex matrices (the single- and double-layer influence), bytes per pair of panels."""
+
+
+def expand(scene):
+    """The scene with its [farm] laid out as [[bodies]] (unchanged when the farm is one device)."""
+    from sim.scene.config import BodyEntry, ConstraintConfig, InitialConfig
+
+    farm = scene.farm
+    count = int(farm.rows) * int(farm.columns)
+    if count <= 1:
+        return scene
+    if scene.moorings.lines or scene.moorings.anchors or scene.moorings.line_file:
+        raise ConfigError("[farm] with [moorings]: each device's own lines are not built (a line file cannot be copied); take the "
+                          "[moorings] table out, or run one device")  # fmt: skip
+    if scene.bodies:
+        device, single = scene.bodies, False
+    else:
+        device, single = (BodyEntry("body", "world", scene.body, scene.initial, scene.constraint),), True
+    entries = []
+    for row in range(int(farm.rows)):
+        for column in range(int(farm.columns)):
+            n = row * int(farm.columns) + column + 1
+            shift = (column * farm.spacing, row * farm.spacing, 0.0)
+            for e in device:
+                name = f"d{n}" if single else f"d{n}_{e.name}"
+                parent = e.parent if e.parent == "world" else f"d{n}_{e.parent}"
+                position = tuple(float(p) + s for p, s in zip(e.initial.position, shift))
+                entries.append(replace(e, name=name, parent=parent, initial=replace(e.initial, position=position)))
+    moorings = replace(scene.moorings, body="")
+    return replace(scene, bodies=tuple(entries), initial=InitialConfig(), constraint=ConstraintConfig(), moorings=moorings,
+                   body=type(scene.body)())  # fmt: skip
+
+
+def check_panels(panels: int, bodies: int) -> None:
+    """Refuse a joint BEM solve of `panels` wet panels over `bodies` bodies whose dense matrices would pass the memory share
+    (limits.MEMORY_SHARE of what is available now), with the numbers and what to change."""
+    from sim.scene.limits import MEMORY_SHARE, available_bytes
+
+    need = BYTES_PER_PANEL_PAIR * float(panels) ** 2
+    room = MEMORY_SHARE * available_bytes()
+    if need > room:
+        raise ConfigError(f"the BEM solve of {bodies} bodies together has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
+                          f"over the {room / 1e9:.3g} GB this machine can give it; use fewer devices ([farm] rows, columns), coarser "
+                          "meshes, or radiation = \"none\"")  # fmt: skip

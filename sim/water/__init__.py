@@ -1,0 +1,1 @@
+"""The water: still, regular, irregular and spread seas, measured records."""

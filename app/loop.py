@@ -24,12 +24,12 @@ import numpy as np
 import sim
 from sim.bodies.body import printable
 from sim.bodies.rotation import quat_to_matrix
-from sim.compiling import Compiler, Loader, kernels_ready
+from sim.bodies.state import initial_state
+from sim.compiling import Compiler, Loader, default_backend, kernels_ready
 from sim.hydro.bem import no_solves
 from sim.hydro.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
 from sim.scene.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, body_own, entry_value, in_effect, load_scene
-from sim.simulation import default_backend, initial_state
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
@@ -134,7 +134,7 @@ class Snapshot(Posed):
     parts: tuple = ()
     """Every body (Part), in the scene's order (one body: itself)."""
     run_frame: object = None
-    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.system.assembly.AssemblyFrame)."""
+    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.assembly.AssemblyFrame)."""
 
     @property
     def run(self):

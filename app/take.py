@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import sim
-from sim.simulation import CSV_COLUMNS
+from sim.system.frame import CSV_COLUMNS
 
 from .loop import Part, Posed
 

@@ -2,7 +2,7 @@
 
 A scene's kernels (sim.kernels.specialised: its scheme, force model, terms and water) compile once per
 machine, in 20 s to a minute. A compiler thread in the running process would hold the GIL against the
-simulation thread for most of that time, so `Compiler` runs `python -m sim.compiling` instead: a child
+simulation thread for most of that time, so `Compiler` runs `python -m sim.commands.compile` instead: a child
 that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps stepping on the numpy reference, polls `done`, then loads the kernels from
 the cache (a second or two) and switches between two steps: the state is the same vector either way.
 
@@ -22,16 +22,37 @@ import time
 COMMAND_ENV = "FLOATSIM_COMPILER"
 
 
+def default_backend() -> str:
+    """'numba' (compiled, the default) unless FLOATSIM_BACKEND=numpy or numba is missing."""
+    choice = os.environ.get("FLOATSIM_BACKEND", "numba")
+    if choice == "numba":
+        try:
+            import numba  # noqa: F401
+        except ImportError:
+            return "numpy"
+    return choice
+
+
 def kernels_ready(spec) -> bool:
     """Whether the compiled kernels for `spec` (kernels.Spec) can be used at once: numba is the backend and
     this machine compiled them before."""
-    from sim.simulation import default_backend
+    return default_backend() == "numba" and cached(spec)
 
-    if default_backend() != "numba":
-        return False
-    from sim.kernels import cached
 
-    return cached(spec)
+def cached(spec) -> bool:
+    """Whether this machine compiled the kernels of `spec` before (kernels.SYSTEM_STEP: the system step's)."""
+    from sim import kernels  # numba's import (about 0.5 s) only once compiled kernels are asked for
+    from sim.system import compiled
+
+    return compiled.ready() if spec == kernels.SYSTEM_STEP else kernels.cached(spec)
+
+
+def warm_up(spec) -> float:
+    """Compile (first run ever) or load from the disk cache the kernels of `spec`; the seconds taken."""
+    from sim import kernels
+    from sim.system import compiled
+
+    return compiled.warm() if spec == kernels.SYSTEM_STEP else kernels.warm_up(spec)
 
 
 def spec_argument(spec) -> str:
@@ -64,7 +85,7 @@ class Compiler:
 
     def __init__(self, spec):
         self.spec = spec
-        command = shlex.split(os.environ.get(COMMAND_ENV, "")) or [sys.executable, "-m", "sim.compiling", str(os.getpid())]
+        command = shlex.split(os.environ.get(COMMAND_ENV, "")) or [sys.executable, "-m", "sim.commands.compile", str(os.getpid())]
         command.append(spec_argument(spec))
         self.log = tempfile.TemporaryFile()  # its output, for the note when it fails
         self.started = time.monotonic()
@@ -131,38 +152,4 @@ class Loader:
 
 def load(spec) -> float:
     """Load the kernels of `spec` from the disk cache into this process (compiling what is missing); seconds taken."""
-    from sim.kernels import warm_up
-
     return warm_up(spec)
-
-
-def preset_specs() -> list:
-    """The kernels.Spec of every preset scene with a compiled twin, as shipped (a scene of several bodies: its bodies'
-    loads and the system step's)."""
-    from sim.scene.config import available_scenes, load_scene
-    from sim.simulation import Simulation
-
-    specs = []
-    for name in available_scenes():
-        sim = Simulation(load_scene(name), backend="numpy")
-        if sim.has_twin:  # (a body on a joint alone runs on the reference)
-            specs += [spec for spec in sim.specs if spec not in specs]
-    return specs
-
-
-def _main(parent: int, specs: list[str]) -> int:
-    """Compile the kernels of each spec given (spec_argument), or of every preset scene; `-`: of each spec read from
-    stdin, a line each, until it closes (so that a parent hands the next to whichever child is free)."""
-    from sim.sweeps.backends import _die_with
-
-    _die_with(parent)  # a viewer stopped by SIGKILL leaves no compiler behind
-    words = (line.strip() for line in sys.stdin) if specs == ["-"] else iter(specs or [spec_argument(s) for s in preset_specs()])
-    for word in words:
-        spec = parse_spec(word)
-        seconds = load(spec)
-        print(f"floatsim: compiled the kernels for the {spec.describe()} in {seconds:.1f} s", flush=True)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(_main(int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid(), sys.argv[2:]))

@@ -9,8 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.bodies.rotation import quat_multiply
+from sim.bodies.state import initial_state
 from sim.hydro.equilibrium import rest_height
-from sim.simulation import Simulation, initial_state
+from sim.simulation import Simulation
 
 
 @dataclass(frozen=True)

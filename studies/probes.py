@@ -21,7 +21,7 @@ from sim.commands import dispatch  # noqa: F401 -- re-exported: `python -m studi
 from sim.commands.progress import progress_bar  # noqa: F401 -- re-exported for studies.common
 from sim.hydro.forces import Model
 from sim.scene.config import FluidConfig
-from sim.simulation import observe
+from sim.system.frame import observe
 from sim.water.seas import StillWater
 
 # ---- reading a body or a simulation -------------------------------------------------------------------

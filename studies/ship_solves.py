@@ -1,5 +1,5 @@
 """`python -m studies.ship_solves`: solve again every BEM case floatsim ships in assets/coefficients (needs the
-.[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.hydro.memory_fit`).
+.[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.commands.memory_fits`).
 
 The cases: each preset with radiation as it builds (its rest pose, moorings included, its grid, the excitation when
 it has waves, a sphere in waves too), the cross-code checks' scenes (assets/scenes/*/), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
@@ -20,7 +20,7 @@ def main() -> None:
 
     import sim.hydro.bem as bem
     from sim import Simulation
-    from sim.hydro.memory_fit import main as fit_all
+    from sim.commands.memory_fits import main as fit_all
     from sim.scene.config import SCENES_DIR, available_scenes, load_scene, with_overrides
     from sim.system.tree import build
 

@@ -19,7 +19,7 @@ def pytest_sessionstart(session):
 
 
 def _compile_covering(terminal=None) -> None:
-    from sim.simulation import default_backend
+    from sim.compiling import default_backend
 
     if default_backend() != "numba":
         return
@@ -29,8 +29,8 @@ def _compile_covering(terminal=None) -> None:
     import sys
     import time
 
-    from sim.compiling import parse_spec, spec_argument
-    from sim.kernels import KERNEL_CACHE, cached
+    from sim.compiling import cached, parse_spec, spec_argument
+    from sim.kernels import KERNEL_CACHE
     from tests.covering import compiled_first, expected_seconds
 
     say = terminal.write_line if terminal is not None else print
@@ -47,7 +47,7 @@ def _compile_covering(terminal=None) -> None:
         # each child takes the next spec as it finishes one, the longest first: two cores busy to the end
         todo.sort(key=lambda word: -expected_seconds(parse_spec(word)))
         queue = list(todo)
-        children = [subprocess.Popen([sys.executable, "-m", "sim.compiling", str(os.getpid()), "-"], stdin=subprocess.PIPE,
+        children = [subprocess.Popen([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), "-"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, text=True) for _ in range(min(2, len(todo)))]  # fmt: skip
         watch = selectors.DefaultSelector()
         for child in children:
@@ -84,12 +84,12 @@ def _hand(child, queue: list) -> None:
 def _compiled_kernels():
     """Load the presets' kernels into this process (a worker) from the disk cache before any test times anything
     (the covering set compiled first if pytest_sessionstart did not run here: pytest started without this conftest's hooks)."""
-    from sim.simulation import default_backend
+    from sim.compiling import default_backend
 
     if default_backend() != "numba":
         return
-    from sim.compiling import preset_specs
-    from sim.kernels import warm_up
+    from sim.commands.compile import preset_specs
+    from sim.compiling import warm_up
 
     _compile_covering()
     for spec in preset_specs():

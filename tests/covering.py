@@ -43,7 +43,7 @@ frame): each term alone, and every term on panels in waves (no preset steps pane
 @cache
 def compiled_first() -> list[Spec]:
     """The covering set's full specialisations (step and frame), compiled before the tests start."""
-    from sim.compiling import preset_specs
+    from sim.commands.compile import preset_specs
 
     specs = preset_specs()
     specs += [still(scheme, "points", terms) for scheme in SCHEMES for terms in (EVERY, LINEAR)]  # (the integrators' own tests: no drag)

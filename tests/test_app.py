@@ -332,7 +332,7 @@ def test_loading_kernels_never_holds_up_the_simulation_thread(make_app, monkeypa
     import app.loop
     import sim.compiling
 
-    if sim.simulation.default_backend() != "numba":
+    if sim.compiling.default_backend() != "numba":
         pytest.skip("no compiled backend here")
     release, asked = threading.Event(), []
 

@@ -91,7 +91,8 @@ def test_every_body_is_drawn_where_the_run_has_it_and_the_controls_drive_it():
 def test_the_run_moves_to_the_compiled_loads_without_a_jump():
     """With the bodies' kernels on disk the loop loads them on a thread and moves to them between two steps: the
     run goes on from the same state (its time never goes back), now compiled."""
-    from sim.kernels import SYSTEM_STEP, warm_up
+    from sim.compiling import warm_up
+    from sim.kernels import SYSTEM_STEP
     from sim.scene.config import load_scene
     from sim.simulation import Simulation
 

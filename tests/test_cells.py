@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 from sim import FluidConfig, Model, Simulation, State, StillWater, load_scene, with_overrides
 from sim.bodies.body import make_box, make_mesh_body
 from sim.hydro.hydrostatics import hydrostatics
-from sim.simulation import CSV_COLUMNS, observe
+from sim.system.frame import CSV_COLUMNS, observe
 
 RHO_G = 1000.0 * 9.81
 POSES = list(zip(Rotation.random(8, random_state=5).as_quat(scalar_first=True), np.linspace(-0.4, 0.35, 8)))

@@ -234,13 +234,13 @@ def test_tyro_panels_become_one_line_in_both_renderings():
 @pytest.mark.slow  # over 4 s (the marker's rule)
 def test_a_first_run_knows_the_kernels_are_not_compiled_yet(tmp_path):
     """`run` announces the one-time compile before it starts (not after a silent minute): it can tell."""
-    probe = "import sim, sim.kernels as k; print(k.cached(sim.Simulation(sim.load_scene('drop')).spec))"
+    probe = "import sim, sim.compiling as k; print(k.cached(sim.Simulation(sim.load_scene('drop')).spec))"
     fresh = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     )
     assert fresh.stdout.strip() == "False"
     from sim import Simulation, load_scene
-    from sim.kernels import cached, warm_up
+    from sim.compiling import cached, warm_up
 
     spec = Simulation(load_scene("drop")).spec
     warm_up(spec)

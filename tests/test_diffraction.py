@@ -201,7 +201,7 @@ def test_diffraction_without_radiation_is_one_line_and_exit_2():
 def test_the_csv_carries_the_diffraction_power(tmp_path):
     """`run` writes P_diff = F_d . (u, omega): here recomputed from the sphere's shipped excitation, the CSV's own
     positions and velocities and a ramp of 1 s (the force grows with the waves); zero with diffraction off."""
-    from sim.simulation import CSV_COLUMNS
+    from sim.system.frame import CSV_COLUMNS
     from sim.water.seas import regular_waves
 
     def run(*extra: str) -> np.ndarray:

@@ -60,7 +60,8 @@ async def _watch(port: int, seconds: float) -> list[tuple[float, bool]]:
 
 @pytest.mark.slow
 def test_an_empty_kernel_cache_runs_on_numpy_at_once_then_on_the_kernels_without_a_restart(tmp_path):
-    from sim.kernels import KERNEL_CACHE, cached
+    from sim.compiling import cached
+    from sim.kernels import KERNEL_CACHE
 
     if not cached(sim.Simulation(sim.load_scene("drop")).spec):
         pytest.skip("needs this machine's compiled kernels to stand in for a compile")

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from sim.commands import main
-from sim.simulation import CSV_COLUMNS
+from sim.system.frame import CSV_COLUMNS
 
 
 @pytest.mark.parametrize("out, why", [("/tmp", "is a folder"), ("/nonexistent/dir/x.csv", "does not exist"), ("/proc/x.csv", "cannot write"),

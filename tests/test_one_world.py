@@ -6,9 +6,9 @@ import re
 import numpy as np
 import pytest
 
+from sim.assembly import Assembly
 from sim.scene.config import ConfigError, load_scene, with_overrides
 from sim.simulation import Simulation
-from sim.system.assembly import Assembly
 from tests.test_system import PAIR, SLIDE, scene_file
 
 

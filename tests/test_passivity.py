@@ -47,13 +47,13 @@ def test_every_shipped_solve_fits_a_passive_memory(path):
 def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path):
     """Each preset with radiation builds without fitting (a fit of rm3 takes 7-30 s): its fit is in
     assets/coefficients/memory under a key that covers memory_fit.py's source, so a changed fit cannot be read stale
-    (after a change: `python -m sim.hydro.memory_fit`)."""
+    (after a change: `python -m sim.commands.memory_fits`)."""
     from sim import Simulation
     from sim.hydro import memory_fit
     from sim.scene.config import SCENES_DIR, available_scenes
 
     def refuse(*args):
-        raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.hydro.memory_fit` and commit the files")
+        raise AssertionError("a preset's fit is not shipped or stale: run `python -m sim.commands.memory_fits` and commit the files")
 
     monkeypatch.setenv("FLOATSIM_BEM_CACHE", str(tmp_path))
     monkeypatch.setattr(memory_fit, "_FITS", {})

@@ -19,7 +19,7 @@ from app.upload import check_upload
 from sim import ConfigError, FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
 from sim.bodies.rotation import matrix_to_quat, quat_to_matrix
 from sim.hydro.forces import pressure
-from sim.simulation import CSV_COLUMNS
+from sim.system.frame import CSV_COLUMNS
 
 
 def recording_messages(html: str) -> tuple[float, list]:

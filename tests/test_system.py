@@ -295,7 +295,7 @@ def test_the_bodies_compiled_loads_match_the_reference_stage_by_stage(tmp_path):
     """Each body's loads from its compiled twin (kernels: linearised_loads) against forces.Model.linearised at the
     same pose, time and twist (the float crossing the wave surface), f and D to round-off; then the pair stepped
     on both for 2 s: the same trajectory to 1e-12."""
-    from sim.kernels import warm_up
+    from sim.compiling import warm_up
 
     system, s = build(scene_file(tmp_path, SLIDING_PAIR))
     for spec in system.specs:
@@ -326,7 +326,7 @@ def test_the_bodies_compiled_loads_match_the_reference_stage_by_stage(tmp_path):
 def test_run_compiles_the_bodies_loads_and_says_so(tmp_path):
     """The CLI on the numba backend with the kernels on disk: the bodies' loads compiled (the summary says so), and
     its rows the numpy reference's to the sea expansion's bound (1e-9 m)."""
-    from sim.kernels import warm_up
+    from sim.compiling import warm_up
 
     (tmp_path / "pair.toml").write_text(textwrap.dedent(SLIDING_PAIR))
     for spec in Simulation(load_scene(str(tmp_path / "pair.toml")), backend="numpy").specs:  # the loads' and the system step's

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 from functools import cached_property
@@ -13,7 +14,7 @@ import numpy as np
 from sim.errors import ConfigError
 
 if TYPE_CHECKING:
-    from sim.scene.config import BodyConfig
+    from sim.scene.config import BodyConfig, SceneConfig
 
 
 @dataclass(frozen=True, eq=False)
@@ -404,3 +405,20 @@ def make_body(cfg: BodyConfig, base_dir: str = ".", exact_inertia: bool = False)
     if not path.is_absolute() and not path.is_file():
         path = Path(base_dir) / path
     return make_mesh_body(str(path), int(cfg.samples), cfg.mass, cfg.density, path.stem, cfg.mesh_unit, exact_inertia, *given)
+
+
+def with_mass(body: Body, mass: float, given_inertia=None) -> Body:
+    """The same geometry with another total mass (inertia scales with it, unless the scene gives it: [body] inertia)."""
+    inertia = body.inertia * (mass / body.mass) if given_inertia is None else np.asarray(given_inertia, float)
+    return dataclasses.replace(body, mass=float(mass), inertia=inertia)
+
+
+def body_mass(scene: SceneConfig, volume: float) -> float:
+    b = scene.body
+    return float(b.mass) if b.mass is not None else float(b.density) * volume
+
+
+def exact_inertia(scene: SceneConfig) -> bool:
+    """The panels model integrates the mesh exactly: its body takes the mesh shell's exact inertia too.
+    The points model keeps the samples' (the source report's model)."""
+    return scene.fluid.forces == "panels"

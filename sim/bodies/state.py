@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sim.bodies.body import Body
-from sim.bodies.rotation import quat_to_matrix
+from sim.bodies.rotation import normalized, quat_multiply, quat_to_matrix
+
+if TYPE_CHECKING:
+    from sim.scene.config import SceneConfig
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,3 +60,12 @@ def angular_velocity(body: Body, R: np.ndarray, L: np.ndarray) -> np.ndarray:
 def angular_momentum(body: Body, R: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """L = R I R^T omega, world frame."""
     return R @ (body.inertia * (R.T @ omega))
+
+
+def initial_state(body: Body, scene: SceneConfig) -> State:
+    """The state a scene starts its body in: [initial] position, orientation (after the input frame's turn), velocity, omega."""
+    init = scene.initial
+    q = normalized(quat_multiply(np.asarray(init.orientation, float), body.q_input_body))
+    R = State(0.0, np.zeros(3), q, np.zeros(3), np.zeros(3)).R_world_body
+    L = angular_momentum(body, R, np.asarray(init.omega, float))
+    return State(0.0, np.asarray(init.position, float), q, np.asarray(init.velocity, float), L)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import os
-import platform
 import statistics
 import sys
 import time
@@ -17,6 +16,7 @@ from sim.scene.config import ConfigError, load_scene, with_overrides
 from sim.simulation import Simulation
 
 from .progress import progress_bar
+from .tables import machine, table
 
 
 @dataclass
@@ -69,7 +69,7 @@ QUICK_SECONDS = 10
 def announce(args: BenchArgs, base, cells) -> None:
     """Say, before the first row, how long the run takes and how to cut it: the whole benchmark is minutes of silence
     but for its progress bar. Kernels not compiled on this machine yet add their compile (counted for the first table)."""
-    from sim.kernels import cached
+    from sim.compiling import cached
 
     scenes = [
         with_overrides(base, fluid__forces=f, step__integrator=i, body__points_per_edge=n or base.body.points_per_edge) for f, n, i in cells
@@ -99,27 +99,13 @@ def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
     return statistics.median(costs)
 
 
-def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import numba
-
-    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}"
-
-
 def bench(args: BenchArgs) -> int:
     if args.startup:
         from .startup import startup
 
         return startup(args.presets, 1.0)
+    from sim.compiling import warm_up
     from sim.ensemble import Ensemble
-    from sim.kernels import warm_up
 
     if args.quick:
         args = dataclasses.replace(args, sizes=(10,), repeats=min(args.repeats, 3), ensemble=0, radiation=False, waves=False, moorings=False,
@@ -170,17 +156,17 @@ def bench(args: BenchArgs) -> int:
     print(
         f"scene {base.name} (d = {base.fluid.damping:g} N s/m^3, dt = {base.step.dt:g} s); kernels compiled or loaded in {compile_s:.2f} s; medians of {args.repeats} runs"
     )
-    _table(("model", "samples", "integrator", "us/step", "ns/sample", "x real time", "numpy us/step", "speed-up"), rows)
+    table(("model", "samples", "integrator", "us/step", "ns/sample", "x real time", "numpy us/step", "speed-up"), rows)
     if ens_rows:
-        _table((f"ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500", "body-steps/s"), ens_rows)
+        table((f"ensemble of {args.ensemble} cubes, N = {base.body.points_per_edge}, densities 300-1500", "body-steps/s"), ens_rows)
     if radiation_rows:
-        _table(("radiation (N = 10)", "model", "integrator", "us/step without", "us/step with", "with / without"), radiation_rows)
+        table(("radiation (N = 10)", "model", "integrator", "us/step without", "us/step with", "with / without"), radiation_rows)
     if sweep_rows:
         print()
         print(f"sweep of {args.sweep_cases} cases (damped cube, N = 10, implicit, dt 0.005 s, 2 s each, chunks of 64; no files); "
               "startup: until the first chunk starts (workers, kernels); idle: the rest of the wall time not spent computing chunks, "
               "over all workers; scheduling: the same without the workers' wait at the end for the last chunk")  # fmt: skip
-        _table(
+        table(
             (
                 "backend",
                 "workers",
@@ -200,20 +186,20 @@ def bench(args: BenchArgs) -> int:
         print(
             f"sea states, implicit, dt = {base.step.dt:g} s; direct sum: the kernels summing every component at every node (no expansion)"
         )
-        _table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
+        table(("sea", "model", "us/step", "vs still water", "direct sum us/step", "direct / this", "numpy us/step"), wave_rows)
     if mooring_rows:
         print()
         print(
             "the moored-buoy preset (compiled, implicit, dt = 0.01 s): the body's step with and without its lines, and where a moored step's time goes"
         )
-        _table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
+        table(("case", "us/step", "x real time", "body (hydrodynamics) us", "MoorDyn us", "coupling us"), mooring_rows)
     if system_rows:
         print()
         print("several bodies: the rm3 preset's step (radiation 12 x 12 with the memory coupling both bodies, diffraction, a take-off) and where "
               "its time goes; loads: the bodies' (numpy, compiled or linear), step: the kinematics, kicks, radiation memory and take-offs "
               "(numpy, or the compiled system step: kernels/system.py); vs numpy: against the case's all-numpy row in this run; direct sum: "
               "every component summed at every node instead of each part's series (the exact wet surface's cost before issue 41)")  # fmt: skip
-        _table(
+        table(
             (
                 "case",
                 "loads",
@@ -369,13 +355,6 @@ def _system_split(run, repeats: int) -> tuple[float, float, float, float]:
         radiation.append((spent["radiation"] - r0) / 40)
         moordyn.append((lines() - m0) / 40)
     return statistics.median(totals), statistics.median(hydro), statistics.median(radiation), statistics.median(moordyn)
-
-
-def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
-    """A markdown table after a blank line."""
-    print()
-    for r in (header, ("---",) * len(header), *rows):
-        print("| " + " | ".join(r) + " |")
 
 
 def _radiation_rows(base, args: BenchArgs) -> list[tuple[str, ...]]:

@@ -12,11 +12,12 @@ from typing import Annotated
 import numpy as np
 import tyro
 
+from sim.compiling import default_backend
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
 from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
 from sim.scene.limits import step_time
-from sim.simulation import Simulation, SimulationDiverged, default_backend
+from sim.simulation import Simulation, SimulationDiverged
 
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
@@ -95,12 +96,12 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
     """The compiled kernels build once per machine (then load from the disk cache): say so before the wait.
     `sim` is built on the numpy reference: where its kernels are not built yet (kernels_ready), a short run
     stays there, saying so; a longer one moves to the kernels, which compile first."""
-    from sim.kernels import cached, warm_up
+    from sim.compiling import cached, warm_up
 
     if sim.has_twin and not sim.compiled and default_backend() == "numba":
         if not sim.kernels_ready and (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
             print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (under a minute, once); this short run takes about "
-                  f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.compiling`, compiles them)",
+                  f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.commands.compile`, compiles them)",
                   file=sys.stderr)  # fmt: skip
         else:
             if todo := [spec for spec in sim.specs if not cached(spec)]:  # say so before the wait, not after it

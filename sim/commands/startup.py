@@ -3,7 +3,7 @@
 Each preset is run as a user runs it, `python -m sim run --scene NAME --t-end T`, in a fresh process: first
 with an empty kernel cache of its own (a first run on a machine: a short run stays on the numpy reference),
 then the kernels that preset needs are compiled into that cache in a fresh process, as the viewer's
-background compiler and a longer run do (`python -m sim.compiling`), then the run again (every later run:
+background compiler and a longer run do (`python -m sim.commands.compile`), then the run again (every later run:
 the kernels load from the cache). Wall time and the peak memory of each process are reported.
 """
 
@@ -34,7 +34,7 @@ def timed_compile(scene: str, cache: str) -> tuple[float, float, int, str]:
     run.close()
     if not specs:  # nothing to compile (sim.compiling with no spec would compile every preset's)
         return 0.0, 0.0, 0, ""
-    return timed([sys.executable, "-m", "sim.compiling", str(os.getpid()), *map(spec_argument, specs)], cache)
+    return timed([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), *map(spec_argument, specs)], cache)
 
 
 def timed(command: list[str], cache: str) -> tuple[float, float, int, str]:
@@ -78,10 +78,10 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
             file=sys.stderr,
             flush=True,
         )
-    from .bench import _table, machine
+    from .tables import machine, table
 
     print(f"machine: {machine()}")
     print(f"`python -m sim run --scene NAME --t-end {t_end:g}` in a fresh process. cold: an empty kernel cache; compile: the kernels "
           "the preset needs, into that cache, in a fresh process (what the viewer and a longer run wait for); warm: the run again")  # fmt: skip
-    _table(("preset", "cold run s", "compile s", "compile peak MiB", "warm run s", "exit"), rows)
+    table(("preset", "cold run s", "compile s", "compile peak MiB", "warm run s", "exit"), rows)
     return 0

@@ -250,3 +250,8 @@ def hydrostatic_energy(water, wet: WetSurface) -> float:
     """U_b = rho g * integral over the submerged volume of (-z) dV = -(rho g / 2) * integral of z^2 nu_z dA (still water)."""
     z = wet.point[:, 2]
     return float(-0.5 * water.rho * water.g * (wet.weight * z * z) @ wet.normal[:, 2])
+
+
+def compiled_model(model: Model) -> bool:
+    """Whether the compiled twin (sim.kernels) has the model's force model for its water (cells: still water only)."""
+    return model.fluid.forces != "cells" or model.water.flat

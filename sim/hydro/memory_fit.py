@@ -527,7 +527,12 @@ def _misfit(block: _Block, poles: np.ndarray, residues: np.ndarray, mass: np.nda
 _FITS: dict = {}
 """Fits already made or read in this process, by their key (`fit_key`)."""
 STORED = Path(__file__).resolve().parents[2] / "assets" / "coefficients" / "memory"
-"""The shipped solves' fits (`python -m sim.hydro.memory_fit` writes them): a fit of rm3's 12 dofs takes 7-30 s."""
+"""The shipped solves' fits (`python -m sim.commands.memory_fits` writes them): a fit of rm3's 12 dofs takes 7-30 s."""
+
+
+def forget_fits() -> None:
+    """Forget the fits made or read in this process (the next ask reads or makes each again)."""
+    _FITS.clear()
 
 
 def fit_key(c, tol: float, max_order: int, length: float) -> str:
@@ -662,38 +667,3 @@ def _assemble(blocks: tuple[BlockFit, ...], A_inf: np.ndarray, dA: np.ndarray) -
         H[e.row, k : k + m] = e.H
         k += m
     return RadiationMemory(F, G, H, tuple(entries), A_inf + dA, dA, tuple(blocks))
-
-
-def main() -> None:
-    """`python -m sim.hydro.memory_fit`: (re)write the fits every preset and cross-code check (assets/scenes/*/) makes into
-    STORED, by building each with radiation once against an empty cache and keeping what it fitted."""
-    import os
-    import shutil
-    import tempfile
-
-    from sim.hydro.bem import CACHE_ENV
-    from sim.scene.config import SCENES_DIR, available_scenes, load_scene
-
-    with tempfile.TemporaryDirectory() as tmp:
-        os.environ[CACHE_ENV] = tmp
-        for old in STORED.glob("*.npz"):
-            old.unlink()
-        _FITS.clear()
-        for name in [*available_scenes(), *sorted(str(p) for p in SCENES_DIR.glob("*/*.toml"))]:
-            scene = load_scene(name)
-            if scene.bodies:
-                from sim.system.tree import build
-
-                build(scene)
-            elif scene.fluid.radiation == "bem":
-                from sim.simulation import Simulation
-
-                Simulation(scene)
-        STORED.mkdir(parents=True, exist_ok=True)
-        for path in sorted(Path(tmp, "memory").glob("*.npz")):
-            shutil.copy(path, STORED / path.name)
-            print(f"{STORED / path.name}")
-
-
-if __name__ == "__main__":
-    main()

@@ -168,11 +168,8 @@ _import_shared()
 
 
 def cached(spec: Spec) -> bool:
-    """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame)."""
-    if spec == SYSTEM_STEP:
-        from sim.system.compiled import ready
-
-        return ready()
+    """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame).
+    Not for SYSTEM_STEP, whose kernels the system package drives (compiling.cached asks it)."""
     found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
     wanted = {"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}
     return (wanted | ({"schemes.step_held"} if spec.held and not spec.system else set())) <= found
@@ -186,13 +183,10 @@ def entry_point(kernel, args: tuple):
 
 
 def warm_up(spec: Spec) -> float:
-    """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken."""
+    """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken. Not for
+    SYSTEM_STEP (compiling.warm_up)."""
     import time
 
-    if spec == SYSTEM_STEP:
-        from sim.system.compiled import warm
-
-        return warm()
     start = time.perf_counter()
     fresh = os.environ.get(COMPILE_LOG) and not cached(spec)
     specialised(spec).schemes.warm_up()

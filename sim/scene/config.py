@@ -24,6 +24,7 @@ from sim.errors import ConfigError
 from sim.hydro.forces import TERMS
 from sim.lines.moorings import SURFACE, check_start, lines_of
 from sim.parameters import Param
+from sim.scene.farm import expand
 from sim.scene.limits import check_samples
 
 SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
@@ -466,9 +467,7 @@ def validate(scene: SceneConfig) -> SceneConfig:
         section = getattr(scene, name)
         checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
     if checked["farm"].rows * checked["farm"].columns > 1:  # laid out as [[bodies]] once (the table goes back to one device)
-        from sim.scene.farm import expand
-
-        return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked)), farm=FarmConfig()))
+        return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked), BodyEntry), farm=FarmConfig()))
     _check_body(checked["body"], checked["initial"], checked["constraint"])
     _check_steepness(checked["waves"], checked["fluid"].g, scene.base_dir)
     if checked["waves"].kind == "record" and any(checked["water"].current):

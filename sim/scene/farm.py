@@ -22,10 +22,9 @@ BYTES_PER_PANEL_PAIR = 32.0
 """Capytaine's two dense complex matrices (the single- and double-layer influence), bytes per pair of panels."""
 
 
-def expand(scene):
-    """The scene with its [farm] laid out as [[bodies]] (unchanged when the farm is one device)."""
-    from sim.scene.config import BodyEntry, ConstraintConfig, InitialConfig
-
+def expand(scene, entry):
+    """The scene with its [farm] laid out as [[bodies]] (unchanged when the farm is one device); `entry` makes a
+    [[bodies]] entry (config.BodyEntry: config calls this module, not the other way)."""
     farm = scene.farm
     count = int(farm.rows) * int(farm.columns)
     if count <= 1:
@@ -36,7 +35,7 @@ def expand(scene):
     if scene.bodies:
         device, single = scene.bodies, False
     else:
-        device, single = (BodyEntry("body", "world", scene.body, scene.initial, scene.constraint),), True
+        device, single = (entry("body", "world", scene.body, scene.initial, scene.constraint),), True
     entries = []
     for row in range(int(farm.rows)):
         for column in range(int(farm.columns)):
@@ -48,7 +47,7 @@ def expand(scene):
                 position = tuple(float(p) + s for p, s in zip(e.initial.position, shift))
                 entries.append(replace(e, name=name, parent=parent, initial=replace(e.initial, position=position)))
     moorings = replace(scene.moorings, body="")
-    return replace(scene, bodies=tuple(entries), initial=InitialConfig(), constraint=ConstraintConfig(), moorings=moorings,
+    return replace(scene, bodies=tuple(entries), initial=type(scene.initial)(), constraint=type(scene.constraint)(), moorings=moorings,
                    body=type(scene.body)())  # fmt: skip
 
 

@@ -27,12 +27,12 @@ class WorkerLost(RuntimeError):
 def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
     """Load (or compile, once per machine) the kernels of the cases `indices` of `sweep` (those of one chunk:
     the cases of a sweep share their scheme, force model and water)."""
-    from sim.simulation import default_backend
+    from sim.compiling import default_backend
 
     if sweep is None or not indices or default_backend() != "numba":
         return
+    from sim.compiling import warm_up
     from sim.ensemble import Ensemble
-    from sim.kernels import warm_up
 
     from .chunk import case_scene
 
@@ -99,10 +99,10 @@ def _start_worker(parent: int) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _die_with(parent)
+    die_with(parent)
 
 
-def _die_with(parent: int) -> None:
+def die_with(parent: int) -> None:
     """End this worker when the process `parent` ends, even by SIGKILL (which leaves it no time to stop its
     workers): on Linux the kernel sends SIGKILL (prctl PR_SET_PDEATHSIG), elsewhere a thread watches os.getppid()."""
     import signal

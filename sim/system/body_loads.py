@@ -31,8 +31,8 @@ class BodyLoads:
 
     @property
     def has_twin(self) -> bool:
+        from sim.hydro.forces import compiled_model
         from sim.kernels import missing_terms
-        from sim.simulation import compiled_model
 
         return compiled_model(self.model) and not missing_terms(self.model) and self.model.held is None
 

@@ -16,12 +16,15 @@ stepping, the memory fit and the coupling, not the BEM.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sim.hydro.forces import Model
-from sim.system.tree import System, SystemState
 from sim.water.seas import StillWater
+
+if TYPE_CHECKING:  # the tree steps in time and asks this module for its linear response: types only here
+    from sim.system.tree import System, SystemState
 
 
 def pose_load(system: System, s: SystemState, still: list[Model]) -> np.ndarray:

@@ -252,7 +252,7 @@ class System:
         self.n_dofs = sum(g.dofs.stop - g.dofs.start for g in groups)
         self.joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
         self.laws = self.passive_laws()
-        """Each joint's take-off law over the next step (control.Law): its spring and damper, or its controller's (system/assembly.py)."""
+        """Each joint's take-off law over the next step (control.Law): its spring and damper, or its controller's (assembly.py)."""
         self.n_free = sum(g.kind == "free" for g in groups)
         constant = []
         for g in groups:  # a slide on slides to the world has a constant Jacobian; a lone hinge to the world no velocity-product load
@@ -530,8 +530,8 @@ def _body_mass(body: Body, R: np.ndarray) -> np.ndarray:
 def build(scene: SceneConfig) -> tuple[System, SystemState]:
     """The system and its starting state from a scene with [[bodies]]: groups of welded bodies, their
     joints about the poses the scene gives (each starting at its `start` coordinate, 0 unless given), the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
+    from sim.bodies.state import initial_state
     from sim.scene.config import diffracting
-    from sim.simulation import initial_state
 
     water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current, scene.base_dir)
     names = [e.name for e in scene.bodies]

@@ -27,7 +27,7 @@ class Assembly(Simulation):
     from their compiled twins when this machine has them (`kernels_ready`; `use_backend` loads or compiles them)."""
 
     def __init__(self, scene: SceneConfig, body=None, backend: str | None = None, mesh=None):
-        from sim.simulation import default_backend
+        from sim.compiling import default_backend
 
         if body is not None or mesh is not None:
             raise ConfigError("a scene of several bodies takes each body's mesh from its [[bodies]] entry (mesh = FILE)")
@@ -166,7 +166,7 @@ class Assembly(Simulation):
         """The step compiled ('numba': the bodies' loads from their compiled twins and the system step,
         system/compiled.py, each loaded from the disk cache or compiled now) or numpy, from the next step on; the state
         is kept as it is. Without a twin for every body's loads, numpy. A linear system stepped exactly keeps its stepper."""
-        from sim.kernels import warm_up
+        from sim.compiling import warm_up
         from sim.system.compiled import CompiledStep
 
         backend = backend if self.system.has_twin else "numpy"
@@ -406,7 +406,7 @@ class Assembly(Simulation):
         of the bodies together): what a viewer draws of each body. Computed once per state, on the numpy reference."""
         if self._parts is None or self._parts[0] is not self.state:
             from sim.bodies.state import State
-            from sim.simulation import observe
+            from sim.system.frame import observe
 
             s, frames = self.state, []
             for m, b, R in zip(self.system.members, body_frames(self.system, s), self.system.pose(s).R):
@@ -514,3 +514,6 @@ def _carried(old: System, new: System, s: SystemState, start: SystemState) -> Sy
             v[g_new.dofs.start : g_new.dofs.start + 3] += np.cross(v[g_new.dofs.start + 3 : g_new.dofs.stop], shift)  # u + omega x r
     memory = s.memory if len(s.memory) == len(start.memory) else np.zeros_like(start.memory)
     return replace(s, x_free=x, v=v, memory=memory, E_rad=s.E_rad if len(start.memory) else 0.0)
+
+
+Simulation.several = Assembly  # Simulation(scene) of several bodies makes one of these

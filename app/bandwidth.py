@@ -13,6 +13,10 @@ from dataclasses import dataclass
 
 import tyro
 
+from app.args import ViewArgs
+from app.main import start
+from app.page import Page
+
 
 @dataclass
 class BandwidthArgs:
@@ -28,7 +32,6 @@ class BandwidthArgs:
 
 async def measure(port: int, warmup: float, seconds: float) -> tuple[int, float]:
     """(bytes received, seconds counted) by one page over `seconds` after `warmup`."""
-    from .page import Page
 
     async with Page.open(port) as page:
         await page.camera()
@@ -45,8 +48,6 @@ async def measure(port: int, warmup: float, seconds: float) -> tuple[int, float]
 
 
 def main(args: BandwidthArgs) -> int:
-    from .args import ViewArgs
-    from .main import start
 
     app = start(ViewArgs(scene=args.scene, port=0))
     try:

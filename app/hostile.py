@@ -36,6 +36,11 @@ import tyro
 import viser
 import websockets
 
+from app.args import ViewArgs
+from app.guard import release_memory
+from app.loop import CONTROLLED
+from app.main import start
+
 from .page import CAMERA, PROBE, Page
 
 HUGE = (2**63, -(2**63), 2**64 - 1, 10**18 + 1)
@@ -142,7 +147,6 @@ async def _page(port: int, frames: list[bytes], camera: bool = True, origin: str
 
 def _fields(app) -> dict[str, object]:
     """The controls a user sets, by the field the run keeps its value under."""
-    from .loop import CONTROLLED
 
     keys = (*CONTROLLED, "speed", "paused")
     return {key: getattr(app.controls, key) for key in keys}
@@ -365,9 +369,6 @@ def _open_link(app, query: str) -> bool:
 
 
 def main(args: HostileArgs) -> int:
-    from .args import ViewArgs
-    from .guard import release_memory
-    from .main import start
 
     counter = _Counter(sys.stderr)
     sys.stderr = counter

@@ -15,6 +15,8 @@ import time
 
 import numpy as np
 
+from sim.bodies.rotation import quat_to_matrix
+
 HULL_HZ = 10.0
 """Updates a second at most (and whenever the wave surface goes out: the two then show the same instant)."""
 LINE_COLOUR = (250, 240, 40)
@@ -143,7 +145,6 @@ class HullView:
             self.wet.visible = False
         if not (line or wet) or not (due or now - self._sent >= 1.0 / self.hz):
             return
-        from sim.bodies.rotation import quat_to_matrix
 
         segments, vertices, faces = self.hull.cut(quat_to_matrix(frame.q_world_body), frame.x_world, water, frame.t)
         if line:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import viser
 
+from sim.bodies.body import load_mesh
 from sim.hydro.hydrostatics import describe_rest
 from sim.scene.config import ConfigError, available_scenes, load_scene
 
@@ -187,8 +188,6 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
         raise ConfigError(f"--mesh gives the one body of a scene its mesh: {args.scene} has several bodies (choose one under Body in the "
                           "viewer and load its mesh there, or give it in its [[bodies]] entry)")  # fmt: skip
     if args.mesh is not None:
-        from sim.bodies.body import load_mesh
-
         load_mesh(args.mesh, args.mesh, args.mesh_unit)  # a bad file: one line and exit 2, before any server starts
     port = check_address(args.host, args.port)
     presets = available_scenes()

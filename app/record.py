@@ -54,7 +54,7 @@ def run(args: RecordArgs) -> int:
     if not 1.0 <= args.fps <= 120.0:
         raise ConfigError(f"--fps must be in 1..120, got {args.fps:g}")
     if args.video:
-        from .video import check_video_tools
+        from .video import check_video_tools  # viser and PyAV (.[video]) only for a run that records
 
         check_video_tools()  # before the run, not after it
     dt = float(scene_from_args(args).step.dt)
@@ -83,7 +83,7 @@ def write_replay(args: RecordArgs, take: Take) -> int | None:
     """The replay page, if asked (whole or absent: a full disk leaves no half page); an exit status if it failed."""
     if not args.record:
         return None
-    from .replay import replay_html
+    from .replay import replay_html  # viser only for a run that records
 
     html = replay_html(take)
     try:
@@ -100,7 +100,7 @@ def write_video(args: RecordArgs, take: Take) -> int | None:
     after a frame keeps the frames so far, which play); an exit status if it failed or was stopped."""
     if not args.video:
         return None
-    from .video import frame_count, render_video
+    from .video import frame_count, render_video  # viser and PyAV (.[video]) only for a run that records
 
     bar = progress_bar(frame_count(take, args.fps), flag=args.progress, unit="frame")
     written = [0]

@@ -19,6 +19,9 @@ from pathlib import Path
 
 import viser
 
+from app.replay import replay_html
+from app.video import check_render_time, check_video_tools, render_video
+
 from .take import MAX_SHOTS, Take
 from .video import MAX_RENDER_SECONDS, longest_take
 
@@ -139,7 +142,6 @@ class RecordPanel:
         if take is None or not len(take):
             self.status.content = "Nothing recorded (the run was paused?)."
             return {}
-        from .replay import replay_html
 
         self.status.content = f"Writing the replay of {take.duration:.1f} s…"
         try:
@@ -177,8 +179,6 @@ class RecordPanel:
 
     def export_video(self, client=None, fps: float = 30.0, size: str = "640x360") -> Path | None:
         """Render the last take to MP4 beside its replay; offer it to `client`. One export at a time."""
-
-        from .video import check_render_time, check_video_tools, render_video
 
         with self._lock:
             if self._exporting or self.last is None:

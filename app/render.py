@@ -7,6 +7,9 @@ import io
 import time
 from pathlib import Path
 
+from app.args import ViewArgs
+from app.main import start
+
 from .browser import launch, missing
 
 View = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
@@ -20,9 +23,6 @@ def render_scene(scene: str, views: dict[str, View], paths: dict[str, Path], siz
         return why
     from PIL import Image
     from playwright.sync_api import sync_playwright
-
-    from .args import ViewArgs
-    from .main import start
 
     viewer = None
     try:

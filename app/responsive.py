@@ -18,6 +18,10 @@ from dataclasses import dataclass
 
 import tyro
 
+from app.args import ViewArgs
+from app.browser import launch, missing
+from app.main import start
+
 
 @dataclass
 class ResponsiveArgs:
@@ -47,10 +51,6 @@ def event_loop_lags(server, seconds: float, period: float = 0.05) -> list[float]
 
 def main(args: ResponsiveArgs) -> int:
     from playwright.sync_api import sync_playwright
-
-    from .args import ViewArgs
-    from .browser import launch, missing
-    from .main import start
 
     if why := missing():
         print(f"floatsim: {why}", file=sys.stderr)

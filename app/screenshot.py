@@ -11,6 +11,9 @@ from dataclasses import dataclass
 
 import tyro
 
+from app.args import ViewArgs
+from app.main import start
+
 from .browser import launch, missing
 
 
@@ -33,9 +36,6 @@ def main(args: ShotArgs) -> int:
         print(f"app.screenshot: {why}", file=sys.stderr)
         return 1
     from playwright.sync_api import sync_playwright
-
-    from .args import ViewArgs
-    from .main import start
 
     with contextlib.redirect_stdout(io.StringIO()):
         app = start(ViewArgs(scene=args.scene, port=0))

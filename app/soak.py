@@ -21,6 +21,10 @@ from pathlib import Path
 
 import tyro
 
+from app.args import ViewArgs
+from app.browser import launch
+from app.main import start
+
 
 @dataclass
 class SoakArgs:
@@ -53,8 +57,6 @@ def browse(url: str, seconds: float) -> None:
     """The child process: keep one page open on the viewer (small viewport, as a laptop tab would be throttled to)."""
     from playwright.sync_api import sync_playwright
 
-    from app.browser import launch
-
     with sync_playwright() as p:
         browser = launch(p)
         page = browser.new_page(viewport={"width": 800, "height": 600})
@@ -66,8 +68,6 @@ def browse(url: str, seconds: float) -> None:
 
 
 def main(args: SoakArgs) -> int:
-    from .args import ViewArgs
-    from .main import start
 
     app = start(ViewArgs(scene=args.scene, port=0))
     app.controls.speed.value = args.speed

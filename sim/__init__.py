@@ -8,8 +8,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from sim.assembly import Assembly  # the runner of several bodies: Simulation(scene) of [[bodies]] makes one
 from sim.bodies.body import Body, make_body  # noqa: E402
-from sim.bodies.integrators import INTEGRATORS, make_integrator
 from sim.bodies.state import State
+from sim.dynamics.integrators import INTEGRATORS, make_integrator
 from sim.errors import ConfigError, SimulationDiverged
 from sim.hydro.forces import TERMS, Model
 from sim.parameters import Param

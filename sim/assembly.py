@@ -16,9 +16,17 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from sim.bodies.rotation import quat_to_matrix
-from sim.errors import ConfigError
+from sim.bodies.state import State
+from sim.compiling import default_backend, kernels_ready, warm_up
+from sim.control.laws import JointState, WaveState, of_constraint, stiffness_check, wrap
+from sim.errors import ConfigError, SimulationDiverged
+from sim.lines.moorings import Moorings, line_file
 from sim.scene.config import SceneConfig, validate, with_overrides
 from sim.simulation import Simulation
+from sim.system.compiled import CompiledStep
+from sim.system.frame import observe
+from sim.system.frequency import stiffness
+from sim.system.linear import exact_linear
 from sim.system.tree import System, SystemState, body_frames, build, lines_scene, moored_body
 
 
@@ -27,7 +35,6 @@ class Assembly(Simulation):
     from their compiled twins when this machine has them (`kernels_ready`; `use_backend` loads or compiles them)."""
 
     def __init__(self, scene: SceneConfig, body=None, backend: str | None = None, mesh=None):
-        from sim.compiling import default_backend
 
         if body is not None or mesh is not None:
             raise ConfigError("a scene of several bodies takes each body's mesh from its [[bodies]] entry (mesh = FILE)")
@@ -47,7 +54,6 @@ class Assembly(Simulation):
         self.notes: list[str] = []
         self._custom: dict = {}  # controllers given from Python (`control`), by joint
         self.controllers = self._make_controllers()
-        from sim.system.linear import exact_linear
 
         self.exact = None if self.switching else exact_linear(self.system, self.state)
         """The exact stepper of a linear system (system/linear.py), or None: Stormer-Verlet."""
@@ -77,7 +83,6 @@ class Assembly(Simulation):
     def _make_controllers(self) -> list:
         """Each joint's take-off controller (the one `control` gave, else its [constraint]'s), its law set for the first step;
         a negative spring checked against the joint's own stiffness (system_frequency.stiffness, with the springs)."""
-        from sim.control.laws import of_constraint, stiffness_check
 
         system, entries = self.system, {e.name: e for e in self.scene.bodies}
         stiff = None
@@ -86,8 +91,6 @@ class Assembly(Simulation):
             c, i = entries[g.name].constraint, g.dofs.start
             if j not in self._custom and c.pto_stiffness < 0:
                 if stiff is None:
-                    from sim.system.frequency import stiffness
-
                     stiff = stiffness(system, replace(self.start, theta=np.zeros_like(self.start.theta), v=np.zeros_like(self.start.v)))
                 e = np.zeros(system.n_dofs)
                 e[i] = 1.0
@@ -108,7 +111,6 @@ class Assembly(Simulation):
         """Drive the take-off of `body`'s joint (the body a joint's group is named by) by `controller`: a callable
         (t, control.JointState, control.WaveState) -> force (N or N m, held over each step) or a control.Controller;
         None: back to the scene's."""
-        from sim.control.laws import wrap
 
         names = [g.name for g in self.system.joints]
         if body not in names:
@@ -127,7 +129,6 @@ class Assembly(Simulation):
         Where a spring's stiffness changes, the difference of its energy goes to the take-off's absorbed energy (E_total +
         E_pto stays whole); where a lock engages, the joint's rate is zeroed and the kinetic energy that takes is absorbed.
         `v` and `absorbed` change in place; `inertia()` gives the mass matrix there (asked only when a lock engages)."""
-        from sim.control.laws import JointState, WaveState
 
         system, tree = self.system, None if self.stepper is None else self.stepper.tree
         for j, (g, controller) in enumerate(zip(system.joints, self.controllers)):
@@ -158,7 +159,6 @@ class Assembly(Simulation):
     @property
     def kernels_ready(self) -> bool:
         """Whether the bodies' compiled loads can be loaded at once (this machine compiled them before)."""
-        from sim.compiling import kernels_ready
 
         return self.system.has_twin and all(kernels_ready(spec) for spec in self.specs)
 
@@ -166,8 +166,6 @@ class Assembly(Simulation):
         """The step compiled ('numba': the bodies' loads from their compiled twins and the system step,
         system/compiled.py, each loaded from the disk cache or compiled now) or numpy, from the next step on; the state
         is kept as it is. Without a twin for every body's loads, numpy. A linear system stepped exactly keeps its stepper."""
-        from sim.compiling import warm_up
-        from sim.system.compiled import CompiledStep
 
         backend = backend if self.system.has_twin else "numpy"
         if backend == "numba":
@@ -276,7 +274,6 @@ class Assembly(Simulation):
         self.use_backend(backend if backend == "numpy" or self.kernels_ready else "numpy")
 
     def _check_exact(self) -> None:
-        from sim.system.linear import exact_linear
 
         self.exact = None if self.switching else exact_linear(self.system, self.state)
 
@@ -284,7 +281,6 @@ class Assembly(Simulation):
         """The lines in MoorDyn at the starting state (lines/moorings.py), or None."""
         if self.moored is None:
             return None
-        from sim.lines.moorings import Moorings
 
         k, s = self.moored, self.start
         attach = self.scene.moorings.attach.split()
@@ -295,7 +291,6 @@ class Assembly(Simulation):
             lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
             self.system.held[k] = lines.load.copy()
             return lines
-        from sim.lines.moorings import line_file
 
         names = self.body_names
         owner = "nearest" if attach == ["nearest"] else [names.index(a) for a in attach]
@@ -338,7 +333,6 @@ class Assembly(Simulation):
             self.moorings.close()
 
     def step(self, n: int = 1) -> SystemState:
-        from sim.errors import SimulationDiverged
 
         if self.exact is not None:  # a linear system: all n steps at once (no lines: they rule it out)
             new = self.exact.advance(self.state, self.dt, n)
@@ -405,9 +399,6 @@ class Assembly(Simulation):
         gravity on it about its centre of mass, its energies; not the joints' reactions, the lines' pull or the radiation
         of the bodies together): what a viewer draws of each body. Computed once per state, on the numpy reference."""
         if self._parts is None or self._parts[0] is not self.state:
-            from sim.bodies.state import State
-            from sim.system.frame import observe
-
             s, frames = self.state, []
             for m, b, R in zip(self.system.members, body_frames(self.system, s), self.system.pose(s).R):
                 L = R @ (m.body.inertia * (R.T @ b["omega"]))

@@ -19,6 +19,8 @@ import tempfile
 import threading
 import time
 
+from sim.system import compiled
+
 COMMAND_ENV = "FLOATSIM_COMPILER"
 
 
@@ -42,7 +44,6 @@ def kernels_ready(spec) -> bool:
 def cached(spec) -> bool:
     """Whether this machine compiled the kernels of `spec` before (kernels.SYSTEM_STEP: the system step's)."""
     from sim import kernels  # numba's import (about 0.5 s) only once compiled kernels are asked for
-    from sim.system import compiled
 
     return compiled.ready() if spec == kernels.SYSTEM_STEP else kernels.cached(spec)
 
@@ -50,7 +51,6 @@ def cached(spec) -> bool:
 def warm_up(spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; the seconds taken."""
     from sim import kernels
-    from sim.system import compiled
 
     return compiled.warm() if spec == kernels.SYSTEM_STEP else kernels.warm_up(spec)
 

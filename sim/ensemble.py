@@ -6,10 +6,11 @@ import dataclasses
 
 import numpy as np
 
-from sim.bodies.body import body_mass, make_body, with_mass
+from sim.bodies.body import body_mass, exact_inertia, make_body, with_mass
 from sim.bodies.state import State
+from sim.compiling import default_backend
 from sim.scene.config import ConfigError, SceneConfig
-from sim.simulation import SimulationDiverged
+from sim.simulation import Simulation, SimulationDiverged
 from sim.system.frame import Frame
 
 SHARED = ("body.shape", "body.size", "body.extents", "body.points_per_edge", "body.mesh", "body.samples", "body.centre_of_mass", "body.inertia", "fluid.rho", "fluid.g", "fluid.forces",
@@ -30,9 +31,6 @@ class Ensemble:
             if any(s.value(key) != base.value(key) for key in SHARED):
                 raise ConfigError("ensemble bodies must share shape, water, force model, integrator and dt; they may differ in density, "
                                   "force coefficients and initial state")  # fmt: skip
-        from sim.bodies.body import exact_inertia
-        from sim.compiling import default_backend
-        from sim.simulation import Simulation
 
         # unit mass: each body's inertia is then this times its own mass, whatever the other bodies (bit for bit)
         shape = make_body(dataclasses.replace(base.body, mass=1.0), base.base_dir, exact_inertia(base))

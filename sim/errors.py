@@ -16,3 +16,7 @@ class WriteFailed(ConfigError):
     def __init__(self, path, reason: str):
         super().__init__(f"cannot write {path}: {reason}")
         self.path, self.reason = str(path), reason
+
+
+class Interrupted(Exception):
+    """Raised by a loop that stopped because Ctrl-C asked it to."""

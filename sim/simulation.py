@@ -9,16 +9,22 @@ import time
 import numpy as np
 
 from sim.bodies.body import Body, body_mass, exact_inertia, make_body, make_mesh_body, with_mass
-from sim.bodies.integrators import make_integrator
 from sim.bodies.rotation import normalized, quat_multiply
 from sim.bodies.state import State, angular_momentum, angular_velocity, initial_state
-from sim.compiling import default_backend
+from sim.compiling import default_backend, kernels_ready
+from sim.control.laws import JointState, Law, WaveState, of_constraint, stiffness_check, wrap
+from sim.dynamics.integrators import make_integrator
+from sim.dynamics.joints import WorldJoint, stiffness_along
+from sim.dynamics.joints import step as joint_step
 from sim.errors import ConfigError, SimulationDiverged
 from sim.hydro.forces import Model, compiled_model
 from sim.hydro.hydrostatics import sampled_model_warning
-from sim.scene.config import SceneConfig, diffracting, moored, validate, with_overrides
+from sim.hydro.radiation import make_radiation
+from sim.lines.moorings import Moorings, moored
+from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.frame import Frame, observe
+from sim.water.records import describe
 from sim.water.seas import make_water
 
 GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", "samples", "centre_of_mass", "inertia")
@@ -108,17 +114,15 @@ class Simulation:
         fluid = self.scene.fluid
         water = make_water(self.scene.waves, fluid.rho, fluid.g, self.scene.water.current, self.scene.base_dir)
         if self.scene.waves.kind == "record":
-            from sim.water.records import describe
-
             if (note := describe(water, self.scene.waves)) not in self.notes:
                 self.notes.append(note)
         radiation = None
         if fluid.radiation == "bem":
-            from sim.hydro.radiation import make_radiation
-
             start = initial_state(body, self.scene)
             drift = water if self.scene.waves.drift and not water.flat else None
-            radiation = make_radiation(body, self.scene, start.R_world_body, water=water if diffracting(self.scene) else None, drift=drift)
+            R = start.R_world_body
+            radiation = make_radiation(body, self.scene, R, water=water if diffracting(self.scene) else None, drift=drift,
+                                       joint_at=lambda rest: WorldJoint.of_scene(self.scene, rest, R))  # fmt: skip
             depth = self.scene.waves.depth
             if depth is not None:
                 note = (f"the radiation{' and diffraction' if diffracting(self.scene) else ''} coefficients are a deep-water solve: at the sea's "
@@ -129,7 +133,6 @@ class Simulation:
 
     def _join(self) -> None:
         """The joint to the world about the scene's starting pose; the state put on it (its velocity projected)."""
-        from sim.bodies.joints import WorldJoint
 
         start = initial_state(self.body, self.scene)
         self.joint = WorldJoint.of_scene(self.scene, start.x_world, start.R_world_body)
@@ -144,7 +147,6 @@ class Simulation:
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
-        from sim.bodies.joints import WorldJoint
 
         old = self.joint
         start = (old.x0, old.R0) if old is not None else (self.state.x_world, self.state.R_world_body)
@@ -159,8 +161,6 @@ class Simulation:
     def _make_controller(self) -> None:
         """The joint's take-off control: the one `control` gave, else the scene's (control/laws.py), a negative spring checked
         against the joint's own stiffness."""
-        from sim.bodies.joints import stiffness_along
-        from sim.control.laws import Law, of_constraint, stiffness_check
 
         j = self.joint
         self._law = Law()
@@ -178,7 +178,6 @@ class Simulation:
     def control(self, controller) -> None:
         """Drive the joint's take-off by `controller`: a callable (t, control.JointState, control.WaveState) -> force
         (N or N m, held over each step), or a control.Controller; None: back to the scene's [constraint] controller."""
-        from sim.control.laws import wrap
 
         if self.joint is None or not self.joint.dofs:
             raise ConfigError("a take-off controller needs the body on a prismatic or revolute joint ([constraint] joint)")
@@ -187,7 +186,6 @@ class Simulation:
 
     def _next_law(self, s: State):
         """The controller's law for the step from s."""
-        from sim.control.laws import JointState, WaveState
 
         if self.controller.linear is not None:  # a spring and damper: nothing to ask
             self._law = self.controller.linear
@@ -204,7 +202,6 @@ class Simulation:
             self.moorings = None
         if not moored(self.scene):
             return
-        from sim.lines.moorings import Moorings
 
         s, R = self.state, self.state.R_world_body
         self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
@@ -288,7 +285,6 @@ class Simulation:
     @property
     def kernels_ready(self) -> bool:
         """Whether the compiled kernels can be used at once: a twin exists and this machine compiled it before."""
-        from sim.compiling import kernels_ready
 
         return self.has_twin and kernels_ready(self.spec)
 
@@ -389,8 +385,7 @@ class Simulation:
 
     def _advance_coupled(self, n: int) -> State:
         """Step by step: the mooring lines advanced over each and their mean pull held over it (lines/moorings.py);
-        a jointed body stepped on its joint's coordinate (bodies/joints.py)."""
-        from sim.bodies.joints import step as joint_step
+        a jointed body stepped on its joint's coordinate (dynamics/joints.py)."""
 
         if self.joint is None and self.compiled:
             return self._advance_moored(n)

@@ -16,8 +16,8 @@ import numpy as np
 from sim.commands import declared_flags, overrides
 from sim.commands.progress import progress_bar
 from sim.decay import analyse, release, signal
+from sim.limits import check_memory
 from sim.scene.config import PARAMS, ConfigError, load_scene, with_overrides
-from sim.scene.limits import check_memory
 from sim.simulation import Simulation
 
 

@@ -73,12 +73,13 @@ def test_a_farm_it_cannot_build_is_one_line(tmp_path):
 
 def test_a_solve_past_the_memory_is_refused_with_its_numbers(monkeypatch):
     """The joint solve's dense matrices, 32 N^2 bytes: refused past half the memory available, before any is made."""
-    from sim.scene import farm, limits
+    from sim import limits
+    from sim.hydro import bem
 
     monkeypatch.setattr(limits, "available_bytes", lambda: 1.0e9)
-    farm.check_panels(3000, 5)  # 288 MB: within 500 MB
+    bem.check_panels(3000, 5)  # 288 MB: within 500 MB
     with pytest.raises(ConfigError, match="4000 wet panels: its matrices take about 0.512 GB, over the 0.5 GB"):
-        farm.check_panels(4000, 6)
+        bem.check_panels(4000, 6)
 
 
 def _pair(spacing: float, omega: float | None = None):

@@ -28,7 +28,7 @@ def test_costly_settings_are_refused_with_their_estimate(argv, says, capsys, tmp
 
 
 def test_the_limit_follows_the_memory_this_machine_has(monkeypatch, capsys):
-    monkeypatch.setattr("sim.scene.limits.available_bytes", lambda: 100e6)  # a small machine: 100 MB free
+    monkeypatch.setattr("sim.limits.available_bytes", lambda: 100e6)  # a small machine: 100 MB free
     assert main(["run", "--points-per-edge", "200", "--t-end", "0.01"]) == 2  # 240 000 samples, about 108 MB
     err = one_line(capsys)
     assert "108 MB" in err and "100 MB available" in err and "--points-per-edge" in err
@@ -36,7 +36,7 @@ def test_the_limit_follows_the_memory_this_machine_has(monkeypatch, capsys):
 
 
 def test_a_long_decay_record_is_checked_against_memory(monkeypatch, capsys):
-    monkeypatch.setattr("sim.scene.limits.available_bytes", lambda: 100e6)
+    monkeypatch.setattr("sim.limits.available_bytes", lambda: 100e6)
     from studies.decay import DecayArgs, decay
 
     with pytest.raises(Exception, match="a record of 20,000,001 steps needs about 320 MB"):

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from sim.bodies.integrators import INTEGRATORS
+from sim.dynamics.integrators import INTEGRATORS
 from studies.accuracy import QUICK, ReportArgs, run_report
 
 pytestmark = pytest.mark.slow  # the quick report takes half a minute to make (the marker's rule: over 4 s)

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from sim.bodies.clusters import bisection_tree
+from sim.bodies.rotation import matrix_to_quat
 from sim.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -79,7 +81,6 @@ class Body:
     @cached_property
     def face_tree(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The mesh's triangles as a tree of nested compact parts (clusters.bisection_tree): order, spans, spheres."""
-        from sim.bodies.clusters import bisection_tree
 
         return bisection_tree(self.mesh_vertices[self.mesh_faces])
 
@@ -174,7 +175,6 @@ def _assemble(r, nrm, area, cells, mass, volume, verts, faces, name, exact: bool
         moments, axes = np.linalg.eigh(inertia)
         if np.linalg.det(axes) < 0:
             axes[:, 2] *= -1
-    from sim.bodies.rotation import matrix_to_quat
 
     return Body(
         r_body=np.ascontiguousarray(r @ axes),

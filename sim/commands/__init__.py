@@ -15,6 +15,7 @@ from typing import Annotated
 
 import tyro
 
+from sim.commands.interrupt import EXIT, interrupted_by_ctrl_c
 from sim.errors import ConfigError
 from sim.parameters import Param
 
@@ -101,8 +102,6 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, SystemError) as e:
-        from .interrupt import EXIT, interrupted_by_ctrl_c
-
         if not interrupted_by_ctrl_c(e):
             raise
         name = next((n for n, (cls, _) in loaded.items() if isinstance(args, cls)), "")

@@ -12,8 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.scene.config import ConfigError, load_scene, with_overrides
+from sim.commands.startup import startup
+from sim.compiling import cached, warm_up
+from sim.ensemble import Ensemble
+from sim.errors import ConfigError
+from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
+from sim.sweeps.backends import run
+from sim.sweeps.grid import Sweep, case_scene, chunks, parse_param
 
 from .progress import progress_bar
 from .tables import machine, table
@@ -69,7 +75,6 @@ QUICK_SECONDS = 10
 def announce(args: BenchArgs, base, cells) -> None:
     """Say, before the first row, how long the run takes and how to cut it: the whole benchmark is minutes of silence
     but for its progress bar. Kernels not compiled on this machine yet add their compile (counted for the first table)."""
-    from sim.compiling import cached
 
     scenes = [
         with_overrides(base, fluid__forces=f, step__integrator=i, body__points_per_edge=n or base.body.points_per_edge) for f, n, i in cells
@@ -101,11 +106,7 @@ def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
 
 def bench(args: BenchArgs) -> int:
     if args.startup:
-        from .startup import startup
-
         return startup(args.presets, 1.0)
-    from sim.compiling import warm_up
-    from sim.ensemble import Ensemble
 
     if args.quick:
         args = dataclasses.replace(args, sizes=(10,), repeats=min(args.repeats, 3), ensemble=0, radiation=False, waves=False, moorings=False,
@@ -220,8 +221,6 @@ def bench(args: BenchArgs) -> int:
 
 def _sweep_rows(cases: int) -> list[tuple[str, ...]]:
     """One sweep on each backend: throughput, its ratio to one core, and the share of wall time lost to scheduling."""
-    from sim.sweeps.backends import run
-    from sim.sweeps.grid import Sweep, case_scene, chunks, parse_param
 
     side = max(1, round(cases**0.5))
     spec = Sweep("damped", (parse_param(f"density=300:1500:{side}"), parse_param(f"orientation_seed=0:{max(0, cases // side - 1)}:{cases // side}")),
@@ -249,7 +248,6 @@ def _sweep_rows(cases: int) -> list[tuple[str, ...]]:
 def _mooring_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     """The moored buoy with and without its lines; the moored step split into MoorDyn's part (timed inside
     moorings.advance), the body's own step (the unmoored cost) and the rest (the per-step coupling)."""
-    from sim.errors import ConfigError
 
     base = load_scene("moored-buoy")
     try:
@@ -281,8 +279,6 @@ def _system_rows(args: BenchArgs) -> list[tuple[str, ...]]:
     reference and with the bodies' loads compiled; split by timing its parts in place: each body's loads
     (hydrodynamics), the radiation memory and diffraction (radiation), and the rest (kinematics, the kicks'
     matrix exponentials)."""
-    from sim.scene.config import with_overrides
-    from sim.simulation import Simulation
 
     preset = load_scene("rm3")
     sea = with_overrides(preset, waves__kind="jonswap", waves__height=2.5, waves__period=8.0, waves__components=64, step__dt=0.01)

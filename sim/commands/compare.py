@@ -14,7 +14,7 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from sim.bodies.integrators import INTEGRATORS
+from sim.dynamics.integrators import INTEGRATORS
 from sim.errors import ConfigError
 from sim.scene.config import PARAMS, load_scene, with_overrides
 from sim.simulation import Simulation

@@ -6,8 +6,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from sim.control.gains import body_port, system_port
 from sim.errors import ConfigError
 from sim.scene.config import load_scene, with_overrides
+from sim.simulation import Simulation
 
 
 @dataclass
@@ -26,8 +28,6 @@ class GainsArgs:
 
 
 def gains(args: GainsArgs) -> int:
-    from sim.control.gains import body_port, system_port
-    from sim.simulation import Simulation
 
     scene = load_scene(args.scene)
     changes = {k: v for k, v in (("waves__period", args.wave_period), ("waves__height", args.wave_height)) if v is not None}

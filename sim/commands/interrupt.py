@@ -8,13 +8,11 @@ from __future__ import annotations
 import signal
 import threading
 
+from sim.errors import Interrupted
+
 CHECK_SECONDS = 0.2
 """Longest stretch of work between two checks: Ctrl-C is answered well within a second."""
 EXIT = 130
-
-
-class Interrupted(Exception):
-    """Raised by a loop that stopped because Ctrl-C asked it to."""
 
 
 class StopOnCtrlC:

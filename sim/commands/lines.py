@@ -8,7 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+from sim.commands.output import write_whole
+from sim.commands.progress import progress_bar
 from sim.errors import ConfigError
+from sim.lines.lines_alone import coupled_points, motion_of, read_table, run
+from sim.lines.moordyn_input import coupled_bodies_as_points
 
 
 @dataclass
@@ -34,11 +38,6 @@ class LinesArgs:
 
 
 def lines(args: LinesArgs) -> int:
-    from sim.lines.lines_alone import coupled_points, motion_of, read_table, run
-    from sim.lines.moordyn_input import coupled_bodies_as_points
-
-    from .output import write_whole
-    from .progress import progress_bar
 
     for name, value in (("--lines", args.lines), ("--motion", args.motion)):
         if not Path(value).is_file():

@@ -12,11 +12,12 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from sim.compiling import default_backend
+from sim.compiling import cached, default_backend, warm_up
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
+from sim.hydro.radiation import misfit_note
+from sim.limits import step_time
 from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
-from sim.scene.limits import step_time
 from sim.simulation import Simulation, SimulationDiverged
 
 from . import FROM_SCENE, declared_flags, overrides
@@ -96,7 +97,6 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
     """The compiled kernels build once per machine (then load from the disk cache): say so before the wait.
     `sim` is built on the numpy reference: where its kernels are not built yet (kernels_ready), a short run
     stays there, saying so; a longer one moves to the kernels, which compile first."""
-    from sim.compiling import cached, warm_up
 
     if sim.has_twin and not sim.compiled and default_backend() == "numba":
         if not sim.kernels_ready and (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
@@ -226,7 +226,6 @@ def summarise(sim: Simulation, first, last) -> None:
           f"integrator {sim.integrator.name}, dt {sim.dt:g} s, forces {describe_terms(sim)}, "
           f"inertia {inertia_source(scene, sim.body)}")  # fmt: skip
     print(f"at rest: {describe_rest(sim.body, sim.params)}")
-    from sim.hydro.radiation import misfit_note
 
     if sim.model.radiation is not None and (note := misfit_note(sim.model.radiation.memory)):
         print(note)
@@ -260,7 +259,6 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
     names = ", ".join(f"{m.name} ({m.body.mass:.6g} kg, {m.body.n_samples} samples)" for m in system.members)
     print(f"scene {sim.scene.name}: {len(system.members)} bodies: {names}; {len(system.groups)} rigid groups, {system.n_dofs} degrees of freedom; "
           "{}, dt {:g} s; the bodies' loads {}".format(*how_stepped(sim)))  # fmt: skip
-    from sim.hydro.radiation import misfit_note
 
     if system.radiation is not None and (note := misfit_note(system.radiation.memory)):
         print(note)

@@ -15,7 +15,10 @@ import sys
 import tempfile
 import time
 
-from sim.scene.config import ConfigError, available_scenes
+from sim.commands.tables import machine, table
+from sim.compiling import spec_argument
+from sim.scene.config import ConfigError, available_scenes, load_scene
+from sim.simulation import Simulation
 
 
 def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, str]:
@@ -25,9 +28,6 @@ def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, 
 
 def timed_compile(scene: str, cache: str) -> tuple[float, float, int, str]:
     """timed_run of compiling the kernels the preset needs (its kernels.Spec) in a fresh process."""
-    from sim.compiling import spec_argument
-    from sim.scene.config import load_scene
-    from sim.simulation import Simulation
 
     run = Simulation(load_scene(scene), backend="numpy")
     specs = run.specs if run.has_twin else []
@@ -78,7 +78,6 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
             file=sys.stderr,
             flush=True,
         )
-    from .tables import machine, table
 
     print(f"machine: {machine()}")
     print(f"`python -m sim run --scene NAME --t-end {t_end:g}` in a fresh process. cold: an empty kernel cache; compile: the kernels "

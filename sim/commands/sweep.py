@@ -20,8 +20,8 @@ from typing import Annotated, Literal
 import tyro
 
 from sim.errors import ConfigError, WriteFailed
+from sim.limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from sim.scene.config import available_scenes
-from sim.scene.limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from sim.sweeps.backends import WorkerLost, run
 from sim.sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 

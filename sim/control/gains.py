@@ -27,6 +27,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from sim.errors import ConfigError
+from sim.hydro.diffraction import transfer_at
+from sim.hydro.forces import Model
+from sim.hydro.linear_hydro import LinearLoads
+from sim.system.frequency import damping_at_rest, stiffness
+from sim.water.seas import StillWater
 
 
 @dataclass(frozen=True)
@@ -83,7 +88,6 @@ def _impedance(c, omega: float, J: np.ndarray, M: np.ndarray, D: np.ndarray, K: 
 def port(c, omega: float, beta: float, J: np.ndarray, M: np.ndarray, D: np.ndarray, K: np.ndarray, e: np.ndarray) -> Port:
     """The port of the generalised coordinate `e` ((d,)) at omega for waves heading beta: J (6k, d); M, D, K (d, d) the
     generalised mass, the terms' linear damping and the stiffness (the take-off's own left out)."""
-    from sim.hydro.diffraction import transfer_at
 
     X = (transfer_at(c, c.froude_krylov, omega, beta) + transfer_at(c, c.diffraction, omega, beta))[0]
     Zd = _impedance(c, omega, J, M, D, K)
@@ -105,9 +109,6 @@ def port(c, omega: float, beta: float, J: np.ndarray, M: np.ndarray, D: np.ndarr
 
 def body_port(sim) -> Port:
     """The port of a one-body Simulation's joint in its scene's regular waves."""
-    from sim.hydro.forces import Model
-    from sim.hydro.linear_hydro import LinearLoads
-    from sim.water.seas import StillWater
 
     omega, beta, c = _sea(sim.scene, sim.model.radiation)
     joint, body = sim.joint, sim.body
@@ -124,7 +125,6 @@ def body_port(sim) -> Port:
 
 def system_port(asm, body: str) -> Port:
     """The port of the joint of `body` (an Assembly's) in its scene's regular waves, every other joint's take-off kept."""
-    from sim.system.frequency import damping_at_rest, stiffness
 
     omega, beta, c = _sea(asm.scene, asm.system.radiation)
     system = asm.system

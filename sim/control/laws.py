@@ -5,7 +5,7 @@ its body (`WaveState`), and gives the affine law the step holds:
 
     F = f - k theta - c theta_dot      (N on a slide, N m on a hinge)
 
-k and c act inside the step's implicit kick (bodies/joints.py, system/tree.py), so a stiff spring, a large damper or a
+k and c act inside the step's implicit kick (dynamics/joints.py, system/tree.py), so a stiff spring, a large damper or a
 latch stays stable at any time step; f is held over the step. The take-off absorbs P = (c theta_dot - f) theta_dot (the
 CSV's P_pto; its spring's power is stored, not absorbed), and E_pto adds that exactly over each step.
 
@@ -36,6 +36,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import Callable
+
+from sim.errors import ConfigError
 
 CONTROLLERS = ("passive", "reactive", "latching", "declutching", "pi")
 
@@ -245,8 +247,6 @@ def stiffness_check(kind: str, k: float, K0, e, where: str = "") -> None:
     (not always the joint's own: a float's spring against its spar's heave) leaves the rest: ConfigError, with the
     bound -1 / (e^T K0^+ e) (for one body -K)."""
     import numpy as np
-
-    from sim.errors import ConfigError
 
     if k >= 0.0:
         return

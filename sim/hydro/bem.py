@@ -33,7 +33,10 @@ from pathlib import Path
 
 import numpy as np
 
+from sim import limits
+from sim.bodies.surface import clip_triangles
 from sim.errors import ConfigError
+from sim.hydro.lid import make_lid
 
 DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
 SHIPPED = Path(__file__).resolve().parents[2] / "assets" / "coefficients"
@@ -286,8 +289,6 @@ def wet_mesh(vertices: np.ndarray, faces: np.ndarray, panel: float) -> tuple[np.
     is longer than `panel` (trimesh's subdivision, then floatsim's own exact clipping at the water line)."""
     import trimesh
 
-    from sim.bodies.surface import clip_triangles
-
     v, f = trimesh.remesh.subdivide_to_size(np.asarray(vertices, float), np.asarray(faces), max_edge=panel)
     T, _ = clip_triangles(v[f], v[f][:, :, 2])
     area = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
@@ -355,8 +356,6 @@ def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth
     needs = "far field" if far_field else "excitation" if excitation else ""
 
     def solve_now() -> Coefficients:
-        from sim.scene.farm import check_panels
-
         check_panels(sum(len(f) for _, f, _ in wet), len(wet))  # before the dense matrices are made
         return solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)
 
@@ -464,8 +463,6 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     from capytaine.bem.airy_waves import froude_krylov_force
     from capytaine.post_pro.kochin import compute_kochin
 
-    from sim.hydro.lid import make_lid
-
     logging.getLogger("capytaine").setLevel(logging.ERROR)  # its resolution warnings concern the top of the grid, where B has died out
     bodies, centers, panels = [], [], 0
     for k, (vertices, faces, center) in enumerate(parts):
@@ -517,3 +514,18 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
         note(f"note: the radiation damping made symmetric and passive (the solve breaks both a little, most in couplings such as "
              f"an axisymmetric body's rank-one surge-pitch block): entries changed by up to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
     return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), panels, center, **excitation)
+
+
+BYTES_PER_PANEL_PAIR = 32.0
+"""Capytaine's two dense complex matrices (the single- and double-layer influence), bytes per pair of panels."""
+
+
+def check_panels(panels: int, bodies: int) -> None:
+    """Refuse a joint BEM solve of `panels` wet panels over `bodies` bodies whose dense matrices would pass the memory share
+    (limits.MEMORY_SHARE of what is available now), with the numbers and what to change."""
+    need = BYTES_PER_PANEL_PAIR * float(panels) ** 2
+    room = limits.MEMORY_SHARE * limits.available_bytes()
+    if need > room:
+        raise ConfigError(f"the BEM solve of {bodies} bodies together has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
+                          f"over the {room / 1e9:.3g} GB this machine can give it; use fewer devices ([farm] rows, columns), coarser "
+                          "meshes, or radiation = \"none\"")  # fmt: skip

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from sim.hydro.bem import Coefficients
+from sim.hydro.diffraction import transfer_at
 from sim.water.seas import ramp_factor, wavenumber
 
 
@@ -107,7 +108,6 @@ class Drift:
     reflected as from a wall: the drift tends to a constant). Headings interpolate linearly (periodic)."""
 
     def __init__(self, c: Coefficients, water, rao: np.ndarray | None = None):
-        from sim.hydro.diffraction import transfer_at
 
         table = mean_drift(c, rao, water.g).astype(complex)
         top = np.asarray(water.omega, float).clip(max=float(c.omega[-1]))

@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from sim.bodies.rotation import quat_to_matrix
+from sim.bodies.surface import wet_panels
 from sim.errors import ConfigError
+from sim.lines.moorings import check_lines, moored, rest_pull
+from sim.water.seas import StillWater
 
 
 def rest_height(body, fluid, R: np.ndarray, pull: float = 0.0) -> float:
@@ -12,9 +16,6 @@ def rest_height(body, fluid, R: np.ndarray, pull: float = 0.0) -> float:
     clipped volume of its mesh), and with `pull` (N, a vertical force on it: negative down, as mooring lines pull)
     what holds that up too, m. ConfigError when it cannot float."""
     from scipy.optimize import brentq
-
-    from sim.bodies.surface import wet_panels
-    from sim.water.seas import StillWater
 
     water = StillWater(fluid.rho, fluid.g)
 
@@ -36,14 +37,11 @@ def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
     (horizontally by Newton steps on their stiffness, vertically by `rest_height` with their vertical pull: each a few
     rounds, the lines' elastic catenaries being cheap); with a MoorDyn file, the lines' vertical pull under the
     starting position (the file's fairleads are where the body starts)."""
-    from sim.scene.config import moored
 
     x, y = (float(v) for v in scene.initial.position[:2])
     z = rest_height(body, scene.fluid, R)
     if not moored(scene):
         return np.array([x, y, z])
-    from sim.bodies.rotation import quat_to_matrix
-    from sim.lines.moorings import check_lines, rest_pull
 
     R_input = R @ quat_to_matrix(body.q_input_body).T  # the frame the lines' fairleads are given in, to world
     level = not scene.moorings.line_file
@@ -69,7 +67,6 @@ def scene_rest(body, scene, R: np.ndarray) -> np.ndarray:
 
 def pull_stiffness(scene, at: np.ndarray, R_input: np.ndarray, step: float = 1e-4) -> np.ndarray:
     """(2, 2) -d(pull_xy)/d(x, y) of the scene's lines on a body held at `at`, N/m (central differences)."""
-    from sim.lines.moorings import rest_pull
 
     K = np.zeros((2, 2))
     for axis in (0, 1):

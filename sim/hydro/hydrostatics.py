@@ -20,7 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sim.bodies.rotation import quat_to_matrix
 from sim.bodies.surface import clip_triangles
+from sim.errors import ConfigError
+from sim.hydro.equilibrium import rest_height
 
 
 @dataclass(frozen=True)
@@ -104,8 +107,6 @@ def at_rest(body, fluid, R: np.ndarray | None = None) -> tuple[float, float, Hyd
     """Where the body floats held at orientation R (default: as its mesh file has it) in calm water: the centre of
     mass's height, the draft (depth of its lowest point) and the hydrostatics there. ConfigError
     when it cannot float."""
-    from sim.bodies.rotation import quat_to_matrix
-    from sim.hydro.equilibrium import rest_height
 
     R = quat_to_matrix(body.q_input_body) if R is None else R
     z = rest_height(body, fluid, R)
@@ -115,7 +116,6 @@ def at_rest(body, fluid, R: np.ndarray | None = None) -> tuple[float, float, Hyd
 
 def describe_rest(body, fluid, R: np.ndarray | None = None) -> str:
     """One line on how a body floats: volume, mass, draft at rest and GM (with what its sign means)."""
-    from sim.errors import ConfigError
 
     head = f"volume {body.volume:.4g} m^3, mass {body.mass:.4g} kg"
     try:
@@ -140,7 +140,6 @@ cube over density and N (part 6), which also counts the runs it misses and the f
 def leak_margin(body, fluid, R: np.ndarray | None = None) -> float | None:
     """|GM| / BM / sqrt(h / L) of the body floating as given, h = sqrt(mean sample area), L = sqrt(waterplane
     area): below LEAK_BAND the points model's rest is unreliable. None when it does not float with a waterplane."""
-    from sim.errors import ConfigError
 
     try:
         h = at_rest(body, fluid, R)[2]
@@ -169,7 +168,6 @@ def floating_potential(body, fluid, R: np.ndarray) -> float:
     """The potential energy of the body held at orientation R and floating freely in height, J, up to a
     constant: with the displaced mass equal to the body's, U = M g (z_G - z_B) (gravity's M g z_G plus
     the water's -rho g V z_B). Its minima over orientations are the stable floating orientations."""
-    from sim.hydro.equilibrium import rest_height
 
     z = rest_height(body, fluid, R)
     h = hydrostatics(body, np.array([0.0, 0.0, z]), R)

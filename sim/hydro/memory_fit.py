@@ -43,6 +43,10 @@ from pathlib import Path
 
 import numpy as np
 
+from sim.errors import ConfigError
+from sim.hydro import bem
+from sim.hydro.bem import UNREADABLE, _replace, _thread
+
 ZETA_MIN = 0.01
 """Smallest damping ratio of a pole."""
 MARGIN = 1e-6
@@ -549,11 +553,9 @@ def fit_memory(c, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -
     """The passive memory of the coefficients `c` (the module's docstring): each block of coupled radiating dofs with
     the lowest number of pole pairs (up to max_order) meeting `tol` in B and A (each against its peak), made passive.
     Read from the shipped fits or the user's cache when they hold it, else made (and cached)."""
-    from sim.hydro.bem import user_cache
-
     key = fit_key(c, tol, max_order, length)
     if key not in _FITS:
-        cached = user_cache() / "memory" / f"{key}.npz"
+        cached = bem.user_cache() / "memory" / f"{key}.npz"
         memory = next((m for m in (_read(STORED / f"{key}.npz"), _read(cached)) if m is not None), None)
         if memory is None:
             refuse_fit_here()
@@ -566,8 +568,6 @@ def fit_memory(c, tol: float = 0.02, max_order: int = 10, length: float = 1.0) -
 def refuse_fit_here() -> None:
     """Inside bem.no_solves (a live viewer's simulation thread), a fit neither shipped nor cached is refused as a solve
     is (a ConfigError saying why): fitting takes seconds to a minute (rm3-moored's spar resampled: 16 s)."""
-    from sim.errors import ConfigError
-    from sim.hydro.bem import _thread
 
     why = getattr(_thread, "no_solve", None)
     if why:
@@ -576,7 +576,6 @@ def refuse_fit_here() -> None:
 
 def _read(path: Path) -> RadiationMemory | None:
     """A stored fit, or None when absent or unreadable (then it is made again)."""
-    from sim.hydro.bem import UNREADABLE
 
     if not path.exists():
         return None
@@ -596,7 +595,6 @@ def _block(f, k: int) -> BlockFit:
 
 def _keep(memory: RadiationMemory, path: Path) -> None:
     """Store a fresh fit (atomically); a cache that cannot be written only means the next run fits again."""
-    from sim.hydro.bem import _replace
 
     arrays = {"blocks": len(memory.blocks), "residual_mass": memory.residual_mass,
               "added_mass_inf": memory.added_mass_inf - memory.residual_mass}  # fmt: skip

@@ -14,7 +14,17 @@ import math
 
 import numpy as np
 
+from sim.bodies.rotation import quat_to_matrix
+from sim.errors import ConfigError
+from sim.hydro import bem
+from sim.hydro.diffraction import NO_DIFFRACTION, Diffraction
+from sim.hydro.drift import NO_DRIFT, Drift, body_rao
+from sim.hydro.equilibrium import pull_stiffness, scene_rest
+from sim.hydro.forces import Model
+from sim.hydro.linear_hydro import LinearLoads
 from sim.hydro.memory_fit import EntryFit, RadiationMemory, fit_memory, transfer
+from sim.lines.moorings import moored
+from sim.water.seas import StillWater
 
 __all__ = ["EntryFit", "Radiation", "RadiationMemory", "fit_memory", "held_step", "make_radiation", "transfer"]
 
@@ -124,8 +134,6 @@ class Radiation:
         band = lambda M: np.where(inside, M[states[:, None], cols], 0.0)  # noqa: E731
         dense = (np.linalg.inv(Mb), (V / np.sqrt(lam)) @ V.T, (V * np.sqrt(lam)) @ V.T, band(Phi), band(self.F))
         per_state = (Gamma[states, col], self.G[states, col], self.H[row, states])
-        from sim.hydro.diffraction import NO_DIFFRACTION
-        from sim.hydro.drift import NO_DRIFT
 
         waves = NO_DIFFRACTION if self.diffraction is None else self.diffraction.kernel_arrays()
         if self.drift is not None and self.diffraction is None:  # the components' phases without a diffraction force
@@ -146,7 +154,6 @@ def lowest_frequency(scene, mass: float, rest: np.ndarray, R_input: np.ndarray) 
     `rest`, its lines' frame R_input to world), rad/s: sqrt(k / M) / 2, k their smaller horizontal stiffness (the added
     mass lowers the true one by less than half while A_11 < 3 M), down to a quarter octave (lines changed a little keep
     the grid); None when the lines do not hold it horizontally."""
-    from sim.hydro.equilibrium import pull_stiffness
 
     try:
         K = pull_stiffness(scene, rest, R_input)
@@ -161,7 +168,6 @@ def lowest_frequency(scene, mass: float, rest: np.ndarray, R_input: np.ndarray) 
 def passive_memory(c, **fit):
     """The radiation memory fitted to the solve `c` (memory_fit.fit_memory); a solve no passive memory fits is one
     ConfigError line, not a traceback."""
-    from sim.errors import ConfigError
 
     try:
         return fit_memory(c, **fit)
@@ -178,20 +184,13 @@ def longest_wave(fluid, lowest: float | None) -> float | None:
     return asked if lowest is None else min(asked, lowest)
 
 
-def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None, drift=None) -> Radiation:
+def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=None, drift=None, joint_at=None) -> Radiation:
     """The body's radiation model about its rest pose at orientation R0 in the scene (BEM coefficients from the
     shipped files, the cache or Capytaine; then the memory fit), in the body frame. The rest pose holds the mooring
     lines' pull too, and the frequency grid reaches down past their slowest natural frequency. With `water` (waves),
     also the diffraction force in that sea (phased where the body is at each instant); with `drift` (waves), the
-    mean and slow drift force in that sea (drift.Drift, the body moving with its linear response)."""
-    from sim.bodies.rotation import quat_to_matrix
-    from sim.errors import ConfigError
-    from sim.hydro.bem import default_frequencies, radiation_coefficients
-    from sim.hydro.diffraction import Diffraction
-    from sim.hydro.drift import Drift
-    from sim.hydro.equilibrium import scene_rest
-    from sim.scene.config import moored
-
+    mean and slow drift force in that sea (drift.Drift, the body moving with its linear response); `joint_at(rest)`: the
+    body's joint to the world at that rest pose (dynamics.joints.WorldJoint.of_scene's, or None), which that response needs."""
     fluid = scene.fluid
     rest = scene_rest(body, scene, R0)
     z = round(float(rest[2]), 9)  # to the nanometre: the same rest pose gives the same mesh and cache key
@@ -202,27 +201,24 @@ def make_radiation(body, scene, R0: np.ndarray, progress: bool = True, water=Non
     if fluid.bem_min_period is not None or fluid.bem_max_period is not None or moored(scene):
         lowest = lowest_frequency(scene, body.mass, rest, R0 @ quat_to_matrix(body.q_input_body).T) if moored(scene) else None
         lowest = longest_wave(fluid, lowest)
-        omega = default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
-    c = radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
+        omega = bem.default_frequencies(float(np.ptp(vertices, axis=0).max()), fluid.g, min_period=fluid.bem_min_period, lowest=lowest)
+    c = bem.radiation_coefficients(vertices, body.mesh_faces, fluid.rho, fluid.g, omega=omega, progress=progress, center=(0.0, 0.0, z),
                                excitation=water is not None, far_field=drift is not None)  # fmt: skip
     memory = passive_memory(c)
     T0 = Radiation._frame(R0)  # world-at-rest dofs = T0 body dofs
     if not memory.entries:
         raise ConfigError("radiation = 'bem': this body radiates no waves here (no damping in the BEM results; is g zero?)")
-    drifting = None if drift is None else Drift(c, drift, linear_response(body, scene, c, rest, R0))
+    drifting = (
+        None if drift is None else Drift(c, drift, linear_response(body, scene, c, rest, R0, None if joint_at is None else joint_at(rest)))
+    )
     return Radiation(T0.T @ c.added_mass_inf @ T0, memory, R0, None if water is None else Diffraction(c, water), c, drifting)
 
 
-def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray) -> np.ndarray:
+def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray, joint=None) -> np.ndarray:
     """(n, m, 6) the body's motion per unit wave amplitude at the solve's frequencies and headings (drift.body_rao):
     its rigid-body mass, the stiffness and linear damping of its own force model at rest (linear_hydro.LinearLoads:
-    the exact pressure's hydrostatics), its joint and take-off. The mooring lines' stiffness is left out: their
+    the exact pressure's hydrostatics), its `joint` to the world (dynamics.joints.WorldJoint) and take-off. The mooring lines' stiffness is left out: their
     natural frequencies lie far below the waves'."""
-    from sim.bodies.joints import WorldJoint
-    from sim.hydro.drift import body_rao
-    from sim.hydro.forces import Model
-    from sim.hydro.linear_hydro import LinearLoads
-    from sim.water.seas import StillWater
 
     still = LinearLoads(Model(body, StillWater(scene.fluid.rho, scene.fluid.g), scene.fluid), rest, R0)
     mass = np.zeros((6, 6))
@@ -230,7 +226,6 @@ def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray) -> np.ndar
     mass[3:, 3:] = (R0 * body.inertia) @ R0.T
     damping = np.zeros((6, 6)) if still.D0 is None else still.D0
     stiffness = still.C.copy()
-    joint = WorldJoint.of_scene(scene, rest, R0)
     J = None
     if joint is not None:
         J = joint.jacobian(rest).reshape(6, joint.dofs)

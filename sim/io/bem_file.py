@@ -29,7 +29,11 @@ import numpy as np
 
 from sim.errors import ConfigError
 from sim.hydro.bem import Coefficients, note, passive
+from sim.hydro.forces import Model
+from sim.hydro.linear_hydro import LinearLoads
 from sim.io.wamit import read_out
+from sim.water.records import record_path
+from sim.water.seas import Waves, wavenumber
 
 HORIZONTAL_SLACK = 0.01
 """m: a body must start this near, horizontally, the file's centre of mass (the excitation's phases are the file's)."""
@@ -37,7 +41,6 @@ HORIZONTAL_SLACK = 0.01
 
 def bem_file_path(name: str, base_dir: str) -> Path:
     """The file a scene names: relative to the scene file, else to the working directory."""
-    from sim.water.records import record_path  # (the same rule as a wave record's)
 
     path = record_path(name, base_dir)
     if not path.is_file():
@@ -143,9 +146,6 @@ def froude_krylov(c: Coefficients, models: list, starts: list, fluid) -> np.ndar
     """(n, m, 6k) the incident wave's linear force on each body's wet surface at rest, per unit wave of each of the
     solve's frequencies and headings (phase zero at the origin), about the bodies' centres of mass, as floatsim
     integrates it (linear_hydro.LinearLoads)."""
-    from sim.hydro.forces import Model
-    from sim.hydro.linear_hydro import LinearLoads
-    from sim.water.seas import Waves, wavenumber
 
     n, m = len(c.omega), len(c.headings)
     omega = np.repeat(c.omega, m)

@@ -30,7 +30,7 @@ _HERE = Path(__file__).resolve().parent
 
 
 def _cache_dir() -> str:
-    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "hydro/forces.py", _HERE.parent / "bodies/integrators.py"]
+    sources = sorted(_HERE.glob("*.py")) + [_HERE.parent / "hydro/forces.py", _HERE.parent / "dynamics/integrators.py"]
     digest = hashlib.sha256(b"".join(p.read_bytes() for p in sources)).hexdigest()[:16]
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "floatsim")
     return os.path.join(root, f"kernels-{digest}")

@@ -1,4 +1,4 @@
-"""Compiled twin of bodies/integrators.py: the flows, kicks and derivative the schemes (schemes.py) are built of.
+"""Compiled twin of dynamics/integrators.py: the flows, kicks and derivative the schemes (schemes.py) are built of.
 
 The same arithmetic as the reference written as plain loops, so the two agree to round-off
 (tests compare them stage by stage and step by step).
@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from sim.bodies.integrators import RELINEARISE, RELINEARISE_TOL
+from sim.dynamics.integrators import RELINEARISE, RELINEARISE_TOL
 
 from .forces import linearised, pose_loads, twist_loads
 from .jit import JIT, njit

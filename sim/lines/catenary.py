@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import fsolve
 
 
 def _ends(H: float, V: float, L: float, w: float, EA: float) -> tuple[float, float]:
@@ -50,6 +49,8 @@ def _guesses(X: float, Z: float, L: float, w: float) -> list[tuple[float, float]
 def catenary(X: float, Z: float, L: float, w: float, EA: float) -> tuple[float, float]:
     """(H, V): the horizontal and vertical tension at the fairlead, N, of a line spanning X horizontally
     and Z vertically (m) from its anchor on the seabed; w its weight in water, N/m, EA its axial stiffness, N."""
+    from scipy.optimize import fsolve  # scipy.optimize takes 0.5 s to import: paid by the scenes with lines
+
     hanging = EA * (math.sqrt(1 + 2 * w * Z / EA) - 1)  # V of a line hanging straight down, stretched: Z = V / w + V^2 / (2 EA w)
     if X <= L - hanging / w:  # slack: it hangs straight down from the fairlead and the rest lies (folded) on the seabed
         return 0.0, hanging

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from sim.errors import ConfigError
+from sim.lines.moorings import Moorings
 
 
 @dataclass(frozen=True)
@@ -107,7 +108,6 @@ def run(text: str, motion: Motion, dt: float, t_end: float | None = None, every:
     and anchor (end A) as OpenFAST's MoorDyn reports them (Moorings.end_forces), every `every` steps. `energy`: also
     E_lines (what the lines store), D_lines (what they have dissipated) and W_in (the work the moved points have done
     on them), J: W_in = E_lines - E_lines(start) + D_lines. `folder`: where the input came from (the files it names)."""
-    from sim.lines.moorings import Moorings
 
     start = float(motion.t[0])
     end = float(motion.t[-1]) if t_end is None else float(t_end)

@@ -34,8 +34,10 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.bodies.rotation import skew
-from sim.errors import ConfigError
+from sim.bodies.rotation import quat_to_matrix, skew
+from sim.errors import ConfigError, SimulationDiverged
+from sim.lines.catenary import catenary
+from sim.lines.line_energy import LineEnergy, read_spec
 from sim.lines.moordyn_input import coupled_bodies_as_points
 
 LINE_DRAG = (1.2, 1.0, 0.2, 0.0)
@@ -458,7 +460,6 @@ class Moorings:
     def track_energy(self) -> None:
         """Count, from now on, the work the fairleads do on the lines (`work_in`) and the energy the lines dissipate
         (`dissipated`; `energy_now`): a few hundred MoorDyn calls a step, so only when asked."""
-        from sim.lines.line_energy import LineEnergy, read_spec
 
         self.energy = LineEnergy(self._md, self._system, self._lines, read_spec(self._text))
         self.work_in = self.dissipated = 0.0
@@ -535,7 +536,6 @@ class Moorings:
         if spread is None:
             return None
         q = np.asarray(scene.initial.orientation, float)
-        from sim.bodies.rotation import quat_to_matrix
 
         text = spread.input_file(
             np.asarray(x0, float), quat_to_matrix(q / np.linalg.norm(q)), scene.fluid.rho, scene.fluid.g, scene.step.dt
@@ -580,8 +580,6 @@ class Moorings:
             ahead = (math.nan,)
         self.seconds += time.perf_counter() - started
         if not math.isfinite(sum(ahead)):
-            from sim.errors import SimulationDiverged
-
             raise SimulationDiverged(f"the mooring lines (MoorDyn) diverged at t = {self.t:g} s: try a smaller time step or more segments "
                                      f"(a mooring file's dtM: at most {CROSSINGS:g} of an axial wave's crossing of a segment, sqrt(mass / EA) per metre)")  # fmt: skip
         ahead = np.array(ahead, float).reshape(-1, 3)
@@ -661,7 +659,6 @@ def rest_pull(scene, x: np.ndarray, R: np.ndarray) -> np.ndarray:
     """(3,) the scene's lines' summed pull on the body held still at x (its centre of mass) with orientation R (input
     frame to world), N, world frame: each line of a spread or of anchors given as an elastic catenary on the seabed
     (sim.lines.catenary, MoorDyn's rest shape to its discretisation); a MoorDyn file's lines from MoorDyn's own start-up."""
-    from sim.lines.catenary import catenary
 
     spread = lines_of(scene.moorings)
     if spread is not None and not scene.moorings.line_file:
@@ -679,3 +676,8 @@ def rest_pull(scene, x: np.ndarray, R: np.ndarray) -> np.ndarray:
         return np.zeros(3)
     with lines:
         return lines.load[:3].copy()
+
+
+def moored(scene) -> bool:
+    """Whether the scene has mooring lines (a spread, anchor points or a MoorDyn file)."""
+    return bool(scene.moorings.lines or scene.moorings.line_file or scene.moorings.anchors)

@@ -16,16 +16,18 @@ from pathlib import Path
 import numpy as np
 
 from sim.bodies.body import UNITS
-from sim.bodies.integrators import INTEGRATORS
-from sim.bodies.joints import JOINTS
 from sim.bodies.surface import FORCE_MODELS
 from sim.control.laws import CONTROLLERS
+from sim.dynamics.integrators import INTEGRATORS
+from sim.dynamics.joints import JOINTS
 from sim.errors import ConfigError
 from sim.hydro.forces import TERMS
-from sim.lines.moorings import SURFACE, check_start, lines_of
+from sim.limits import check_samples
+from sim.lines.moorings import SURFACE, check_start, lines_of, moored
 from sim.parameters import Param
 from sim.scene.farm import expand
-from sim.scene.limits import check_samples
+from sim.water.records import measured, peak_period
+from sim.water.seas import ramp_seconds, wavenumber
 
 SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
 
@@ -526,14 +528,8 @@ def points_per_edge(scene: SceneConfig) -> int:
     return b.points_per_edge if b.shape != "mesh" else max(1, round(math.sqrt(b.samples / 6)))
 
 
-def moored(scene: SceneConfig) -> bool:
-    """Whether the scene has mooring lines (a spread, anchor points or a MoorDyn file)."""
-    return bool(scene.moorings.lines or scene.moorings.line_file or scene.moorings.anchors)
-
-
 def wave_ramp(scene: SceneConfig) -> float:
     """The wave ramp the run uses, s (water.ramp_seconds: 3.5 periods of the sea when unset)."""
-    from sim.water.seas import ramp_seconds
 
     return ramp_seconds(scene.waves, scene.base_dir)
 
@@ -565,13 +561,10 @@ BREAKING_STEEPNESS = 1 / 7
 def _check_steepness(w, g: float, base_dir: str = ".") -> None:
     """Refuse a sea steeper than breaking: regular H / lambda, JONSWAP Hs / lambda_p, a record's 4 std(eta) / lambda_p
     (a record read in millimetres as metres is caught here). A record that cannot be read is refused too."""
-    from sim.water.seas import wavenumber
 
     if w.kind == "still" or g == 0:
         return
     if w.kind == "record":
-        from sim.water.records import measured, peak_period
-
         dt, eta = measured(w, base_dir)
         height, period, what = 4 * float(np.std(eta)), peak_period(dt, eta, w.cutoff_period), "the record's 4 std(eta) / peak wavelength"
     else:

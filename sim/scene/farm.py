@@ -18,9 +18,6 @@ from dataclasses import replace
 
 from sim.errors import ConfigError
 
-BYTES_PER_PANEL_PAIR = 32.0
-"""Capytaine's two dense complex matrices (the single- and double-layer influence), bytes per pair of panels."""
-
 
 def expand(scene, entry):
     """The scene with its [farm] laid out as [[bodies]] (unchanged when the farm is one device); `entry` makes a
@@ -49,16 +46,3 @@ def expand(scene, entry):
     moorings = replace(scene.moorings, body="")
     return replace(scene, bodies=tuple(entries), initial=type(scene.initial)(), constraint=type(scene.constraint)(), moorings=moorings,
                    body=type(scene.body)())  # fmt: skip
-
-
-def check_panels(panels: int, bodies: int) -> None:
-    """Refuse a joint BEM solve of `panels` wet panels over `bodies` bodies whose dense matrices would pass the memory share
-    (limits.MEMORY_SHARE of what is available now), with the numbers and what to change."""
-    from sim.scene.limits import MEMORY_SHARE, available_bytes
-
-    need = BYTES_PER_PANEL_PAIR * float(panels) ** 2
-    room = MEMORY_SHARE * available_bytes()
-    if need > room:
-        raise ConfigError(f"the BEM solve of {bodies} bodies together has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
-                          f"over the {room / 1e9:.3g} GB this machine can give it; use fewer devices ([farm] rows, columns), coarser "
-                          "meshes, or radiation = \"none\"")  # fmt: skip

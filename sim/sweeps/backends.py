@@ -12,7 +12,10 @@ import logging
 import os
 from collections.abc import Callable, Iterable
 
-from sim.errors import ConfigError
+from sim.compiling import default_backend, warm_up
+from sim.ensemble import Ensemble
+from sim.errors import ConfigError, Interrupted
+from sim.sweeps.chunk import case_scene, run_chunk
 
 from .grid import Sweep
 
@@ -27,14 +30,9 @@ class WorkerLost(RuntimeError):
 def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
     """Load (or compile, once per machine) the kernels of the cases `indices` of `sweep` (those of one chunk:
     the cases of a sweep share their scheme, force model and water)."""
-    from sim.compiling import default_backend
 
     if sweep is None or not indices or default_backend() != "numba":
         return
-    from sim.compiling import warm_up
-    from sim.ensemble import Ensemble
-
-    from .chunk import case_scene
 
     base = sweep.base()
     if base.bodies:  # several bodies: each case's Assembly loads its own kernels
@@ -47,8 +45,6 @@ def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
 def _task(sweep: Sweep, indices: list[int], stop=None):
     """One chunk on a worker: (rows, history, seconds of compute)."""
     import time
-
-    from .chunk import run_chunk
 
     started = time.perf_counter()
     rows, history = run_chunk(sweep, indices, stop)
@@ -131,8 +127,6 @@ def die_with(parent: int) -> None:
 
 def _check(stop) -> None:
     if stop is not None and stop.asked:
-        from sim.commands.interrupt import Interrupted
-
         raise Interrupted
 
 

@@ -15,6 +15,8 @@ import numpy as np
 
 from sim.bodies.rotation import quat_to_matrix
 from sim.ensemble import Ensemble
+from sim.errors import SimulationDiverged
+from sim.simulation import Simulation
 
 from .grid import Sweep, case_scene
 
@@ -138,8 +140,6 @@ def run_system_chunk(sweep: Sweep, indices: list[int], stop=None) -> dict:
     """A scene of several bodies, case after case: each run to t_end; per joint, the take-off's mean power and the
     coordinate's amplitude (half its range) over the run's second half (the start's transient left out), and the
     energy every take-off absorbed (`E_pto`). A case that diverges gets status 'diverged' and NaNs."""
-    from sim.errors import SimulationDiverged
-    from sim.simulation import Simulation
 
     base = sweep.base()
     rows: dict = {"case": list(indices)}

@@ -24,9 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
+from sim.bodies.rotation import quat_multiply
 from sim.errors import ConfigError
+from sim.hydro import forces
+from sim.limits import MAX_CASES
 from sim.scene.config import PARAMS, SceneConfig, body_own, load_scene, read_toml, with_overrides
-from sim.scene.limits import MAX_CASES
 
 START = {"z0": "initial height of the centre of mass, m", "tilt": "initial heel about the world x axis, degrees",
          "orientation_seed": "random initial orientation (uniform over rotations), by seed"}  # fmt: skip
@@ -157,7 +159,6 @@ def case_scene(base: SceneConfig, case: dict) -> SceneConfig:
     if "tilt" in case:
         half = math.radians(float(case["tilt"])) / 2
         heel = np.array([math.cos(half), math.sin(half), 0.0, 0.0])
-        from sim.bodies.rotation import quat_multiply
 
         orientation = quat_multiply(heel, orientation)
     if "z0" in case:
@@ -170,9 +171,7 @@ def case_scene(base: SceneConfig, case: dict) -> SceneConfig:
 
 def group_key(scene: SceneConfig) -> tuple:
     """Cases with equal keys run in one ensemble: shared geometry and stepping, the same force terms, one sea."""
-    from sim.hydro.forces import TERMS
-
-    terms = tuple(t.name for t in TERMS if t.is_used(scene.fluid))
+    terms = tuple(t.name for t in forces.TERMS if t.is_used(scene.fluid))
     return tuple(scene.value(k) for k in SHARED) + (terms, scene.waves, scene.water, scene.fluid.radiation)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.hydro.forces import Model
+from sim.hydro.forces import Model, compiled_model
 
 
 class BodyLoads:
@@ -31,7 +31,6 @@ class BodyLoads:
 
     @property
     def has_twin(self) -> bool:
-        from sim.hydro.forces import compiled_model
         from sim.kernels import missing_terms
 
         return compiled_model(self.model) and not missing_terms(self.model) and self.model.held is None

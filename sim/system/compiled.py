@@ -13,7 +13,8 @@ import os
 
 import numpy as np
 
-from sim.system.tree import System, SystemState
+from sim.scene.config import load_scene, with_overrides
+from sim.system.tree import System, SystemState, build
 
 KERNELS = ("system.advance", "system.first_half", "system.kick", "system.configure")
 """The compiled functions a run uses (their disk cache tells whether they are ready)."""
@@ -33,9 +34,6 @@ def warm() -> float:
     joint with linear loads (n steps in one call), and rm3 without radiation in still water; seconds taken."""
     import dataclasses
     import time
-
-    from sim.scene.config import load_scene, with_overrides
-    from sim.system.tree import build
 
     started = time.perf_counter()
     rm3 = load_scene("rm3")

@@ -31,7 +31,6 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import block_diag, expm
 
 from sim.hydro.linear_hydro import LinearLoads
 
@@ -73,6 +72,8 @@ class ExactLinear:
         n = 2 * d + s + 1  # (q, v, x, 1)
         M = system.inertia(pose)
         f0 = np.concatenate([loads.f0 for loads in system.loads])
+        from scipy.linalg import block_diag  # scipy.linalg takes 0.3 s to import: paid by the linear systems
+
         C = block_diag(*(loads.C for loads in system.loads))
         D = block_diag(*(np.zeros((6, 6)) if loads.D0 is None else loads.D0 for loads in system.loads))
         K, c = np.zeros((d, d)), np.zeros(d)
@@ -141,6 +142,8 @@ class ExactLinear:
         if h not in self._maps:
             if len(self._maps) > 4:
                 self._maps.clear()
+            from scipy.linalg import expm
+
             self._maps[h] = (expm(self.A * h), self._probe @ expm(self.A * (0.5 * h)))
         return self._maps[h]
 

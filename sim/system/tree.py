@@ -39,17 +39,25 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.linalg import expm
 
 from sim.bodies.body import Body, make_body
-from sim.bodies.joints import _rotation
 from sim.bodies.rotation import matrix_to_quat, normalized, quat_to_matrix, rotate_world, skew
+from sim.bodies.state import initial_state
 from sim.bodies.surface import wet_panels
+from sim.control.laws import Law
+from sim.dynamics.joints import _rotation
 from sim.errors import ConfigError
-from sim.hydro.forces import Model
+from sim.hydro.bem import bodies_coefficients, default_frequencies
+from sim.hydro.diffraction import Diffraction
+from sim.hydro.drift import Drift
+from sim.hydro.forces import Model, hydrostatic_energy
 from sim.hydro.linear_hydro import LinearLoads
-from sim.scene.config import SceneConfig
+from sim.hydro.radiation import held_step, longest_wave, lowest_frequency, passive_memory
+from sim.io.bem_file import bem_file_path, from_file
+from sim.lines.moorings import moored
+from sim.scene.config import SceneConfig, diffracting
 from sim.system.body_loads import BodyLoads
+from sim.system.frequency import raos
 from sim.water.seas import make_water
 
 
@@ -171,10 +179,6 @@ class SystemRadiation:
            far_field: bool = False) -> SystemRadiation:  # fmt: skip
         """Solved (or read) about the starting poses, the grid reaching down to `lowest` (rad/s) where that is lower
         (moored bodies: `moored_lowest`); or from the scene's `bem_file` (io/bem_file.py)."""
-        from sim.hydro.bem import bodies_coefficients, default_frequencies
-        from sim.hydro.diffraction import Diffraction
-        from sim.hydro.radiation import longest_wave, passive_memory
-        from sim.io.bem_file import bem_file_path, from_file
 
         if fluid.bem_file:
             c = from_file(bem_file_path(fluid.bem_file, base_dir), models, starts, fluid, water)
@@ -218,15 +222,13 @@ class SystemRadiation:
     def advance(self, x: np.ndarray, nu_fit: np.ndarray, dt: float) -> np.ndarray:
         """The memory after dt with a constant twist (in the fit's axes), exactly."""
         if dt not in self._steps:
-            from sim.hydro.radiation import held_step
-
             self._steps = {dt: held_step(self.F, self.G, dt)}
         Phi, Gamma = self._steps[dt]
         return Phi @ x + Gamma @ nu_fit
 
     def drift(self, system: System, before: SystemState, after: SystemState, h: float) -> SystemState:
         """The memory over a drift at the velocities v: driven by the twists in the fit's axes, averaged over both
-        ends; the radiated energy h nu . mu likewise (as bodies/joints.py does for one body)."""
+        ends; the radiated energy h nu . mu likewise (as dynamics/joints.py does for one body)."""
         p0, p1 = system.pose(before), system.pose(after)
         T0, T1 = self.frames(p0), self.frames(p1)
         nu0, nu1 = p0.stacked @ before.v, p1.stacked @ before.v
@@ -270,7 +272,6 @@ class System:
 
     def passive_laws(self) -> list:
         """Each joint's take-off as its scene gives it: its spring and damper."""
-        from sim.control.laws import Law
 
         return [Law(0.0, g.stiffness, g.damping) for g in self.joints]
 
@@ -467,6 +468,8 @@ class System:
         # Van Loan: expm([[A, z z^T], [0, -A^T]] h) has e^{Ah} ... and the integral of z z^T over the step
         big = np.zeros((2 * n + 2, 2 * n + 2))
         big[: n + 1, : n + 1], big[: n + 1, n + 1 :], big[n + 1 :, n + 1 :] = A, np.outer(z, z), -A.T
+        from scipy.linalg import expm  # scipy.linalg takes 0.3 s to import: paid by the scenes that kick with it
+
         E = expm(big * h)
         gram = E[: n + 1, n + 1 :] @ E[: n + 1, : n + 1].T  # integral over the step of z z^T
         v = (E[: n + 1, : n + 1] @ z)[:n]
@@ -490,7 +493,6 @@ class System:
         pose = self.pose(s)
         g = self.water.g
         e_hyd = 0.0
-        from sim.hydro.forces import hydrostatic_energy
 
         for m, loads, x, R in zip(self.members, self.loads, pose.x, pose.R):
             if isinstance(loads, LinearLoads):
@@ -530,8 +532,6 @@ def _body_mass(body: Body, R: np.ndarray) -> np.ndarray:
 def build(scene: SceneConfig) -> tuple[System, SystemState]:
     """The system and its starting state from a scene with [[bodies]]: groups of welded bodies, their
     joints about the poses the scene gives (each starting at its `start` coordinate, 0 unless given), the bodies' given velocities projected on the joints' (kinetic-energy metric)."""
-    from sim.bodies.state import initial_state
-    from sim.scene.config import diffracting
 
     water = make_water(scene.waves, scene.fluid.rho, scene.fluid.g, scene.water.current, scene.base_dir)
     names = [e.name for e in scene.bodies]
@@ -606,8 +606,6 @@ def attach_drift(system: System, rest: SystemState, water) -> None:
     """The drift force of the bodies together (drift.Drift, from the solve's far field with the bodies moving as the
     linear system does: system_frequency.raos) on the root of their one tree, about its centre of mass. The far field
     gives the total on them all; bodies apart (several trees) would need each body's own, from the near field."""
-    from sim.hydro.drift import Drift
-    from sim.system.frequency import raos
 
     roots = [i for i, g in enumerate(system.groups) if g.parent < 0]  # one (build checks)
     rad = system.radiation
@@ -618,7 +616,6 @@ def attach_drift(system: System, rest: SystemState, water) -> None:
 
 def moored_body(scene) -> int | None:
     """The index of the body the scene's mooring lines hold ([moorings] body, else the first); None without lines."""
-    from sim.scene.config import moored
 
     if not moored(scene):
         return None
@@ -634,8 +631,6 @@ def moored_lowest(scene, models: list, starts: list) -> float | None:
     """Where a moored scene's solve grid starts: below half the lines' natural frequency for all the bodies' mass
     (the slowest swing carries every body the joints hold; the whole mass errs low, the safe side); None unmoored.
     The scene's start is its rest with the lines in place (a preset sets the moored body's mass so that it is)."""
-    from sim.bodies.rotation import quat_to_matrix
-    from sim.hydro.radiation import lowest_frequency
 
     k = moored_body(scene)
     if k is None or scene.moorings.attach:  # (lines on several bodies: the grid is not extended for their slow swing)

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sim.water.records import components, measured, peak_period
+
 
 @dataclass(frozen=True)
 class StillWater:
@@ -208,8 +210,6 @@ def ramp_seconds(waves, base_dir: str = ".") -> float:
     if waves.ramp is not None:
         return float(waves.ramp)
     if waves.kind == "record":
-        from sim.water.records import measured, peak_period
-
         return RAMP_PERIODS * peak_period(*measured(waves, base_dir), waves.cutoff_period)
     return RAMP_PERIODS * float(waves.period if waves.kind == "regular" else waves.tp)
 
@@ -276,7 +276,6 @@ def record_waves(rho: float, g: float, dt: float, eta: np.ndarray, direction_deg
                  point=(0.0, 0.0), cutoff_period: float | None = None) -> Waves:  # fmt: skip
     """The long-crested sea whose elevation at `point` is the record eta (samples dt apart, the first at t = 0),
     travelling in `direction_deg` (records.components: its periodic extension, less its mean)."""
-    from sim.water.records import components
 
     omega, amplitude, alpha = components(dt, eta, cutoff_period)
     k = wavenumber(omega, g, depth)
@@ -298,8 +297,6 @@ def make_water(waves, rho: float, g: float, current=(0.0, 0.0), base_dir: str = 
         sea = jonswap_waves(rho, g, waves.hs, waves.tp, waves.gamma, waves.components, waves.seed, waves.direction, waves.spreading, depth)
         return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves))
     if waves.kind == "record":
-        from sim.water.records import measured
-
         dt, eta = measured(waves, base_dir)
         sea = record_waves(rho, g, dt, eta, waves.direction, depth, waves.record_point, waves.cutoff_period)
         return dataclasses.replace(sea, current=current, ramp=ramp_seconds(waves, base_dir))

@@ -34,6 +34,9 @@ import numpy as np
 
 from sim.bodies.rotation import matrix_to_quat
 from sim.bodies.state import State, angular_momentum, angular_velocity
+from sim.control.laws import Law
+from sim.hydro.forces import Model
+from sim.water.seas import StillWater
 
 JOINTS = ("free", "fixed", "prismatic", "revolute", "planar")
 
@@ -131,7 +134,6 @@ def step(model, joint: WorldJoint, s: State, dt: float, theta: float, law=None) 
     whole turns), twist terms and the take-off's spring and damper implicit in each half kick; returns the new state,
     the energy the take-off absorbed over the step, J, and the new coordinate. `law`: the take-off's control.Law over
     the step (default: the joint's spring and damper); its force's work is -f times the coordinate's change."""
-    from sim.control.laws import Law
 
     body = model.body
     law = Law(0.0, joint.stiffness, joint.damping) if law is None else law
@@ -204,8 +206,6 @@ def _affine(model, joint: WorldJoint, theta: float, rate: float, t: float, memor
 def stiffness_along(model, joint: WorldJoint, step: float = 1e-4) -> float:
     """K = -dQ/dtheta at the joint's start in still water: the water's and gravity's stiffness along the joint (central
     differences of the generalised pose load), what a take-off's negative spring must stay below (control/laws.py)."""
-    from sim.hydro.forces import Model
-    from sim.water.seas import StillWater
 
     still = Model(model.body, StillWater(model.water.rho, model.water.g), model.fluid)
 

@@ -29,7 +29,7 @@ from sim.compiling import Compiler, Loader, default_backend, kernels_ready
 from sim.hydro.bem import no_solves
 from sim.hydro.hydrostatics import at_rest, describe_rest, hydrostatics, sampled_model_warning
 from sim.parameters import Param
-from sim.scene.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, body_own, entry_value, in_effect, load_scene
+from sim.scene.config import ENTRY_KEYS, IN_EFFECT, MESH_FORCES, PARAMS, available_scenes, body_own, entry_value, in_effect, load_scene
 
 NOTICE_SECONDS = 10.0
 """How long a note about a clamped value stays in the GUI (a divergence note stays until Reset or Resume)."""
@@ -212,7 +212,7 @@ class SimLoop(Mailbox):
         self._budget = budget * self.period
         self._resync_after = resync_after
         self._fp = {"all": "raise", "under": "ignore"} if fp_raise else {"all": "ignore"}
-        self.scene_options = tuple(scene_options) or tuple(sim.config.available_scenes())
+        self.scene_options = tuple(scene_options) or tuple(available_scenes())
 
         self._background = background_compile and kernels and default_backend() == "numba"
         """Whether a scene whose kernels this machine has not compiled runs on the numpy reference while a child compiles them."""

@@ -35,7 +35,7 @@ def tether(k: float):
 
 
 def main(args: Args) -> None:
-    sim.forces.TERMS = (*sim.forces.TERMS, tether(args.stiffness))  # the registry line
+    sim.hydro.forces.TERMS = (*sim.hydro.forces.TERMS, tether(args.stiffness))  # the registry line
     scene = with_overrides(load_scene("rest"), initial__position=(0.5, 0.0, -0.4), fluid__damping=0.0)
     run = Simulation(scene)
     print("; ".join(run.notes) or ("compiled" if run.compiled else "on the numpy reference"))
@@ -52,7 +52,7 @@ def main(args: Args) -> None:
     else:  # no whole period to measure: say so, not "nan"
         print(f"surge period: too short a run to measure ({len(up)} upward crossings in {args.t_end:g} s); 2 pi sqrt(m / k) = {closed:.3f} s: "
               f"give --t-end {math.ceil(2 * closed)} or more")  # fmt: skip
-    sim.forces.TERMS = sim.forces.TERMS[:-1]  # as it was
+    sim.hydro.forces.TERMS = sim.hydro.forces.TERMS[:-1]  # as it was
 
 
 if __name__ == "__main__":

@@ -6,15 +6,14 @@ import sys
 
 import tyro
 
+from app.args import ViewArgs
 from sim.commands.tyro_errors import parse
 from sim.scene.config import ConfigError
-
-from .args import ViewArgs
 
 
 def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:
     args = parse(lambda: tyro.cli(ViewArgs, args=argv, prog=prog), prog)
-    from .main import serve  # viser is imported only once the flags parsed
+    from app.main import serve  # viser is imported only once the flags parsed
 
     try:
         return serve(args)

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import sys
 
+from app.args import ViewArgs
 from sim.commands import floatsim
-
-from .args import ViewArgs
 
 
 def view(args: ViewArgs) -> int:
-    from .main import serve  # viser is imported here, only when viewing
+    from app.main import serve  # viser is imported here, only when viewing
 
     return serve(args)
 

@@ -11,22 +11,21 @@ from pathlib import Path
 
 import viser
 
+from app.args import ViewArgs
+from app.drawn.camera import CameraView
+from app.drawn.scene import SceneView
+from app.guards.access import own_origin_only, viewer_address
+from app.guards.gate import Gate
+from app.live.about import About
+from app.live.controls import Controls, Layers, current_values_for_new_pages
+from app.live.loop import SimLoop, Snapshot
+from app.live.readouts import Readouts
+from app.live.share import copy_button_html, link_query, mesh_left_out, parse_link
+from app.live.upload import BodyFile
+from app.recording.recorder import RecordPanel
 from sim.bodies.body import load_mesh
 from sim.hydro.hydrostatics import describe_rest
 from sim.scene.config import ConfigError, available_scenes, load_scene
-
-from .about import About
-from .access import own_origin_only, viewer_address
-from .args import ViewArgs
-from .camera import CameraView
-from .controls import Controls, Layers, current_values_for_new_pages
-from .gate import Gate
-from .loop import SimLoop, Snapshot
-from .readouts import Readouts
-from .recorder import RecordPanel
-from .scene import SceneView
-from .share import copy_button_html, link_query, mesh_left_out, parse_link
-from .upload import BodyFile
 
 
 class ViewerApp:
@@ -39,7 +38,7 @@ class ViewerApp:
         self.host, self.url = host, viewer_address(host, self.port)
         self.token = token
         self.gate = Gate(server, lambda text: loop.post("notice", text), token=token, share=share, on_link=self._apply_link)
-        """Checks every message a page sends (app/gate.py), from before the first control exists."""
+        """Checks every message a page sends (app/guards/gate.py), from before the first control exists."""
         self.refusals, self.uploads, self.drivers = self.gate.refusals, self.gate.uploads, self.gate.drivers
         server.gui.configure_theme(control_width="large", show_share_button=share)
         snap = loop.latest()
@@ -197,7 +196,7 @@ def start(args: ViewArgs, *, publish_hz: float = 30.0, strict: bool = False, ker
     )
     if args.mesh is not None:
         loop.post("mesh", (str(Path(args.mesh).resolve()), args.mesh_unit))  # as an upload: at rest height, with its description
-    with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/access.py)
+    with own_origin_only(args.host):  # pages from other sites may not open its websocket (app/guards/access.py)
         server = viser.ViserServer(host=args.host, port=port, label="floatsim", verbose=False)
     try:
         return ViewerApp(server, loop, args.host, args.token, args.share)

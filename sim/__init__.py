@@ -6,7 +6,7 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from sim.assembly import Assembly  # the runner of several bodies: Simulation(scene) of [[bodies]] makes one
+from sim import assembly  # noqa: F401, E402  (registers the runner of several bodies: Simulation(scene) of [[bodies]] makes one)
 from sim.bodies.body import Body, make_body  # noqa: E402
 from sim.bodies.state import State
 from sim.dynamics.integrators import INTEGRATORS, make_integrator
@@ -28,5 +28,5 @@ from sim.simulation import Simulation
 from sim.system.frame import CSV_COLUMNS, Frame, observe
 from sim.water.seas import StillWater
 
-__all__ = ["Assembly", "Body", "make_body", "ConfigError", "SceneConfig", "BodyConfig", "FluidConfig", "InitialConfig", "StepConfig", "WavesConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
+__all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "BodyConfig", "FluidConfig", "InitialConfig", "StepConfig", "WavesConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
            "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip

@@ -151,7 +151,7 @@ class Assembly(Simulation):
     def _repack(self) -> None:
         """The laws into the compiled step's tree (read at each call)."""
         if self.stepper is not None:
-            from sim.kernels.system_layout import take_offs
+            from sim.kernels.system_layout import take_offs  # numba's import (0.6 s): only where compiled kernels run
 
             tree = self.stepper.tree
             tree.stiffness[:], tree.damping[:], tree.force[:], tree.held[:] = take_offs(self.system)
@@ -186,7 +186,7 @@ class Assembly(Simulation):
     def specs(self) -> list:
         """The kernels.Spec of the bodies' compiled loads, each once, and the system step's (kernels.SYSTEM_STEP) where it
         runs (not for a linear system stepped exactly)."""
-        from sim.kernels import SYSTEM_STEP
+        from sim.kernels import SYSTEM_STEP  # numba's import (0.6 s): only where compiled kernels run
 
         return self.system.specs + ([] if self.exact is not None else [SYSTEM_STEP])
 

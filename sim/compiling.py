@@ -50,7 +50,7 @@ def cached(spec) -> bool:
 
 def warm_up(spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; the seconds taken."""
-    from sim import kernels
+    from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
     return compiled.warm() if spec == kernels.SYSTEM_STEP else kernels.warm_up(spec)
 
@@ -72,7 +72,7 @@ def spec_argument(spec) -> str:
 
 
 def parse_spec(word: str):
-    from sim.kernels import Spec
+    from sim.kernels import Spec  # numba's import (0.6 s): only where compiled kernels run
 
     scheme, model, terms, waves, radiating, current, held, system = word.split(",")
     return Spec(

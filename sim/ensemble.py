@@ -74,13 +74,13 @@ class Ensemble:
     def spec(self, live: list[int] | None = None):
         """The kernels.Spec that steps the bodies `live` together (default: all): every term any of them uses
         (a term some body leaves out has a zero coefficient there: it adds nothing)."""
-        from sim.kernels import compiled_terms
+        from sim.kernels import compiled_terms  # numba's import (0.6 s): only where compiled kernels run
 
         sims = self.sims if live is None else [self.sims[i] for i in live]
         return sims[0].spec._replace(terms=compiled_terms({name for s in sims for name in s.model.term_names}))
 
     def _step_compiled(self, live: list[int], n: int, check_energy: bool = True) -> None:
-        from sim import kernels
+        from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
         sims = [self.sims[i] for i in live]
         Y = np.array([s.state.as_vector() for s in sims])

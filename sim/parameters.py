@@ -1,7 +1,7 @@
 """One declaration per user-facing parameter: its section, key, default, unit, valid range, label and help.
 
 Everything else reads these declarations: the TOML scene schema and its validation (scene/config.py), the
-command-line flags (commands/run.py), the viewer's controls and their clamps (app/controls.py), and
+command-line flags (commands/run.py), the viewer's controls and their clamps (app/live/controls.py), and
 the summary. A force term declares its own parameters next to its function (hydro/forces.py).
 """
 

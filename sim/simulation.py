@@ -301,25 +301,25 @@ class Simulation:
     @property
     def has_twin(self) -> bool:
         """Whether the scene has a compiled twin: a fixed-step integrator with one, a force model it covers in this water, every term compiled."""
-        from sim.kernels import SCHEMES, missing_terms
+        from sim.kernels import SCHEMES, missing_terms  # numba's import (0.6 s): only where compiled kernels run
 
         return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model) and self.joint is None
 
     @property
     def spec(self):
         """What the compiled kernels specialise on for this scene (kernels.Spec)."""
-        from sim.kernels import spec_of
+        from sim.kernels import spec_of  # numba's import (0.6 s): only where compiled kernels run
 
         return spec_of(self.model, self.integrator.name)
 
     def kernels(self):
         """The compiled kernels for this scene (kernels.specialised: loaded from the disk cache, or compiled now)."""
-        from sim.kernels import specialised
+        from sim.kernels import specialised  # numba's import (0.6 s): only where compiled kernels run
 
         return specialised(self.spec)
 
     def _check_backend(self) -> None:
-        from sim.kernels import SCHEMES, missing_terms
+        from sim.kernels import SCHEMES, missing_terms  # numba's import (0.6 s): only where compiled kernels run
 
         integ = self.integrator
         notes = []
@@ -412,8 +412,8 @@ class Simulation:
 
     def _packs(self) -> tuple:
         """(kernels, the model packed for them, the sea, the radiation), each rebuilt only when what it packs changed."""
-        from sim import kernels
-        from sim.kernels.layout import HELD
+        from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
+        from sim.kernels.layout import HELD  # numba's import (0.6 s): only where compiled kernels run
 
         body, model = self.body, self.model
         if self._packed[0] is not model or self._packed[1] != self.integrator.name:  # a step at a time costs 40 us less
@@ -444,7 +444,7 @@ class Simulation:
         """The compiled body and MoorDyn in turn, a step each: the kernels keep their carry and scratch from step to step
         (schemes.step_held, which also takes the lines' pull into the held load and gives the fairleads' next kinematics),
         so a step is one compiled call and one MoorDyn call. The same steps as the one-step-a-call loop, to round-off."""
-        from sim.kernels import entry_point
+        from sim.kernels import entry_point  # numba's import (0.6 s): only where compiled kernels run
 
         compiled, packed, sea, rad = self._packs()
         lines, dt, t = self.moorings, self.dt, self.state.t

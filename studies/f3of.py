@@ -4,7 +4,7 @@ The scenes assets/scenes/f3of/dt1.toml, dt2.toml, dt3.toml (the platform's meshe
 studies/f3of_meshes.py; linear hydrostatics and radiation from one BEM solve of the three bodies, shipped) are run
 as they are, and each free decay's periods and extrema are taken the way studies/f3of_reference.py took the other
 codes' from their records (assets/reference/f3of_decay.json: WEC-Sim, InWave, WaveDyn, ProteusDS, HydroChrono).
-Writes reports/accuracy/f3of.png and reports/f3of.md; the slow test tests/test_cross_code.py checks the same numbers.
+Writes reports/accuracy/f3of.png and reports/f3of.md; the slow test tests/studies/test_cross_code.py checks the same numbers.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ The preset `rm3-wecsim-moorings` (WEC-Sim's RM3 MoorDyn case: its WAMIT coeffici
 sea as it ran; studies/rm3_wecsim.py derives each) is run as its user runs it, and the statistics WEC-Sim's results
 give over 100-400 s (assets/reference/rm3_mooring.json: the three upper lines' fairlead tensions, the float's and the
 plate's heave) are taken from floatsim's the same way. Writes reports/accuracy/rm3-mooring.png and
-reports/rm3-mooring.md; the slow test tests/test_cross_code.py checks the same numbers.
+reports/rm3-mooring.md; the slow test tests/studies/test_cross_code.py checks the same numbers.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 .[bem] extra; about 10-20 minutes on two cores), then fit their memories again (`python -m sim.commands.memory_fits`).
 
 The cases: each preset with radiation as it builds (its rest pose, moorings included, its grid, the excitation when
-it has waves, a sphere in waves too), the cross-code checks' scenes (assets/scenes/*/), and the test hemisphere of tests/test_bem.py (Hulme's table). Run it after a
+it has waves, a sphere in waves too), the cross-code checks' scenes (assets/scenes/*/), and the test hemisphere of tests/hydro/test_bem.py (Hulme's table). Run it after a
 change to how solves are made (sim.hydro.bem.SOLVER_VERSION, the lid, the wet mesh) or to a preset's body: the old files'
 keys no longer match, so the presets would otherwise solve on every machine.
 """

@@ -141,7 +141,7 @@ def _require(ok: bool, reason: str) -> None:
 
 @pytest.fixture
 def browser_page():
-    from app.browser import launch, missing
+    from app.recording.browser import launch, missing
 
     why = missing()
     _require(why is None, why or "")

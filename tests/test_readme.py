@@ -161,7 +161,7 @@ def test_the_viewer_page_answers_questions_and_leaves_measurements_to_performanc
         assert len(section.split()) < 700, section.splitlines()[0]
     assert not re.search(r"MB/s|server CPU|app\.soak|cores", viewer)
     costs = (ROOT / "docs" / "performance.md").read_text().split("## The viewer's costs")[1]
-    assert "MB/s" in costs and "app.soak" in costs and "server CPU" in costs
+    assert "MB/s" in costs and "app.tools.soak" in costs and "server CPU" in costs
 
 
 QUOTED = re.compile(r"`(?:floatsim: error: )?((\w+) must be [^`]*?, got (-?[\d.e+-]+))`")

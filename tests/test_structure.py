@@ -4,10 +4,12 @@ physics package imports no viewer, plotting or command-line library."""
 
 import ast
 import dataclasses
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
 
+import grimp
 import numpy as np
 import pytest
 
@@ -16,7 +18,86 @@ from sim.bodies.body import make_box
 from sim.commands.run import RunArgs
 from sim.kernels.layout import coefficients, slot
 
-SIM = Path(__file__).resolve().parent.parent / "sim"
+ROOT = Path(__file__).resolve().parent.parent
+SIM = ROOT / "sim"
+
+
+def test_the_layers_hold_as_written():
+    """pyproject.toml's import-linter contracts: each layer of sim and app imports only those below it, and the physics
+    no viewer, parser or plotting library (CI runs lint-imports too; here a broken layer fails the test line)."""
+    lint = Path(sys.executable).parent / "lint-imports"  # import-linter's command, installed beside this python
+    out = subprocess.run([str(lint), "--no-cache"], cwd=ROOT, capture_output=True, text=True, check=False)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+    assert "0 broken" in out.stdout
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    """No import cycle among the modules of sim, app and studies, however long, counting imports inside functions
+    (a type named only for annotations, under TYPE_CHECKING, is no import at run time)."""
+    graph = grimp.build_graph("sim", "app", "studies", include_external_packages=False, exclude_type_checking_imports=True)
+    cycles = [c for c in _strongly_connected(graph) if len(c) > 1]
+    assert not cycles, cycles
+
+
+def _strongly_connected(graph) -> list[list[str]]:
+    """Tarjan's strongly connected components of the import graph (each cycle of modules is one)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(m: str) -> None:
+        index[m] = low[m] = len(index)
+        stack.append(m)
+        on.add(m)
+        for n in graph.find_modules_directly_imported_by(m):
+            if n not in index:
+                visit(n)
+                low[m] = min(low[m], low[n])
+            elif n in on:
+                low[m] = min(low[m], index[n])
+        if low[m] == index[m]:
+            component = []
+            while True:
+                n = stack.pop()
+                on.discard(n)
+                component.append(n)
+                if n == m:
+                    break
+            out.append(component)
+
+    for m in sorted(graph.modules):
+        if m not in index:
+            visit(m)
+    return out
+
+
+def test_an_import_inside_a_function_is_for_an_optional_extra_or_a_stated_start_up_cost():
+    """Imports of the project's own modules sit at the top of a module, where the layers show them: inside a function
+    only numba's kernels (0.6 s to import), and in the viewer viser's and PyAV's modules, each with its reason beside it."""
+    allowed = ("sim.kernels", "app.main", "app.recording.video", "app.recording.replay")
+    for path in [*SIM.rglob("*.py"), *(ROOT / "app").rglob("*.py")]:
+        if "kernels" in path.parts:
+            continue  # the kernels' own modules are imported afresh per specialisation (kernels/__init__.py)
+        lines = path.read_text().splitlines()
+        for fn in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(fn):
+                if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module.split(".")[0] in ("sim", "app"):
+                    target = node.module + ("." + node.names[0].name if node.module == "sim" else "")
+                    assert target.startswith(allowed), f"{path}:{node.lineno} imports {target} inside a function"
+                    assert "#" in lines[node.end_lineno - 1] or "#" in lines[node.lineno - 1], (
+                        f"{path}:{node.lineno}: say why it is imported here"
+                    )
+                assert not isinstance(node, ast.Import) or not node.names[0].name.startswith(("sim", "app")), f"{path}:{node.lineno}"
+
+
+def test_the_layers_page_is_made_from_the_code():
+    """docs/developer.md's map is what `python docs/layers.py` makes of the code now."""
+    spec = importlib.util.spec_from_file_location("layers", ROOT / "docs" / "layers.py")
+    layers = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(layers)
+    text = layers.PAGE.read_text()
+    assert layers.page_with(text, layers.picture()) == text, "the layers in docs/developer.md are stale: run python docs/layers.py"
+    assert text.count("| `sim.") >= 15 and "`sim.hydro` | What water does to a body" in text
 
 
 def test_physics_package_imports_no_viewer_plotting_or_cli_library():
@@ -40,7 +121,7 @@ def test_physics_package_imports_no_viewer_plotting_or_cli_library():
 
 @pytest.mark.parametrize("term", TERMS, ids=lambda t: t.name)
 def test_each_term_parameter_is_a_scene_key_a_flag_a_control_and_a_kernel_slot(term):
-    from app.loop import CONTROLLED
+    from app.live.loop import CONTROLLED
 
     fields = {f.name for f in dataclasses.fields(FluidConfig)}
     flags = {f.name for f in dataclasses.fields(RunArgs)}

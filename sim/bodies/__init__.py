@@ -1,1 +1,1 @@
-"""Rigid bodies: their surface samples and meshes, state, rotations, joints to the world, the integrators."""
+"""Rigid bodies: their surface samples and meshes, mass and inertia, state, rotations, the wet part of their surface."""

@@ -37,6 +37,7 @@ several-body system's dense algebra).
 
 from __future__ import annotations
 
+import ast
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -534,15 +535,30 @@ STORED = Path(__file__).resolve().parents[2] / "assets" / "coefficients" / "memo
 """The shipped solves' fits (`python -m sim.commands.memory_fits` writes them): a fit of rm3's 12 dofs takes 7-30 s."""
 
 
+def _fitting_code() -> bytes:
+    """This module's code as the fits depend on it: its syntax tree without imports and docstrings (a moved import, a
+    comment or a reworded docstring keeps every fit; a changed line of code makes them anew)."""
+    tree = ast.parse(Path(__file__).read_text())
+    tree.body = [n for n in tree.body if not isinstance(n, (ast.Import, ast.ImportFrom))]
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(body, list):  # every bare string is documentation: a docstring, or an attribute's
+            node.body = [n for n in body if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant))] or [ast.Pass()]
+    return ast.dump(tree).encode()
+
+
+_FITTING_CODE = _fitting_code()
+
+
 def forget_fits() -> None:
     """Forget the fits made or read in this process (the next ask reads or makes each again)."""
     _FITS.clear()
 
 
 def fit_key(c, tol: float, max_order: int, length: float) -> str:
-    """The fit's identity: the coefficients' bytes, the arguments and this module's source (so a changed fit is made
+    """The fit's identity: the coefficients' bytes, the arguments and this module's code (so a changed fit is made
     anew, never read stale from a file)."""
-    h = hashlib.sha256(Path(__file__).read_bytes())
+    h = hashlib.sha256(_FITTING_CODE)
     for a in (c.omega, c.damping, c.added_mass, c.added_mass_inf):
         h.update(np.ascontiguousarray(a, dtype=float).tobytes())
     h.update(repr((float(tol), int(max_order), round(float(length), 12))).encode())

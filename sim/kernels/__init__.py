@@ -24,6 +24,8 @@ from typing import NamedTuple
 
 import numba
 
+from sim.hydro import forces
+
 from .layout import COMPILED_TERMS, MODELS, NO_RADIATION, SCHEMES, Model, pack, radiation_pack, sea_pack
 
 _HERE = Path(__file__).resolve().parent
@@ -88,9 +90,7 @@ def spec_of(model, scheme: str) -> Spec:
 
 def compiled_terms(used) -> tuple[str, ...]:
     """The terms kernels compile for a scene using the terms `used`: every linear one, and the nonlinear ones used."""
-    from sim.hydro.forces import TERMS
-
-    return tuple(t.name for t in TERMS if t.name in COMPILED_TERMS and (t.linear or t.name in used))
+    return tuple(t.name for t in forces.TERMS if t.name in COMPILED_TERMS and (t.linear or t.name in used))
 
 
 def missing_terms(model) -> tuple[str, ...]:

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from sim.bodies.body import make_box
+
 from .forces import pose_loads, twist_loads
 from .integrators import (
     damped_kick,
@@ -26,12 +28,13 @@ from .integrators import (
     with_memory,
 )
 from .jit import JIT, njit
-from .layout import HELD, Model, Scratch
+from .layout import COEF_SIZE, HELD, Model, Scratch
 from .radiation import drift_memory, frames
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotation_quat
-from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, HOLDING, IMPLICIT, MOVING, SCHEME, SPLITTING, WAVES
+from .simulation import linearised_loads, observe
+from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, HOLDING, IMPLICIT, MOVING, RADIATING, SCHEME, SPEC, SPLITTING, WAVES
 from .state import angular_velocity
-from .surface import workspace
+from .surface import exact_hydrostatic_energy, workspace
 
 
 @njit(**JIT)
@@ -280,13 +283,6 @@ def advance_many(Y, t0, n_steps, dt, geom, masses, inertias, coefs, sea, rad):
 
 def warm_up() -> None:
     """Compile (first run ever) or load from the disk cache this copy's step and frame kernels."""
-    from sim.bodies.body import make_box
-
-    from .layout import COEF_SIZE
-    from .simulation import linearised_loads, observe
-    from .spec import RADIATING, SPEC
-    from .surface import exact_hydrostatic_energy
-
     body = make_box((1.0, 1.0, 1.0), 1, 1.0)
     y = np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     coef = np.ones(COEF_SIZE)

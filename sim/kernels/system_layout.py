@@ -14,6 +14,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from sim.hydro.linear_hydro import LinearLoads
+from sim.hydro.radiation import held_step
+
 FREE, FIXED, PRISMATIC, REVOLUTE, PLANAR = 0, 1, 2, 3, 4
 KINDS = {"free": FREE, "fixed": FIXED, "prismatic": PRISMATIC, "revolute": REVOLUTE, "planar": PLANAR}
 EPS = 1e-5
@@ -167,8 +170,6 @@ def tree_pack(system) -> Tree:
 
 def linear_pack(system) -> Linear:
     """The bodies' linear loads where every body has them (`[fluid] hydro = "linear"`), else an empty pack."""
-    from sim.hydro.linear_hydro import LinearLoads
-
     loads, k = system.loads, len(system.loads)
     if not all(isinstance(lo, LinearLoads) for lo in loads):
         return Linear(False, np.zeros((k, 6)), np.zeros((k, 6, 6)), np.zeros((k, 6, 6)), np.zeros((k, 3)), np.zeros((k, 3, 3)),
@@ -183,8 +184,6 @@ def linear_pack(system) -> Linear:
 
 def memory_pack(system, dt: float) -> Memory:
     """The radiation's arrays for drifts of dt (an empty pack without radiation)."""
-    from sim.hydro.radiation import held_step
-
     rad, k = system.radiation, len(system.members)
     none = sparse_rows(np.zeros((0, 0)))
     if rad is None:

@@ -1,1 +1,1 @@
-"""The scene description: TOML presets, overrides and validation, the stated limits, farms."""
+"""The scene description: TOML presets, overrides and validation against the physics' own declarations, farms."""

@@ -1,1 +1,2 @@
-"""Bodies on joints as one system: the tree, its step (numpy and compiled), its frequency and linear forms, the running assembly, the step's stability numbers."""
+"""Bodies on joints as one system: the tree and its step (numpy and compiled), its frequency and linear forms, a body's
+loads near a twist, what a run shows of a body (its Frame), the step's stability numbers."""

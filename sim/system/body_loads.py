@@ -25,13 +25,13 @@ class BodyLoads:
     @property
     def spec(self):
         """The kernels.Spec of this body's loads."""
-        from sim.kernels import spec_of
+        from sim.kernels import spec_of  # numba's import (0.6 s): only where compiled kernels run
 
         return spec_of(self.model, "implicit")._replace(radiating=False, held=False, system=True)
 
     @property
     def has_twin(self) -> bool:
-        from sim.kernels import missing_terms
+        from sim.kernels import missing_terms  # numba's import (0.6 s): only where compiled kernels run
 
         return compiled_model(self.model) and not missing_terms(self.model) and self.model.held is None
 
@@ -45,7 +45,7 @@ class BodyLoads:
         if not on:
             self._compiled = None
             return
-        from sim import kernels
+        from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
         body = self.model.body
         _, coef = kernels.pack(self.model)

@@ -22,7 +22,7 @@ KERNELS = ("system.advance", "system.first_half", "system.kick", "system.configu
 
 def ready() -> bool:
     """Whether this machine compiled the system step before (its disk cache has every kernel a run uses)."""
-    from sim.kernels import KERNEL_CACHE
+    from sim.kernels import KERNEL_CACHE  # numba's import (0.6 s): only where compiled kernels run
 
     found = {name.split("-")[0] for _, _, names in os.walk(os.path.join(KERNEL_CACHE, "shared")) for name in names if name.endswith(".nbi")}
     return set(KERNELS) <= found
@@ -53,7 +53,7 @@ class CompiledStep:
     """A system packed for the compiled step (kernels/system_layout.py), once; the radiation's per time step."""
 
     def __init__(self, system: System):
-        from sim.kernels.system_layout import linear_pack, tree_pack
+        from sim.kernels.system_layout import linear_pack, tree_pack  # numba's import (0.6 s): only where compiled kernels run
 
         self.system = system
         self.tree = tree_pack(system)
@@ -63,7 +63,7 @@ class CompiledStep:
 
     def memory(self, dt: float):
         if self._memory[0] != dt:
-            from sim.kernels.system_layout import memory_pack
+            from sim.kernels.system_layout import memory_pack  # numba's import (0.6 s): only where compiled kernels run
 
             self._memory = (dt, memory_pack(self.system, dt))
         return self._memory[1]
@@ -76,7 +76,7 @@ class CompiledStep:
         """n steps of dt from s (stopping after one whose state is non-finite): the state and the steps taken. `before`:
         called at each step's start as before(t, theta, v, absorbed, inertia) (the take-offs' controllers: they set the
         tree's laws and may change v and absorbed in place; inertia() the mass matrix there); then a compiled call a step."""
-        from sim.kernels import system as kernels
+        from sim.kernels import system as kernels  # numba's import (0.6 s): only where compiled kernels run
 
         if n < 1:
             return s, 0
@@ -117,7 +117,7 @@ class CompiledStep:
 
     def configuration(self, s: SystemState, dt: float):
         """kernels.system.configure at s's configuration (the last step's end kept: the next step starts there)."""
-        from sim.kernels import system as kernels
+        from sim.kernels import system as kernels  # numba's import (0.6 s): only where compiled kernels run
 
         if self._config[0] is not s:
             self._config = (s, kernels.configure(self.tree, self.memory(dt), s.x_free, s.q_free, s.theta))

@@ -124,8 +124,8 @@ def observe(model: Model, state: State, kernels=None, expand: bool = True) -> Fr
     common = dict(t=state.t, x_world=state.x_world, q_world_body=state.q_world_body, u_world=state.u_world, omega_world=omega,
                   L_world=state.L_world, E_kin=E_kin, E_grav=E_grav, eta=float(water.elevation(state.x_world[:2], state.t)), E_rad=state.E_rad)  # fmt: skip
     if kernels is not None:
-        from sim.kernels import Model as Packed
-        from sim.kernels import pack, sea_pack
+        from sim.kernels import Model as Packed  # numba's import (0.6 s): only where compiled kernels run
+        from sim.kernels import pack, sea_pack  # numba's import (0.6 s): only where compiled kernels run
 
         wet = np.empty(body.n_samples, dtype=bool)
         packed = Packed(body.packed, body.mass, body.inertia, pack(model)[1])

@@ -10,7 +10,7 @@ The sphere preset (radiation and diffraction from its shipped BEM solve) in smal
   sign (a run started half a wave down-wave subtracted) is the first-order start-up kick; its drift per period after
   the ramp, against the wave amplitude.
 
-The slow tests of tests/test_diffraction.py and tests/test_waves.py use the same functions.
+The slow tests of tests/hydro/test_diffraction.py and tests/water/test_waves.py use the same functions.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ the response amplitude operators (motion per unit wave amplitude) of:
 
 Each run starts on the linear steady state (its radiation memory's included; the waves at full height, no ramp), so a few periods suffice;
 the first harmonic of the last `fit` periods is fitted, a drift removed, referred to the wave at the
-body's mean position. The slow tests of tests/test_diffraction.py use the same functions.
+body's mean position. The slow tests of tests/hydro/test_diffraction.py use the same functions.
 """
 
 from __future__ import annotations

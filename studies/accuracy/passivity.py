@@ -7,7 +7,7 @@ B and A against each entry's own peak; its states. In time: rm3 without its take
 upwards at 0.5 m/s in still water, linear hydro stepped exactly (sim.system.linear.exact_linear): the mechanical
 energy, E_total + E_pto + E_rad, and the largest real part of the linear system's eigenvalues.
 
-The helpers are also `python -m studies.passivity`'s and tests/test_passivity.py's. They use only what the fit
+The helpers are also `python -m studies.passivity`'s and tests/hydro/test_passivity.py's. They use only what the fit
 before issue 38's passive one had too (fit_memory, response, exact_linear), so the study can be run against an
 older checkout.
 """
@@ -106,7 +106,7 @@ class Passivity:
     rm3: KickedRm3 | None = None
 
 
-# ---- shared with studies/passivity.py and tests/test_passivity.py ----------------------------------
+# ---- shared with studies/passivity.py and tests/hydro/test_passivity.py ----------------------------------
 
 
 def damping_floor(memory, omega_top: float, points: int = 20000, dofs=None) -> tuple[np.ndarray, np.ndarray]:

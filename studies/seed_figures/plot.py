@@ -230,7 +230,7 @@ def viewer_render(trace: Trace, paths: dict[str, Path]) -> str | None:
     """Pictures of the final pose from the live viewer, one per view in VIEWS. Returns None on success, else
     why not. Optional and lazy (chromium may be missing), with a matplotlib render as the fallback."""
     try:
-        from app.render import render_scene
+        from app.tools.render import render_scene
     except Exception as e:  # noqa: BLE001 -- any import problem means the matplotlib render
         return f"the viewer could not be imported ({type(e).__name__}: {e})"
     with tempfile.TemporaryDirectory() as tmp:

@@ -158,7 +158,7 @@ def test_falling_behind_resyncs_and_warns_but_stays_responsive(make_app):
 
 def test_pacing_drops_the_debt_instead_of_racing_to_catch_up():
     """The loop's pacing on a fake clock (no thread): a 10 s stall is not made up afterwards."""
-    from app.live.loop import SimLoop
+    from app.loop import SimLoop
 
     loop = SimLoop(sim.load_scene("spin"), "spin")
     dt, now = loop.sim.dt, time.monotonic()
@@ -222,7 +222,7 @@ def test_current_control_carries_the_body_downstream_and_bad_values_are_clamped(
     before = app.sync().frame
     c.current.value = (0.4, -0.2)
     snap = app.sync()
-    assert snap.settings.current == (0.4, -0.2) and app.live.loop.sim.model.water.current == (0.4, -0.2)
+    assert snap.settings.current == (0.4, -0.2) and app.loop.sim.model.water.current == (0.4, -0.2)
     np.testing.assert_array_equal(snap.frame.x_world, before.x_world)  # a water property: the pose is kept
     c.paused.value = False
     snap = wait_for(app, lambda s: s.frame.t > before.t + 3.0, what="three seconds in the current")
@@ -320,7 +320,7 @@ def test_bad_values_are_clamped_with_a_visible_notice(make_app, field, sent, use
     assert getattr(app.controls, field).value == used  # the GUI shows what is used
     assert snap.notice and snap.notice.split(":")[0] in ("Density", "Damping", "Time step", "Speed", "Points per edge", "Drag C_d")
     assert app.controls.notice.visible and snap.notice in app.controls.notice.content
-    assert app.live.loop.is_alive()
+    assert app.loop.is_alive()
     snap = wait_for(app, lambda s, n=snap.steps: s.steps > n + 10, what="the run to go on")
     assert not snap.diverged and np.isfinite(snap.frame.x_world).all()
 
@@ -362,17 +362,17 @@ def test_loading_kernels_never_holds_up_the_simulation_thread(make_app, monkeypa
 def test_wrong_kinds_of_input_are_refused(make_app):
     app = make_app("damped", paused=True)
     integrator = app.latest().settings.integrator
-    app.live.loop.post("density", "heavy")
-    app.live.loop.post("omega", (float("nan"), 0.0, 1.0))
-    app.live.loop.post("integrator", "leapfrog")
-    app.live.loop.post("scene", "../../etc/passwd")
-    app.live.loop.post("no such command", 1)
+    app.loop.post("density", "heavy")
+    app.loop.post("omega", (float("nan"), 0.0, 1.0))
+    app.loop.post("integrator", "leapfrog")
+    app.loop.post("scene", "../../etc/passwd")
+    app.loop.post("no such command", 1)
     snap = app.sync()
     assert snap.density == 900.0 and snap.settings.omega == (-1.0, 1.0, 0.0)
     assert snap.settings.integrator == integrator and snap.settings.scene == "damped"
     assert "Unknown command" in snap.notice
     assert snap.notice_id >= 5
-    assert app.live.loop.is_alive()
+    assert app.loop.is_alive()
 
 
 def test_divergence_pauses_and_reset_recovers(make_app):
@@ -385,7 +385,7 @@ def test_divergence_pauses_and_reset_recovers(make_app):
     assert snap.settings.paused and c.paused.value is True
     assert "diverged" in snap.notice and app.controls.notice.visible
     assert np.isfinite(snap.frame.x_world).all() and np.isfinite(snap.frame.L_world).all()
-    assert app.live.loop.is_alive()
+    assert app.loop.is_alive()
     t_stuck = snap.frame.t
     time.sleep(0.3)
     assert app.sync().frame.t == t_stuck  # paused, not crashing in a loop
@@ -469,7 +469,7 @@ def test_force_model_dropdown_switches_the_running_model(make_app):
     assert snap.frame.x_world[2] == pytest.approx(-0.4, abs=1e-12)  # the state is kept
     app.controls.points_per_edge.value = 4
     assert app.sync().params.forces == "panels"
-    app.live.loop.post("forces", "voxels")
+    app.loop.post("forces", "voxels")
     snap = app.sync()
     assert snap.params.forces == "panels" and "Force model" in snap.notice
 
@@ -497,10 +497,10 @@ def test_diffraction_control_shows_the_switch_in_effect_and_refuses_it_without_r
     assert app.controls.diffraction.value is False  # still water: nothing to scatter
     app.controls.kind.value = "regular"
     app.sync()
-    assert app.controls.diffraction.value is True and app.live.loop.sim.model.radiation.diffraction is not None
+    assert app.controls.diffraction.value is True and app.loop.sim.model.radiation.diffraction is not None
     app.controls.diffraction.value = False
     snap = app.sync()
-    assert snap.settings.diffraction is False and app.live.loop.sim.model.radiation.diffraction is None
+    assert snap.settings.diffraction is False and app.loop.sim.model.radiation.diffraction is None
     other = make_app("damped", paused=True)
     other.controls.diffraction.value = True
     snap = other.sync()
@@ -514,14 +514,14 @@ def test_drift_control_switches_the_drift_force_and_refuses_it_without_radiation
     app = make_app("sphere", paused=True)
     app.controls.kind.value = "regular"
     app.sync()
-    assert app.controls.drift.value is False and app.live.loop.sim.model.radiation.drift is None
+    assert app.controls.drift.value is False and app.loop.sim.model.radiation.drift is None
     app.controls.drift.value = True
     snap = app.sync()
-    assert snap.settings.drift is True and app.live.loop.sim.model.radiation.drift is not None
-    assert app.live.loop.sim.model.radiation.drift.mean[0] > 0  # downwave
+    assert snap.settings.drift is True and app.loop.sim.model.radiation.drift is not None
+    assert app.loop.sim.model.radiation.drift.mean[0] > 0  # downwave
     app.controls.drift.value = False
     app.sync()
-    assert app.live.loop.sim.model.radiation.drift is None
+    assert app.loop.sim.model.radiation.drift is None
     other = make_app("damped", paused=True)
     other.controls.drift.value = True
     snap = other.sync()
@@ -532,14 +532,14 @@ def test_drag_control_switches_the_term_on_in_the_running_scene(make_app):
     """The drag coefficient's control (generated from its declaration) changes Simulation.scene, and
     the term joins the model only while it is nonzero."""
     app = make_app("damped", paused=True)
-    assert "drag" not in app.live.loop.sim.model.term_names
+    assert "drag" not in app.loop.sim.model.term_names
     app.controls.drag_coefficient.value = 2.0
     snap = app.sync()
-    assert snap.params.drag_coefficient == 2.0 and app.live.loop.sim.scene.fluid.drag_coefficient == 2.0
-    assert "drag" in app.live.loop.sim.model.term_names
+    assert snap.params.drag_coefficient == 2.0 and app.loop.sim.scene.fluid.drag_coefficient == 2.0
+    assert "drag" in app.loop.sim.model.term_names
     app.controls.drag_coefficient.value = 0.0
     app.sync()
-    assert "drag" not in app.live.loop.sim.model.term_names
+    assert "drag" not in app.loop.sim.model.term_names
 
 
 def test_waves_are_an_animated_surface_from_the_simulations_own_water(make_app):
@@ -579,7 +579,7 @@ def test_the_sea_rises_over_its_ramp_and_a_reset_ramps_it_again(make_app):
     full height while it rises over its ramp (3.5 periods, 21 s); Reset restarts time and the sea with it: the next
     surfaces are as flat as the ramp's start."""
     app = make_app("waves")
-    water, sea = app.scene.water, app.live.loop.sim.model.water
+    water, sea = app.scene.water, app.loop.sim.model.water
     assert sea.ramp == pytest.approx(21.0)
 
     def surface() -> np.ndarray:
@@ -672,11 +672,11 @@ def test_the_sampling_control_follows_the_body(make_app):
     body with at least that many samples."""
     app = make_app("damped", paused=True)
     app.sync()
-    app._publish(app.live.loop.latest())
+    app._publish(app.loop.latest())
     assert app.controls.points_per_edge.visible and not app.controls.samples.visible
-    app.live.loop.post("scene", "log")
+    app.loop.post("scene", "log")
     app.sync()
-    app._publish(app.live.loop.latest())
+    app._publish(app.loop.latest())
     assert app.controls.samples.visible and not app.controls.points_per_edge.visible
     app.controls.samples.value = 3000
     snap = app.sync()
@@ -707,7 +707,7 @@ def test_a_stiff_adaptive_setting_stops_with_a_message_and_the_loop_stays_respon
     app.controls.density.value = 1.0
     app.controls.damping.value = 1e7
     app.sync()
-    app.live.loop.post("integrator", integrator)
+    app.loop.post("integrator", integrator)
     started = time.monotonic()
     snap = app.sync(timeout=20)
     deadline = time.monotonic() + 20
@@ -748,7 +748,7 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
     app.controls.joint.value = "prismatic"
     app.controls.pto_damping.value = 2000.0
     snap = app.sync()
-    assert snap.settings.joint == "prismatic" and app.live.loop.sim.joint is not None and app.live.loop.sim.joint.damping == 2000.0
+    assert snap.settings.joint == "prismatic" and app.loop.sim.joint is not None and app.loop.sim.joint.damping == 2000.0
     deadline = time.monotonic() + 10.0
     while time.monotonic() < deadline and app.sync().frame.E_pto <= 0.0:
         time.sleep(0.05)
@@ -776,16 +776,16 @@ def test_latching_from_the_viewer_holds_the_joint_for_the_time_set(make_app):
     app.controls.latch_time.value = 0.4
     app.controls.controller.value = "latching"
     snap = app.sync()
-    ctrl = app.live.loop.sim.controller
+    ctrl = app.loop.sim.controller
     assert snap.settings.controller == "latching" and ctrl.name == "latching" and ctrl.hold == 0.4
     assert "power take-off (latching)" in describe(snap)
     app.controls.latch_time.value = 99.0
     snap = app.sync()
-    assert snap.settings.latch_time == 30.0 and app.live.loop.sim.controller.hold == 30.0
+    assert snap.settings.latch_time == 30.0 and app.loop.sim.controller.hold == 30.0
     app.controls.declutch_time.value = 0.25
     app.controls.controller.value = "declutching"
     snap = app.sync()
-    assert app.live.loop.sim.controller.name == "declutching" and app.live.loop.sim.controller.hold == 0.25
+    assert app.loop.sim.controller.name == "declutching" and app.loop.sim.controller.hold == 0.25
 
 
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():

@@ -158,7 +158,7 @@ def test_falling_behind_resyncs_and_warns_but_stays_responsive(make_app):
 
 def test_pacing_drops_the_debt_instead_of_racing_to_catch_up():
     """The loop's pacing on a fake clock (no thread): a 10 s stall is not made up afterwards."""
-    from app.loop import SimLoop
+    from app.live.loop import SimLoop
 
     loop = SimLoop(sim.load_scene("spin"), "spin")
     dt, now = loop.sim.dt, time.monotonic()

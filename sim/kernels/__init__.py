@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numba
+from numba.core.caching import UserProvidedCacheLocator
 
 from sim.hydro import forces
 
@@ -170,9 +171,17 @@ _import_shared()
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame).
     Not for SYSTEM_STEP, whose kernels the system package drives (compiling.cached asks it)."""
-    found = {name.split("-")[0] for _, _, names in os.walk(_spec_cache(spec)) for name in names if name.endswith(".nbi")}
+    found = compiled_here(_spec_cache(spec))
     wanted = {"simulation.linearised_loads"} if spec.system else {"schemes.advance", "simulation.observe"}
     return (wanted | ({"schemes.step_held"} if spec.held and not spec.system else set())) <= found
+
+
+def compiled_here(folder: str) -> set[str]:
+    """The kernels ('module.function') whose compiled code numba will read from `folder` for this checkout. numba keeps
+    each source folder's code in a subfolder named after that folder's path, so a cache filled from another checkout
+    (another clone on this machine) counts for nothing here: it would compile anew in every process that loads it."""
+    here = os.path.join(folder, UserProvidedCacheLocator.get_suitable_cache_subpath(str(_HERE / "jit.py")))
+    return {name.split("-")[0] for name in (os.listdir(here) if os.path.isdir(here) else ()) if name.endswith(".nbi")}
 
 
 def entry_point(kernel, args: tuple):

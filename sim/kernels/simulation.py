@@ -1,4 +1,4 @@
-"""Compiled twin of simulation.observe: a frame's diagnostics (in still water, the sampled model in one pass)."""
+"""Compiled twin of system/frame.py's observe: a frame's diagnostics (in still water, the sampled model in one pass)."""
 
 from __future__ import annotations
 

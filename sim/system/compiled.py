@@ -22,9 +22,9 @@ KERNELS = ("system.advance", "system.first_half", "system.kick", "system.configu
 
 def ready() -> bool:
     """Whether this machine compiled the system step before (its disk cache has every kernel a run uses)."""
-    from sim.kernels import KERNEL_CACHE  # numba's import (0.6 s): only where compiled kernels run
+    from sim.kernels import KERNEL_CACHE, compiled_here  # numba's import (0.6 s): only where compiled kernels run
 
-    found = {name.split("-")[0] for _, _, names in os.walk(os.path.join(KERNEL_CACHE, "shared")) for name in names if name.endswith(".nbi")}
+    found = compiled_here(os.path.join(KERNEL_CACHE, "shared"))
     return set(KERNELS) <= found
 
 

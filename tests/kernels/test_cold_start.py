@@ -40,3 +40,20 @@ def test_a_cold_test_run_says_it_is_compiling_at_once(tmp_path):
     said = [line for line in lines if "floatsim" in line]  # (an installed plugin may warn first: pytest-benchmark under xdist)
     assert said and said[0].startswith("floatsim: compiling the numba kernels of") and str(tmp_path) in said[0], lines
     assert run.returncode == -signal.SIGKILL  # still running when stopped: compiling, not failed
+
+
+def test_kernels_compiled_from_another_checkout_do_not_count_as_compiled_here(tmp_path):
+    """numba files a kernel's compiled code under a subfolder named after its source folder's path: a cache a clone
+    elsewhere on this machine filled holds nothing this checkout can load, and a run that took it for compiled would
+    compile in every process instead of once, up front (the tests' covering set, the viewer's switch)."""
+    from numba.core.caching import UserProvidedCacheLocator
+
+    import sim.kernels as kernels
+
+    ours = UserProvidedCacheLocator.get_suitable_cache_subpath(str(Path(kernels.__file__).parent / "schemes.py"))
+    theirs = UserProvidedCacheLocator.get_suitable_cache_subpath("/elsewhere/floatsim/sim/kernels/schemes.py")
+    assert ours != theirs
+    for sub in (theirs, ours):
+        (tmp_path / sub).mkdir()
+        (tmp_path / sub / "schemes.advance-250.py311.nbi").write_bytes(b"")
+        assert kernels.compiled_here(str(tmp_path)) == ({"schemes.advance"} if sub == ours else set())

@@ -3,8 +3,9 @@
 A scene's kernels (sim.kernels.specialised: its scheme, force model, terms and water) compile once per
 machine, in 20 s to a minute. A compiler thread in the running process would hold the GIL against the
 simulation thread for most of that time, so `Compiler` runs `python -m sim.commands.compile` instead: a child
-that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps stepping on the numpy reference, polls `done`, then loads the kernels from
-the cache (a second or two) and switches between two steps: the state is the same vector either way.
+that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps
+stepping on the numpy reference, polls `done`, then loads the kernels from the cache (a second or two) and switches
+between two steps: the state is the same vector either way.
 
 `FLOATSIM_COMPILER` replaces the child's command (tests fill the cache by copying a warm one).
 """
@@ -43,7 +44,7 @@ def kernels_ready(spec) -> bool:
 
 def cached(spec) -> bool:
     """Whether this machine compiled the kernels of `spec` before (kernels.SYSTEM_STEP: the system step's)."""
-    from sim import kernels  # numba's import (about 0.5 s) only once compiled kernels are asked for
+    from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
     return compiled.ready() if spec == kernels.SYSTEM_STEP else kernels.cached(spec)
 

@@ -19,13 +19,13 @@ from typing import Annotated, Literal
 
 import tyro
 
-from sim.errors import ConfigError, WriteFailed
+from sim.errors import ConfigError, Interrupted, WriteFailed
 from sim.limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from sim.scene.config import available_scenes
 from sim.sweeps.backends import WorkerLost, run
 from sim.sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
 
-from .interrupt import EXIT, Interrupted, StopOnCtrlC
+from .interrupt import EXIT, StopOnCtrlC
 from .output import reason, temporaries, write_whole
 from .progress import progress_bar
 

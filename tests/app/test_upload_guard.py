@@ -156,12 +156,15 @@ def test_a_transfer_declaring_480_mib_is_refused_before_its_bytes_are_kept(app):
     snap = wait_for(app, lambda s: "Upload refused" in s.notice, what="the refusal")
     assert "503 MB, more than 50 MB" in snap.notice and app.uploads.refused >= 1
     assert not app.server.gui._current_file_upload_states  # nothing kept of it
-    assert live_memory() - before < 20.0
+    # the bounds are far below what keeping the bytes would cost (128 MiB, then 48 MiB), and far above
+    # what the running viewer's own buffers may add meanwhile (a few MiB, load-dependent)
+    assert live_memory() - before < 40.0
     # a transfer that declares 1 MB and sends 8 MiB parts is dropped at its first excess part
+    before = live_memory()
     asyncio.run(_transfer(app, "liar.stl", 2**20, 2, (os.urandom(8 * 2**20) for _ in range(6))))
     snap = wait_for(app, lambda s: "more bytes arrived than it declared" in s.notice, what="the liar's refusal")
     assert not app.server.gui._current_file_upload_states
-    assert live_memory() - before < 20.0
+    assert live_memory() - before < 24.0
     still_running(app, body)
 
 

@@ -45,7 +45,6 @@ class Assembly(Simulation):
         self.system, self.state = build(scene)
         self.start = self.state
         self.check_seconds = 0.0
-        self.step_seconds: float | None = None
         self.stepper = None
         """The compiled system step (system_compiled.CompiledStep) on the numba backend, else None: System.step."""
         self.moored = moored_body(scene)
@@ -216,6 +215,11 @@ class Assembly(Simulation):
 
     integrator = None
     """(Several bodies step by their own scheme: system/tree.py.)"""
+
+    step_seconds = None
+    """(No adaptive method steps several bodies.)"""
+
+    expand_waves = True
 
     @property
     def n_samples(self) -> int:

@@ -15,15 +15,15 @@ from sim.compiling import default_backend, kernels_ready
 from sim.control.laws import JointState, Law, WaveState, of_constraint, stiffness_check, wrap
 from sim.dynamics.integrators import make_integrator
 from sim.dynamics.joints import WorldJoint, stiffness_along
-from sim.dynamics.joints import step as joint_step
 from sim.errors import ConfigError, SimulationDiverged
-from sim.hydro.forces import Model, compiled_model
+from sim.hydro.forces import Model
 from sim.hydro.hydrostatics import sampled_model_warning
 from sim.hydro.radiation import make_radiation
 from sim.lines.moorings import Moorings, moored
 from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.frame import Frame, observe
+from sim.system.single import Motion, Single, StepFailed
 from sim.water.records import describe
 from sim.water.seas import make_water
 
@@ -67,32 +67,21 @@ class Simulation:
         """Things the user should know about how this runs (a fallback to numpy, ...)."""
         self._frame_key: tuple | None = None
         self._frame: Frame | None = None
-        self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
-        self._rad: tuple = (None, None)  # ((model, dt), its radiation packed for the kernels)
-        self._packed: tuple = (None, None, None, None)  # (model, scheme, its kernels, the model packed for them)
         self.largest_turn = 0.0
         """With radiation: the largest rotation away from the rest orientation so far, degrees."""
         self._memory_of = None  # the radiation whose memory the state carries
-        self.step_seconds: float | None = None
-        """Wall-time budget of one step of an adaptive method (None: only its evaluation cap); past it the
-        step stops with SimulationDiverged naming a better integrator. The viewer sets it."""
         self.check_seconds = 0.0
         """What the last `step` call's blow-up check (the frame of the state reached) cost, s: a viewer sizes its chunks by it."""
-        self.expand_waves = True
-        """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
-        False: every component at every node (benchmarks and checks)."""
         body = body or self._make_body(scene)
         self.moorings = None
         """moorings.Moorings: the scene's mooring lines in MoorDyn, or None."""
-        self.joint = None
-        """joints.WorldJoint: the body's joint to the world, or None (free)."""
         self.pto_energy = 0.0
         """The energy the joint's take-off has absorbed since the start, J."""
         self.controller = None
         """control.Controller: the joint's take-off control (None without a joint that moves)."""
         self._custom = None  # a controller given from Python (`control`), kept over scene changes
-        self.model = self._model(body)
-        self.integrator = make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol)
+        self.single = Single(self._model(body), make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol), None)
+        """The step (system/single.py): the body's model, integrator and joint, and the compiled twin."""
         self.state = initial_state(body, scene)
         self._join()
         self._moor()
@@ -184,14 +173,14 @@ class Simulation:
         self._custom = None if controller is None else wrap(controller)
         self._make_controller()
 
-    def _next_law(self, s: State):
-        """The controller's law for the step from s."""
+    def _next_law(self, s: State, theta: float):
+        """The controller's law for the step from s at the joint's coordinate theta."""
 
         if self.controller.linear is not None:  # a spring and damper: nothing to ask
             self._law = self.controller.linear
             return self._law
         j = self.joint
-        self._law = self.controller.law(JointState(s.t, self.joint_theta, j.rate(self.body, s), self.dt),
+        self._law = self.controller.law(JointState(s.t, theta, j.rate(self.body, s), self.dt),
                                         WaveState(self.model.water, j.x0[:2], s.t))  # fmt: skip
         return self._law
 
@@ -207,6 +196,53 @@ class Simulation:
         self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
         self.moorings.t = s.t
         self.model.held[:] = self.moorings.load
+
+    @property
+    def model(self) -> Model:
+        """The body's force model in its water."""
+        return self.single.model
+
+    @model.setter
+    def model(self, model: Model) -> None:
+        self.single.model = model
+
+    @property
+    def integrator(self):
+        """The free body's integrator (dynamics/integrators.py)."""
+        return self.single.integrator
+
+    @integrator.setter
+    def integrator(self, integrator) -> None:
+        self.single.integrator = integrator
+
+    @property
+    def joint(self) -> WorldJoint | None:
+        """The body's joint to the world (dynamics/joints.py), or None (free)."""
+        return self.single.joint
+
+    @joint.setter
+    def joint(self, joint: WorldJoint | None) -> None:
+        self.single.joint = joint
+
+    @property
+    def step_seconds(self) -> float | None:
+        """Wall-time budget of one step of an adaptive method (None: only its evaluation cap); past it the
+        step stops with SimulationDiverged naming a better integrator. The viewer sets it."""
+        return self.single.step_seconds
+
+    @step_seconds.setter
+    def step_seconds(self, seconds: float | None) -> None:
+        self.single.step_seconds = seconds
+
+    @property
+    def expand_waves(self) -> bool:
+        """Whether the kernels may sum a many-component sea as a local expansion (kernels/water.py);
+        False: every component at every node (benchmarks and checks)."""
+        return self.single.expand_waves
+
+    @expand_waves.setter
+    def expand_waves(self, expand: bool) -> None:
+        self.single.expand_waves = expand
 
     @property
     def body(self) -> Body:
@@ -301,51 +337,31 @@ class Simulation:
     @property
     def has_twin(self) -> bool:
         """Whether the scene has a compiled twin: a fixed-step integrator with one, a force model it covers in this water, every term compiled."""
-        from sim.kernels import SCHEMES, missing_terms  # numba's import (0.6 s): only where compiled kernels run
-
-        return self.integrator.name in SCHEMES and compiled_model(self.model) and not missing_terms(self.model) and self.joint is None
+        return self.single.has_twin
 
     @property
     def spec(self):
         """What the compiled kernels specialise on for this scene (kernels.Spec)."""
-        from sim.kernels import spec_of  # numba's import (0.6 s): only where compiled kernels run
-
-        return spec_of(self.model, self.integrator.name)
+        return self.single.spec
 
     def kernels(self):
         """The compiled kernels for this scene (kernels.specialised: loaded from the disk cache, or compiled now)."""
-        from sim.kernels import specialised  # numba's import (0.6 s): only where compiled kernels run
-
-        return specialised(self.spec)
+        return self.single.kernels()
 
     def _check_backend(self) -> None:
-        from sim.kernels import SCHEMES, missing_terms  # numba's import (0.6 s): only where compiled kernels run
-
-        integ = self.integrator
-        notes = []
-        if self.joint is not None and integ.name != "implicit":
-            notes.append(
-                f"a jointed body steps by its own scheme (Stormer-Verlet, its damping implicit): integrator '{integ.name}' is not used"
-            )
-        if self.backend == "numba" and self.joint is not None:
-            notes.append("the joint has no compiled twin yet: the scene runs on the numpy reference (slower)")
-        elif self.backend == "numba" and missing_terms(self.model):
-            notes.append(
-                f"the {', '.join(missing_terms(self.model))} term has no compiled twin: the scene runs on the numpy reference (slower)"
-            )
-        elif self.backend == "numba" and not integ.adaptive and integ.name not in SCHEMES:
-            notes.append(f"integrator '{integ.name}' has no compiled twin: it runs on the numpy reference (slower)")
-        elif self.backend == "numba" and not compiled_model(self.model):
-            notes.append("the cells force model has no compiled twin in waves: it runs on the numpy reference (slower)")
-        self.notes += [n for n in notes if n not in self.notes]
+        self.notes += [n for n in self.single.backend_notes(self.backend) if n not in self.notes]
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
         checked, checked_theta = self.state, self.joint_theta
-        if self.moorings is not None or self.joint is not None:
-            self.state = self._advance_coupled(n)
-        else:
-            self.state = self._advance_compiled(n) if self.compiled else self._advance_numpy(n)
+        self.single.compiled = self.compiled
+        law = None if self.controller is None else self._next_law
+        try:
+            m = self.single.advance(Motion(self.state, self.joint_theta, self.pto_energy), n, self.dt, law, self.moorings)
+        except StepFailed as e:
+            self.state, self.joint_theta, self.pto_energy = e.state, e.theta, e.absorbed
+            raise SimulationDiverged(self.diagnose(e.t, e.why)) from None
+        self.state, self.joint_theta, self.pto_energy = m.state, m.theta, m.absorbed
         if self.model.radiation is not None:
             rest = initial_state(self.body, self.scene).q_world_body
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
@@ -363,110 +379,6 @@ class Simulation:
                 else "the state left every finite bound"
             )
             raise SimulationDiverged(self.diagnose(t, what))
-        return self.state
-
-    def _advance_numpy(self, n: int) -> State:
-        model, integrator, dt = self.model, self.integrator, self.dt
-        if integrator.adaptive:
-            integrator.max_seconds = self.step_seconds
-        state = self.state
-        for _ in range(n):
-            try:
-                new = integrator.step(model, state, dt)
-            except FloatingPointError as e:  # where np.seterr makes overflow raise, as in the tests
-                new, why = None, f"floating-point error ({e})"
-            else:
-                why = "the state became non-finite"
-            if new is None or not new.is_finite():
-                self.state = state
-                raise SimulationDiverged(self.diagnose(state.t + dt, why))
-            state = new
-        return state
-
-    def _advance_coupled(self, n: int) -> State:
-        """Step by step: the mooring lines advanced over each and their mean pull held over it (lines/moorings.py);
-        a jointed body stepped on its joint's coordinate (dynamics/joints.py)."""
-
-        if self.joint is None and self.compiled:
-            return self._advance_moored(n)
-        advance = self._advance_compiled if self.compiled else self._advance_numpy
-        held = self.model.held
-        try:
-            for _ in range(n):
-                s = self.state
-                if self.moorings is not None:
-                    R = s.R_world_body
-                    held[:] = self.moorings.advance(s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world), self.dt)
-                if self.joint is None:
-                    self.state = advance(1)
-                    continue
-                law = None if self.controller is None else self._next_law(s)
-                new, absorbed, theta = joint_step(self.model, self.joint, s, self.dt, self.joint_theta, law)
-                if not new.is_finite():
-                    raise SimulationDiverged(self.diagnose(s.t + self.dt, "the state became non-finite"))
-                self.state, self.pto_energy, self.joint_theta = new, self.pto_energy + absorbed, theta
-        finally:
-            if self.moorings is not None:
-                held[:] = self.moorings.load  # the pull now, as the frame shows it
-        return self.state
-
-    def _packs(self) -> tuple:
-        """(kernels, the model packed for them, the sea, the radiation), each rebuilt only when what it packs changed."""
-        from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
-        from sim.kernels.layout import HELD  # numba's import (0.6 s): only where compiled kernels run
-
-        body, model = self.body, self.model
-        if self._packed[0] is not model or self._packed[1] != self.integrator.name:  # a step at a time costs 40 us less
-            _, coef = kernels.pack(model)
-            self._packed = (model, self.integrator.name, self.kernels(), kernels.Model(body.packed, body.mass, body.inertia, coef))
-        elif model.held is not None:
-            self._packed[3].coef[HELD:] = model.held  # the moorings' pull, new at every step
-        if self._sea[0] != (model, self.expand_waves):
-            self._sea = ((model, self.expand_waves), kernels.sea_pack(model.water, body, self.expand_waves))
-        if self._rad[0] != (model, self.dt):
-            self._rad = ((model, self.dt), kernels.radiation_pack(model.radiation, body, self.dt))
-        return self._packed[2], self._packed[3], self._sea[1], self._rad[1]
-
-    def _state_of(self, y: np.ndarray, t: float) -> State:
-        extra = (y[13:-1].copy(), float(y[-1])) if len(y) > 13 else ()  # radiation: the memory and E_rad
-        return State(t, y[0:3], y[3:7], y[7:10], y[10:13], *extra)
-
-    def _advance_compiled(self, n: int) -> State:
-        compiled, packed, sea, rad = self._packs()
-        y, done = compiled.schemes.advance(self.state.as_vector(), self.state.t, n, self.dt, packed, sea, rad)
-        state = self._state_of(y, self.state.t + done * self.dt)
-        if done < n:
-            self.state = state
-            raise SimulationDiverged(self.diagnose(state.t + self.dt, "the state became non-finite"))
-        return state
-
-    def _advance_moored(self, n: int) -> State:
-        """The compiled body and MoorDyn in turn, a step each: the kernels keep their carry and scratch from step to step
-        (schemes.step_held, which also takes the lines' pull into the held load and gives the fairleads' next kinematics),
-        so a step is one compiled call and one MoorDyn call. The same steps as the one-step-a-call loop, to round-off."""
-        from sim.kernels import entry_point  # numba's import (0.6 s): only where compiled kernels run
-
-        compiled, packed, sea, rad = self._packs()
-        lines, dt, t = self.moorings, self.dt, self.state.t
-        levers = lines.r_body
-        pos, vel = np.empty(levers.size), np.empty(levers.size)
-        y = self.state.as_vector()
-        s, keep = compiled.schemes.held_start(y, t, dt, packed, sea, rad, levers, pos, vel)
-        step = entry_point(
-            compiled.schemes.step_held, (y, t, dt, packed, sea, rad, s, keep, lines._forces, lines._forces, levers, pos, vel)
-        )
-        pull = lines.pull
-        try:
-            for _ in range(n):
-                now = lines._forces
-                y, ok = step(y, t, dt, packed, sea, rad, s, keep, now, pull(pos, vel, dt), levers, pos, vel)
-                if not ok:
-                    raise SimulationDiverged(self.diagnose(t + dt, "the state became non-finite"))
-                t += dt
-        finally:  # the state reached, and the pull now as the frame shows it
-            self.state = self._state_of(y, t)
-            lines.settle(keep[0])
-            self.model.held[:] = lines.load
         return self.state
 
     def _rebase_energy(self) -> None:

@@ -299,7 +299,7 @@ def warm_up() -> None:
         linearised_loads(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea)
         return
     advance(y, 0.0, 1, 0.01, model, sea, rad)
-    if HOLDING:  # a moored body's step (Simulation._advance_moored)
+    if HOLDING:  # a moored body's step (system/single.py, Single._moored)
         levers, pos, vel = np.zeros((1, 3)), np.zeros(3), np.zeros(3)
         s, keep = held_start(y, 0.0, 0.01, model, sea, rad, levers, pos, vel)
         step_held(y, 0.0, 0.01, model, sea, rad, s, keep, np.zeros((1, 3)), np.zeros((1, 3)), levers, pos, vel)

@@ -15,11 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.bodies.state import State, angular_velocity
+from sim.bodies.rotation import matrix_to_quat, normalized, quat_multiply, quat_to_matrix
+from sim.bodies.state import State, angular_momentum, angular_velocity
 from sim.control.laws import Law
 from sim.dynamics.joints import WorldJoint
 from sim.dynamics.joints import step as joint_step
 from sim.hydro.forces import Model, compiled_model
+from sim.system.tree import Group, Member, System, SystemState
+
+WIDTHS = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1}
+"""A system of one's velocities: six free, none fixed, the joint's rate on a slide or a hinge."""
 
 
 class StepFailed(Exception):
@@ -40,6 +45,53 @@ class Motion:
     absorbed: float = 0.0
 
 
+def system_of_one(model: Model, joint: WorldJoint | None, start: State) -> System:
+    """The body as a system of one (system/tree.py): its group free about the starting pose `start`, or on its joint to the
+    world (the joint's own starting pose), the take-off's spring and damper as the joint's."""
+    kind = "free" if joint is None else joint.kind
+    x0, R0 = (start.x_world, start.R_world_body) if joint is None else (joint.x0, joint.R0)
+    width = WIDTHS[kind]
+    member = Member("body", model, np.zeros(3), np.asarray(R0, float).copy())
+    axis, pivot = (np.array([0.0, 0.0, 1.0]), x0) if joint is None else (joint.axis, joint.pivot)
+    stiffness, damping = (0.0, 0.0) if joint is None else (joint.stiffness, joint.damping)
+    group = Group("body", (member,), kind, -1, np.asarray(axis, float), np.asarray(pivot, float).copy(), np.asarray(x0, float).copy(),
+                  stiffness, damping, slice(0, width), 0 if width else -1, np.asarray(x0, float).copy())  # fmt: skip
+    return System([group], [(0, 0)], model.water, model.fluid)
+
+
+def to_system(system: System, joint: WorldJoint | None, m: Motion) -> SystemState:
+    """The body's motion as the system of one's state: a free group's centre of mass, its turn from the start and its twist
+    (u, omega); a joint's coordinate, rate and absorbed energy."""
+    s, g = m.state, system.groups[0]
+    body = g.members[0].body
+    if g.kind == "free":
+        turn = normalized(matrix_to_quat(s.R_world_body @ g.members[0].rotation.T))
+        v = np.concatenate([s.u_world, angular_velocity(body, s.R_world_body, s.L_world)])
+        return SystemState(s.t, s.x_world[None, :].copy(), turn[None, :], np.zeros(0), v, np.zeros(0), s.memory, s.E_rad)
+    width = WIDTHS[g.kind]
+    rate = joint.rate(body, s)
+    theta, v = np.array([m.theta])[:width], np.array([rate])[:width]
+    return SystemState(s.t, np.zeros((0, 3)), np.zeros((0, 4)), theta, v, np.array([m.absorbed])[:width], s.memory, s.E_rad)
+
+
+def from_system(system: System, joint: WorldJoint | None, s: SystemState) -> Motion:
+    """The system of one's state as the body's motion (to_system's inverse, to round-off)."""
+    g = system.groups[0]
+    if joint is not None:
+        width = WIDTHS[g.kind]
+        theta, rate = (float(s.theta[0]), float(s.v[0])) if width else (0.0, 0.0)
+        like = State(s.t, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), s.memory, s.E_rad)
+        return Motion(joint.state(g.members[0].body, s.t, theta, rate, like), theta, float(s.absorbed[0]) if width else 0.0)
+    pose = system.pose(s)
+    x, J = pose.x[0], pose.J[0]
+    nu = J @ s.v
+    q0 = matrix_to_quat(g.members[0].rotation)
+    q = normalized(quat_multiply(s.q_free[0], q0))
+    state = State(s.t, np.asarray(x, float).copy(), q, nu[:3].copy(), angular_momentum(g.members[0].body, quat_to_matrix(q), nu[3:]),
+                  s.memory, s.E_rad)  # fmt: skip
+    return Motion(state)
+
+
 class Single:
     """The step of a system of one. `model`, `integrator` and `joint` are the runner's (it replaces them whole on a change);
     `compiled` says whether the compiled twin steps (the runner sets it where `has_twin`)."""
@@ -54,6 +106,7 @@ class Single:
         self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
         self._rad: tuple = (None, None)  # ((model, dt), its radiation packed for the kernels)
         self._packed: tuple = (None, None, None, None)  # (model, scheme, its kernels, the model packed for them)
+        self._last: tuple = (None, None)  # (the system state `step` gave back, the body's motion it came from)
 
     # the compiled twin
 
@@ -99,6 +152,19 @@ class Single:
         return notes
 
     # stepping
+
+    def step(self, system: System, s: SystemState, n: int, dt: float, law=None, lines=None) -> SystemState:
+        """`advance` on the system of one's state: the body's own motion is carried from the last call exactly (a state this
+        step gave back), else taken from `s` (to round-off)."""
+        m = self._last[1] if self._last[0] is s else from_system(system, self.joint, s)
+        try:
+            m = self.advance(m, n, dt, law, lines)
+        except StepFailed as e:  # the last good state as the system's too
+            e.system_state = to_system(system, self.joint, Motion(e.state, e.theta, e.absorbed))
+            raise
+        out = to_system(system, self.joint, m)
+        self._last = (out, m)
+        return out
 
     def advance(self, m: Motion, n: int, dt: float, law: Callable[[State, float], Law] | None = None, lines=None) -> Motion:
         """`m` after n steps of dt; `law(s, theta)`: the take-off's law for the step from s at the coordinate theta (None: the joint's spring and damper);

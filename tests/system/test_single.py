@@ -1,0 +1,91 @@
+"""A body alone is a system of one (system/single.py): its system's kinematics and energies are the body's, and its step on
+the system's state gives the one-body run's states bit for bit."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sim.bodies.state import initial_state
+from sim.scene.config import load_scene, with_overrides
+from sim.simulation import Simulation
+from sim.system.single import Motion, from_system, system_of_one, to_system
+from sim.system.tree import body_frames
+
+
+def system_run(scene, backend: str):
+    """A run, and its body as a system of one with the system's state at its start."""
+    sim = Simulation(scene, backend=backend)
+    system = system_of_one(sim.model, sim.joint, initial_state(sim.body, sim.scene))
+    return sim, system, to_system(system, sim.joint, Motion(sim.state, sim.joint_theta, sim.pto_energy))
+
+
+def vectors(s) -> np.ndarray:
+    return np.concatenate([s.x_free.ravel(), s.q_free.ravel(), s.theta, s.v, s.absorbed, s.memory, [s.t, s.E_rad]])
+
+
+CASES = [
+    ("drop", {}, "numpy"),
+    ("drop", {"step__integrator": "rk4"}, "numpy"),
+    ("waves", {}, "numba"),
+    ("point-absorber", {}, "numpy"),
+    ("moored-buoy", {}, "numba"),
+]
+
+
+@pytest.mark.parametrize("name,changes,backend", CASES, ids=[f"{c[0]}-{c[2]}{'-rk4' if c[1] else ''}" for c in CASES])
+def test_a_system_of_one_steps_as_the_body_does(name, changes, backend):
+    """The one-body run, and its step driven through the system of one's state from another run of the same scene (its own
+    lines and controller): the same states bit for bit, over calls of several steps."""
+    scene = with_overrides(load_scene(name), **changes)
+    reference = Simulation(scene, backend=backend)
+    sim, system, s = system_run(scene, backend)
+    sim.single.compiled = sim.compiled
+    law = None if sim.controller is None else sim._next_law
+    for n in (1, 7, 12):
+        reference.step(n)
+        s = sim.single.step(system, s, n, sim.dt, law, sim.moorings)
+        expected = to_system(system, reference.joint, Motion(reference.state, reference.joint_theta, reference.pto_energy))
+        assert np.array_equal(vectors(s), vectors(expected))
+    reference.close()
+    sim.close()
+
+
+@pytest.mark.parametrize("name", ["spin", "point-absorber"])
+def test_the_systems_state_and_the_bodys_are_one_motion(name):
+    """to_system then from_system gives the body's state back to round-off (a state handed in from outside, a reset's)."""
+    sim, system, _ = system_run(load_scene(name), "numpy")
+    sim.step(25)
+    m = Motion(sim.state, sim.joint_theta, sim.pto_energy)
+    back = from_system(system, sim.joint, to_system(system, sim.joint, m))
+    assert back.state.t == m.state.t and back.theta == m.theta and back.absorbed == m.absorbed
+    for a, b in zip(back.state.as_vector(), m.state.as_vector()):
+        assert a == pytest.approx(b, rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("name", ["spin", "waves", "point-absorber"])
+def test_a_system_of_one_sees_the_body_where_it_is(name):
+    """Its kinematics give the body's pose and twist, and its energies the run's: kinetic, gravity and the exact
+    hydrostatic energy of the mesh clipped at the surface."""
+    sim, system, _ = system_run(with_overrides(load_scene(name), fluid__radiation="none"), "numpy")
+    sim.step(30)
+    s, frame = to_system(system, sim.joint, Motion(sim.state, sim.joint_theta, sim.pto_energy)), sim.frame()
+    (b,) = body_frames(system, s)
+    q = b["q"] * np.sign(b["q"][0] * frame.q_world_body[0])
+    for got, want in ((b["x"], frame.x_world), (q, frame.q_world_body), (b["u"], frame.u_world), (b["omega"], frame.omega_world)):
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-12)
+    energies = system.energies(s)
+    assert energies["E_kin"] == pytest.approx(frame.E_kin, rel=1e-12, abs=1e-9)
+    assert energies["E_grav"] == pytest.approx(frame.E_grav, rel=1e-12)
+    assert energies["E_hyd"] == pytest.approx(frame.E_hyd, rel=1e-9)
+
+
+def test_a_joint_of_one_is_the_systems_joint():
+    """The hinge or slide of a body on a joint is the system's one joint: its axis, its take-off's spring and damper."""
+    sim, system, s = system_run(load_scene("point-absorber"), "numpy")
+    (joint,) = system.joints
+    assert joint.kind == sim.joint.kind and np.array_equal(joint.axis, sim.joint.axis)
+    assert (joint.stiffness, joint.damping) == (sim.joint.stiffness, sim.joint.damping)
+    (point, direction) = system.joint_axes(s)[0]
+    assert np.allclose(direction, sim.joint.axis) and abs(np.cross(point - sim.frame().joint_axis[0], direction)).max() < 1e-12
+    assert dataclasses.replace(s).v.shape == (1,)

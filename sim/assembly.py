@@ -216,6 +216,9 @@ class Assembly(Simulation):
     integrator = None
     """(Several bodies step by their own scheme: system/tree.py.)"""
 
+    system = None
+    state = None
+
     step_seconds = None
     """(No adaptive method steps several bodies.)"""
 

@@ -46,7 +46,7 @@ class Ensemble:
 
     @property
     def states(self) -> list[State]:
-        return [s.state for s in self.sims]
+        return [s.body_state for s in self.sims]
 
     def frames(self) -> list[Frame]:
         return [s.frame() for s in self.sims]
@@ -59,7 +59,7 @@ class Ensemble:
         if not live:
             return
         first = self.sims[live[0]]
-        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].scene.water == first.scene.water and self.sims[i].state.t == first.state.t and self.sims[i].model.radiation is None
+        one_sea = all(self.sims[i].scene.waves == first.scene.waves and self.sims[i].scene.water == first.scene.water and self.sims[i].body_state.t == first.body_state.t and self.sims[i].model.radiation is None
                       and self.sims[i].moorings is None  # (moored bodies step on their own: MoorDyn between steps)
                       for i in live)  # fmt: skip
         if self.backend == "numba" and first.compiled and one_sea:
@@ -83,18 +83,18 @@ class Ensemble:
         from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
         sims = [self.sims[i] for i in live]
-        Y = np.array([s.state.as_vector() for s in sims])
+        Y = np.array([s.body_state.as_vector() for s in sims])
         masses = np.array([s.body.mass for s in sims])
         inertias = np.array([s.body.inertia for s in sims])
         coefs = np.array([kernels.pack(s.model)[1] for s in sims])
         sea = kernels.sea_pack(sims[0].model.water, self.shape)
-        Y, done = kernels.specialised(self.spec(live)).schemes.advance_many(Y, sims[0].state.t, n, self.dt, self.shape.packed, masses, inertias, coefs, sea,
+        Y, done = kernels.specialised(self.spec(live)).schemes.advance_many(Y, sims[0].body_state.t, n, self.dt, self.shape.packed, masses, inertias, coefs, sea,
                                                          kernels.NO_RADIATION)  # fmt: skip
         for i, s, y, k in zip(live, sims, Y, done):
-            before = s.state
-            s.state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])  # the ensemble steps bodies without radiation
+            before = s.body_state
+            s.body_state = State(before.t + k * self.dt, y[0:3], y[3:7], y[7:10], y[10:13])  # the ensemble steps bodies without radiation
             if k < n:
-                self.diverged[i] = s.diagnose(s.state.t + self.dt, "the state became non-finite")
+                self.diverged[i] = s.diagnose(s.body_state.t + self.dt, "the state became non-finite")
             elif check_energy and s.frame().E_total - s._E_ref > 10.0 * s._E_scale:
-                self.diverged[i] = s.diagnose(s.state.t, "the energy blew up")
-                s.state = before  # the last state that passed the check, as Simulation.step does
+                self.diverged[i] = s.diagnose(s.body_state.t, "the energy blew up")
+                s.body_state = before  # the last state that passed the check, as Simulation.step does

@@ -23,7 +23,8 @@ from sim.lines.moorings import Moorings, moored
 from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.frame import Frame, observe
-from sim.system.single import Motion, Single, StepFailed
+from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
+from sim.system.tree import System, SystemState
 from sim.water.records import describe
 from sim.water.seas import make_water
 
@@ -82,7 +83,10 @@ class Simulation:
         self._custom = None  # a controller given from Python (`control`), kept over scene changes
         self.single = Single(self._model(body), make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol), None)
         """The step (system/single.py): the body's model, integrator and joint, and the compiled twin."""
-        self.state = initial_state(body, scene)
+        self.body_state = initial_state(body, scene)
+        """The body's own state (bodies/state.State): what `state` shows as its system of one's."""
+        self._system: tuple = (None, None)  # ((model, joint), the body as a system of one)
+        self._state: tuple = (None, None)  # ((body_state, theta, absorbed), the system of one's state)
         self._join()
         self._moor()
         norm = float(np.linalg.norm(scene.initial.orientation))
@@ -129,21 +133,21 @@ class Simulation:
         self.joint_theta = 0.0
         """The joint's coordinate, a hinge's whole turns counted (the pose alone gives it up to them)."""
         if self.joint is not None:
-            s = self.state
+            s = self.body_state
             self.joint_theta = self.joint.coordinate(s)
-            self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
+            self.body_state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
         self._make_controller()
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
 
         old = self.joint
-        start = (old.x0, old.R0) if old is not None else (self.state.x_world, self.state.R_world_body)
+        start = (old.x0, old.R0) if old is not None else (self.body_state.x_world, self.body_state.R_world_body)
         self.joint = WorldJoint.of_scene(self.scene, *start)
         if self.joint is not None:
-            s = self.state
+            s = self.body_state
             self.joint_theta = self.joint.coordinate(s, near=self.joint_theta if old is not None and old.kind == self.joint.kind else 0.0)
-            self.state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
+            self.body_state = self.joint.state(self.body, s.t, self.joint_theta, self.joint.rate(self.body, s), s)
         self._make_controller()
         self._check_backend()
 
@@ -192,7 +196,7 @@ class Simulation:
         if not moored(self.scene):
             return
 
-        s, R = self.state, self.state.R_world_body
+        s, R = self.body_state, self.body_state.R_world_body
         self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
         self.moorings.t = s.t
         self.model.held[:] = self.moorings.load
@@ -245,6 +249,31 @@ class Simulation:
         self.single.expand_waves = expand
 
     @property
+    def system(self) -> System:
+        """The body as a system of one (system/single.py): its group free or on its joint to the world."""
+        key = (self.model, self.joint)
+        if self._system[0] != key:
+            self._system = (key, system_of_one(self.model, self.joint, initial_state(self.body, self.scene)))
+        return self._system[1]
+
+    @property
+    def state(self) -> SystemState:
+        """The run's state, as every scene's: its system's (here a system of one, whose .x_world, .q_world_body, .u_world,
+        .L_world and .body are the body's own state)."""
+        key = (self.body_state, self.joint_theta, self.pto_energy)
+        if self._state[0] != key:
+            self._state = (key, to_system(self.system, self.joint, Motion(*key)))
+        return self._state[1]
+
+    @state.setter
+    def state(self, state: SystemState | State) -> None:
+        if isinstance(state, SystemState):
+            m = from_system(self.system, self.joint, state)
+            self.body_state, self.joint_theta, self.pto_energy = m.state, m.theta, m.absorbed
+        else:
+            self.body_state = state
+
+    @property
     def body(self) -> Body:
         """The running body (its samples, mass, inertia and mesh)."""
         return self.model.body
@@ -269,14 +298,14 @@ class Simulation:
 
     def _checked(self) -> Frame:
         """The frame without the lines' nodes: what a step's blow-up check reads."""
-        key = (self.state, self.model)
+        key = (self.body_state, self.model)
         if self._frame_key != key:
-            frame = observe(self.model, self.state, self.kernels() if self.compiled else None, self.expand_waves)
+            frame = observe(self.model, self.body_state, self.kernels() if self.compiled else None, self.expand_waves)
             if self.moorings is not None:
                 frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(),
                                             fairlead_tensions=self.moorings.fairlead_tensions(), line_energy=self.moorings.energy_now())  # fmt: skip
             if self.joint is not None:
-                rate = self.joint.rate(self.body, self.state)
+                rate = self.joint.rate(self.body, self.body_state)
                 j = self.joint
                 axis = None if j.kind == "fixed" else ((j.pivot if j.kind == "revolute" else j.x0), j.axis)
                 law = self._law  # its spring's power is stored, not absorbed
@@ -353,26 +382,30 @@ class Simulation:
 
     def step(self, n: int = 1) -> State:
         """Advance n steps; on blow-up raise SimulationDiverged, leaving the last state known good."""
-        checked, checked_theta = self.state, self.joint_theta
+        checked, checked_theta = self.body_state, self.joint_theta
         self.single.compiled = self.compiled
         law = None if self.controller is None else self._next_law
         try:
-            m = self.single.advance(Motion(self.state, self.joint_theta, self.pto_energy), n, self.dt, law, self.moorings)
+            m = self.single.advance(Motion(self.body_state, self.joint_theta, self.pto_energy), n, self.dt, law, self.moorings)
         except StepFailed as e:
-            self.state, self.joint_theta, self.pto_energy = e.state, e.theta, e.absorbed
+            self.body_state, self.joint_theta, self.pto_energy = e.state, e.theta, e.absorbed
             raise SimulationDiverged(self.diagnose(e.t, e.why)) from None
-        self.state, self.joint_theta, self.pto_energy = m.state, m.theta, m.absorbed
+        self.body_state, self.joint_theta, self.pto_energy = m.state, m.theta, m.absorbed
         if self.model.radiation is not None:
             rest = initial_state(self.body, self.scene).q_world_body
-            turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.state.q_world_body)))))
+            turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ self.body_state.q_world_body)))))
             self.largest_turn = max(self.largest_turn, turn)
         started = time.perf_counter()
         frame = self._checked()
         self.check_seconds = time.perf_counter() - started
         energy = frame.E_total
-        if not self.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
+        if not self.body_state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too
-            t, self.state, self.joint_theta = self.state.t, checked, checked_theta  # back to the last state that passed this check
+            t, self.body_state, self.joint_theta = (
+                self.body_state.t,
+                checked,
+                checked_theta,
+            )  # back to the last state that passed this check
             what = (
                 f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"
                 if np.isfinite(energy)
@@ -388,7 +421,7 @@ class Simulation:
         frame = self.frame()
         body, p = self.body, self.params
         if not (np.isfinite(frame.E_total) and np.all(np.isfinite(frame.force_world)) and np.all(np.isfinite(frame.torque_world))):
-            raise SimulationDiverged(f"the state at t = {self.state.t:g} s gives non-finite forces or energy: check the initial "
+            raise SimulationDiverged(f"the state at t = {self.body_state.t:g} s gives non-finite forces or energy: check the initial "
                                      "position, velocities and the body's size and density")  # fmt: skip
         self._E_ref = frame.E_total
         # The energy is the seabed's: a current feeds a body up to its speed, 1/2 M |u' + U|^2 <= M |u'|^2 + M |U|^2
@@ -452,10 +485,10 @@ class Simulation:
         if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY) or exact_inertia(old) != exact_inertia(scene):
             self._rebuild_body(self._make_body(scene))
         elif body_mass(scene, body.volume) != body.mass:
-            R = self.state.R_world_body
-            omega = angular_velocity(body, R, self.state.L_world)
+            R = self.body_state.R_world_body
+            omega = angular_velocity(body, R, self.body_state.L_world)
             self.model = self._model(with_mass(body, body_mass(scene, body.volume), scene.body.inertia))
-            self.state = dataclasses.replace(self.state, L_world=angular_momentum(self.body, R, omega))
+            self.body_state = dataclasses.replace(self.body_state, L_world=angular_momentum(self.body, R, omega))
         elif (
             old.fluid != scene.fluid
             or old.waves != scene.waves
@@ -474,19 +507,19 @@ class Simulation:
         radiation = self.model.radiation
         if radiation is not self._memory_of:
             n = 0 if radiation is None else radiation.states
-            self.state = dataclasses.replace(self.state, memory=np.zeros(n), E_rad=self.state.E_rad if n else 0.0)
+            self.body_state = dataclasses.replace(self.body_state, memory=np.zeros(n), E_rad=self.body_state.E_rad if n else 0.0)
             self._memory_of = radiation
 
     def _rebuild_body(self, body: Body) -> None:
         """Swap in a new body of the same shape given in the same world orientation (its principal
         frame may differ slightly), with the same position, velocity and angular velocity."""
-        old, state = self.body, self.state
+        old, state = self.body, self.body_state
         omega = angular_velocity(old, state.R_world_body, state.L_world)
         q_input = normalized(quat_multiply(state.q_world_body, old.q_input_body * np.array([1.0, -1.0, -1.0, -1.0])))
         q = normalized(quat_multiply(q_input, body.q_input_body))
         self.model = self._model(body)
         carried = dataclasses.replace(state, q_world_body=q)
-        self.state = dataclasses.replace(carried, L_world=angular_momentum(body, carried.R_world_body, omega))
+        self.body_state = dataclasses.replace(carried, L_world=angular_momentum(body, carried.R_world_body, omega))
 
     def set_params(self, **changes) -> None:
         """Replace fluid parameters (rho, g, damping, forces, any term's coefficient); velocities are kept."""
@@ -504,14 +537,16 @@ class Simulation:
         """Another integrator from the next step on (update(step__integrator=name))."""
         self.update(step__integrator=name)
 
-    def reset(self, state: State | None = None) -> None:
+    def reset(self, state: SystemState | State | None = None) -> None:
         """Back to the scene's initial pose and velocities, keeping the current parameters."""
-        self.state = state or initial_state(self.body, self.scene)
+        if isinstance(state, SystemState):
+            state = from_system(self.system, self.joint, state).state
+        self.body_state = state or initial_state(self.body, self.scene)
         self.largest_turn = 0.0
         self._join()
         self._moor()
         self._memory_of = (
-            None if self.model.radiation is None or len(self.state.memory) != self.model.radiation.states else self.model.radiation
+            None if self.model.radiation is None or len(self.body_state.memory) != self.model.radiation.states else self.model.radiation
         )
         self._sync_memory()
         self._rebase_energy()

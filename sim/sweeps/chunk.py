@@ -77,7 +77,7 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
     if sweep.history_every:
         block = math.gcd(block, sweep.history_every)
     n = len(indices)
-    samples_t, samples_z = [0.0], [[s.state.x_world[2] for s in ensemble.sims]]
+    samples_t, samples_z = [0.0], [[s.body_state.x_world[2] for s in ensemble.sims]]
     rest_time = [math.nan] * n
     candidate = [math.nan] * n  # time of the first of two checks at rest
     history = {k: [] for k in HISTORY} if sweep.history_every else None
@@ -86,7 +86,7 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
         for j, s in enumerate(ensemble.sims):
             if ensemble.stopped[j] and done > 0:
                 continue
-            st = s.state
+            st = s.body_state
             for k, v in zip(HISTORY, (indices[j], st.t, *st.x_world, *st.q_world_body)):
                 history[k].append(v)
 
@@ -101,7 +101,7 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
             stop.check()
         if done % sample == 0 or done == n_steps:
             samples_t.append(done * dt)
-            samples_z.append([s.state.x_world[2] for s in ensemble.sims])
+            samples_z.append([s.body_state.x_world[2] for s in ensemble.sims])
         if history is not None and done % sweep.history_every == 0:
             keep_history(done)
         if sweep.settle and done % check == 0:
@@ -110,7 +110,7 @@ def run_chunk(sweep: Sweep, indices: list[int], stop=None) -> tuple[dict, dict |
                     continue
                 if at_rest(s):
                     if math.isnan(candidate[j]):
-                        candidate[j] = s.state.t
+                        candidate[j] = s.body_state.t
                     else:
                         rest_time[j] = candidate[j]
                         ensemble.stopped[j] = True

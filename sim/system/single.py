@@ -65,23 +65,28 @@ def to_system(system: System, joint: WorldJoint | None, m: Motion) -> SystemStat
     s, g = m.state, system.groups[0]
     body = g.members[0].body
     if g.kind == "free":
-        turn = normalized(matrix_to_quat(s.R_world_body @ g.members[0].rotation.T))
-        v = np.concatenate([s.u_world, angular_velocity(body, s.R_world_body, s.L_world)])
-        return SystemState(s.t, s.x_world[None, :].copy(), turn[None, :], np.zeros(0), v, np.zeros(0), s.memory, s.E_rad)
+        with np.errstate(all="ignore"):  # a state far off (a run that blew up stops there) reads as non-finite, not as an error
+            turn = quat_multiply(s.q_world_body, matrix_to_quat(g.members[0].rotation) * [1.0, -1.0, -1.0, -1.0])
+            v = np.concatenate([s.u_world, angular_velocity(body, s.R_world_body, s.L_world)])
+        return SystemState(s.t, s.x_world[None, :].copy(), turn[None, :], np.zeros(0), v, np.zeros(0), s.memory, s.E_rad).with_body(s)
     width = WIDTHS[g.kind]
-    rate = joint.rate(body, s)
+    with np.errstate(all="ignore"):
+        rate = joint.rate(body, s)
     theta, v = np.array([m.theta])[:width], np.array([rate])[:width]
-    return SystemState(s.t, np.zeros((0, 3)), np.zeros((0, 4)), theta, v, np.array([m.absorbed])[:width], s.memory, s.E_rad)
+    return SystemState(s.t, np.zeros((0, 3)), np.zeros((0, 4)), theta, v, np.array([m.absorbed])[:width], s.memory, s.E_rad).with_body(s)
 
 
 def from_system(system: System, joint: WorldJoint | None, s: SystemState) -> Motion:
-    """The system of one's state as the body's motion (to_system's inverse, to round-off)."""
+    """The system of one's state as the body's motion: its body's own state where it has one (exactly), else from its
+    coordinates and velocities (to_system's inverse, to round-off)."""
     g = system.groups[0]
+    one = len(s.theta) == 1  # on a slide or a hinge
+    if "_body" in s.__dict__:
+        return Motion(s.body, float(s.theta[0]) if one else 0.0, float(s.absorbed[0]) if one else 0.0)
     if joint is not None:
-        width = WIDTHS[g.kind]
-        theta, rate = (float(s.theta[0]), float(s.v[0])) if width else (0.0, 0.0)
+        theta, rate = (float(s.theta[0]), float(s.v[0])) if one else (0.0, 0.0)
         like = State(s.t, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), np.zeros(3), s.memory, s.E_rad)
-        return Motion(joint.state(g.members[0].body, s.t, theta, rate, like), theta, float(s.absorbed[0]) if width else 0.0)
+        return Motion(joint.state(g.members[0].body, s.t, theta, rate, like), theta, float(s.absorbed[0]) if one else 0.0)
     pose = system.pose(s)
     x, J = pose.x[0], pose.J[0]
     nu = J @ s.v
@@ -106,7 +111,6 @@ class Single:
         self._sea: tuple = (None, None)  # (model, its water packed for the kernels)
         self._rad: tuple = (None, None)  # ((model, dt), its radiation packed for the kernels)
         self._packed: tuple = (None, None, None, None)  # (model, scheme, its kernels, the model packed for them)
-        self._last: tuple = (None, None)  # (the system state `step` gave back, the body's motion it came from)
 
     # the compiled twin
 
@@ -154,17 +158,14 @@ class Single:
     # stepping
 
     def step(self, system: System, s: SystemState, n: int, dt: float, law=None, lines=None) -> SystemState:
-        """`advance` on the system of one's state: the body's own motion is carried from the last call exactly (a state this
-        step gave back), else taken from `s` (to round-off)."""
-        m = self._last[1] if self._last[0] is s else from_system(system, self.joint, s)
+        """`advance` on the system of one's state (its body's own state carried exactly, from_system)."""
+        m = from_system(system, self.joint, s)
         try:
             m = self.advance(m, n, dt, law, lines)
         except StepFailed as e:  # the last good state as the system's too
             e.system_state = to_system(system, self.joint, Motion(e.state, e.theta, e.absorbed))
             raise
-        out = to_system(system, self.joint, m)
-        self._last = (out, m)
-        return out
+        return to_system(system, self.joint, m)
 
     def advance(self, m: Motion, n: int, dt: float, law: Callable[[State, float], Law] | None = None, lines=None) -> Motion:
         """`m` after n steps of dt; `law(s, theta)`: the take-off's law for the step from s at the coordinate theta (None: the joint's spring and damper);

@@ -42,7 +42,7 @@ import numpy as np
 
 from sim.bodies.body import Body, make_body
 from sim.bodies.rotation import matrix_to_quat, normalized, quat_to_matrix, rotate_world, skew
-from sim.bodies.state import initial_state
+from sim.bodies.state import State, initial_state
 from sim.bodies.surface import wet_panels
 from sim.control.laws import Law
 from sim.dynamics.joints import _rotation
@@ -129,7 +129,49 @@ class SystemState:
     """Energy the radiated waves have carried away so far, J."""
 
     def is_finite(self) -> bool:
+        if "_body" in self.__dict__:  # a system of one's: its body's own state
+            return self.body.is_finite() and bool(np.isfinite(self.theta).all())
         return bool(all(np.isfinite(a).all() for a in (self.x_free, self.q_free, self.theta, self.v)))
+
+    # A body alone is a system of one (system/single.py): its state is also the body's, exact (bodies/state.State), as
+    # its step reached it. A state made by hand or by dataclasses.replace has none: its body is body_frames'.
+
+    @property
+    def body(self) -> State:
+        """A system of one's body state (x_world, q_world_body, u_world, L_world); AttributeError for several bodies."""
+        own = self.__dict__.get("_body")
+        if own is None:
+            raise AttributeError("a system's state: each body's pose and twist is body_frames(system, state)")
+        return own
+
+    def with_body(self, body: State) -> SystemState:
+        """This state, its body's own state `body` kept beside it (a system of one's)."""
+        object.__setattr__(self, "_body", body)
+        return self
+
+    @property
+    def x_world(self) -> np.ndarray:
+        return self.body.x_world
+
+    @property
+    def q_world_body(self) -> np.ndarray:
+        return self.body.q_world_body
+
+    @property
+    def u_world(self) -> np.ndarray:
+        return self.body.u_world
+
+    @property
+    def L_world(self) -> np.ndarray:
+        return self.body.L_world
+
+    @property
+    def R_world_body(self) -> np.ndarray:
+        return self.body.R_world_body
+
+    def as_vector(self) -> np.ndarray:
+        """The body's (13,) x, q, u, L (then the radiation memory and E_rad): a system of one's."""
+        return self.body.as_vector()
 
 
 @dataclass(frozen=True, eq=False)

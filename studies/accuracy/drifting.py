@@ -103,7 +103,7 @@ def heave_rao(scene, moved_by: float, periods: int = 12, fit: int = 6) -> float:
     from sim import Simulation
 
     sim = Simulation(scene)
-    s = sim.state
+    s = sim.body_state
     sim.reset(dataclasses.replace(s, x_world=s.x_world + [moved_by, 0.0, 0.0]))
     T, a = scene.waves.period, 0.5 * scene.waves.height
     t_end, chunk = sim.model.water.ramp + periods * T, 5
@@ -138,7 +138,7 @@ def _start_run(scene, x0: float, t_end: float) -> tuple[np.ndarray, np.ndarray]:
     from sim import Simulation
 
     sim = Simulation(scene)
-    s = sim.state
+    s = sim.body_state
     sim.reset(dataclasses.replace(s, x_world=s.x_world + [x0, 0.0, 0.0]))
     t, x = [], []
     for _ in range(round(t_end / sim.dt)):

@@ -144,7 +144,7 @@ def _watch(sim: Simulation, density: float, n: int, forces: str, cfg: LeakSettin
         sim.step(every)
         tilts.append(tilt_deg(sim.state.R_world_body))
     speed = float(np.linalg.norm(sim.state.x_world[:2] - start)) / cfg.watch
-    held = dataclasses.replace(sim.state, u_world=np.zeros(3), L_world=np.zeros(3))
+    held = dataclasses.replace(sim.body_state, u_world=np.zeros(3), L_world=np.zeros(3))
     force = probes.frame_at(sim, held).force_world
     margin = probes.leak_margin(sim)
     warned = margin is not None and margin < probes.leak_band()

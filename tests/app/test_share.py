@@ -133,7 +133,7 @@ def test_markers_sit_at_the_exact_centre_of_buoyancy_and_metacentre():
         # a tilted pose: B on the panel model's line of action of buoyancy, M above it by I / V
         R = quat_to_matrix(np.array([0.95, 0.2, -0.15, 0.1]) / np.linalg.norm([0.95, 0.2, -0.15, 0.1]))
         x = np.array([0.2, 0.1, -0.05])
-        sim.reset(sim.state.__class__(0.5, x, matrix_to_quat(R), np.zeros(3), np.zeros(3)))
+        sim.reset(sim.body_state.__class__(0.5, x, matrix_to_quat(R), np.zeros(3), np.zeros(3)))
         view.show(shot_of(sim), now=1.0)
         line, volume = panel_buoyancy_centre(sim.body, x, R)
         np.testing.assert_allclose(view.markers.b.position[:2], line, atol=1e-9)

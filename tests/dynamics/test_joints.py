@@ -229,7 +229,7 @@ def test_a_heaving_converter_absorbs_the_frequency_domain_power():
         nu = np.zeros(6, complex)
         nu[2] = -1j * w * a * xi
         memory = np.linalg.solve(-1j * w * np.eye(rad.states) - rad.F, rad.G @ nu).real  # the memory in steady state too
-        s = sim.state
+        s = sim.body_state
         sim.reset(type(s)(s.t, s.x_world, s.q_world_body, s.u_world, s.L_world, memory, 0.0))
         sim.step(200 * 8)  # 8 periods
         e0, t0 = sim.frame().E_pto, sim.state.t

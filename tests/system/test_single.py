@@ -53,11 +53,17 @@ def test_a_system_of_one_steps_as_the_body_does(name, changes, backend):
 
 @pytest.mark.parametrize("name", ["spin", "point-absorber"])
 def test_the_systems_state_and_the_bodys_are_one_motion(name):
-    """to_system then from_system gives the body's state back to round-off (a state handed in from outside, a reset's)."""
+    """to_system then from_system gives the body's state back: exactly where the system's state keeps it, to round-off from
+    the coordinates and velocities alone (a state made by hand, a reset's)."""
     sim, system, _ = system_run(load_scene(name), "numpy")
     sim.step(25)
     m = Motion(sim.state, sim.joint_theta, sim.pto_energy)
-    back = from_system(system, sim.joint, to_system(system, sim.joint, m))
+    s = to_system(system, sim.joint, m)
+    assert from_system(system, sim.joint, s).state is m.state  # its body's own state, carried
+    made = dataclasses.replace(s)  # a state made from another keeps no body of its own: its coordinates give it
+    with pytest.raises(AttributeError):
+        made.x_world
+    back = from_system(system, sim.joint, made)
     assert back.state.t == m.state.t and back.theta == m.theta and back.absorbed == m.absorbed
     for a, b in zip(back.state.as_vector(), m.state.as_vector()):
         assert a == pytest.approx(b, rel=1e-12, abs=1e-12)

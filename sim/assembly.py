@@ -18,14 +18,13 @@ import numpy as np
 from sim.bodies.rotation import quat_to_matrix
 from sim.bodies.state import State
 from sim.compiling import default_backend, kernels_ready, warm_up
-from sim.control.laws import JointState, WaveState, of_constraint, stiffness_check, wrap
+from sim.control.laws import JointState, WaveState
 from sim.errors import ConfigError, SimulationDiverged
 from sim.lines.moorings import Moorings, line_file
 from sim.scene.config import SceneConfig, validate, with_overrides
 from sim.simulation import Simulation
 from sim.system.compiled import CompiledStep
 from sim.system.frame import observe
-from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.tree import System, SystemState, body_frames, build, lines_scene, moored_body
 
@@ -80,45 +79,22 @@ class Assembly(Simulation):
     # take-off control (control/laws.py)
 
     def _make_controllers(self) -> list:
-        """Each joint's take-off controller (the one `control` gave, else its [constraint]'s), its law set for the first step;
-        a negative spring checked against the joint's own stiffness (system_frequency.stiffness, with the springs)."""
+        """Each joint's controller (Simulation._make_controllers), its law into the system for the first step."""
 
-        system, entries = self.system, {e.name: e for e in self.scene.bodies}
-        stiff = None
-        out = []
-        for j, g in enumerate(system.joints):
-            c, i = entries[g.name].constraint, g.dofs.start
-            if j not in self._custom and c.pto_stiffness < 0:
-                if stiff is None:
-                    stiff = stiffness(system, replace(self.start, theta=np.zeros_like(self.start.theta), v=np.zeros_like(self.start.v)))
-                e = np.zeros(system.n_dofs)
-                e[i] = 1.0
-                stiffness_check(c.controller, c.pto_stiffness, stiff - c.pto_stiffness * np.outer(e, e), e, f"[[bodies]] {g.name}: ")
-            controller = self._custom.get(j) or of_constraint(c)
-            controller.reset()
-            out.append(controller)
+        out = super()._make_controllers()
+        system = self.system
         system.laws = [c.linear or law for c, law in zip(out, system.passive_laws())]
         self._group_index = [system.groups.index(g) for g in system.joints]
         return out
 
+    def _constraint_of(self, name: str) -> tuple:
+        return next(e.constraint for e in self.scene.bodies if e.name == name), f"[[bodies]] {name}: "
+
     @property
-    def switching(self) -> bool:
-        """Whether some take-off's law changes from step to step (a controller other than a spring and damper)."""
-        return any(c.linear is None for c in self.controllers)
+    def _start(self):
+        return self.start
 
-    def control(self, controller, body: str) -> None:
-        """Drive the take-off of `body`'s joint (the body a joint's group is named by) by `controller`: a callable
-        (t, control.JointState, control.WaveState) -> force (N or N m, held over each step) or a control.Controller;
-        None: back to the scene's."""
-
-        names = [g.name for g in self.system.joints]
-        if body not in names:
-            raise ConfigError(f"no take-off on {body!r}: the joints with one are on {', '.join(names) or 'no body'}")
-        j = names.index(body)
-        if controller is None:
-            self._custom.pop(j, None)
-        else:
-            self._custom[j] = wrap(controller)
+    def _controllers_changed(self) -> None:
         self.controllers = self._make_controllers()
         self._check_exact()
         self._repack()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -14,7 +15,7 @@ from sim.bodies.state import State, angular_momentum, angular_velocity, initial_
 from sim.compiling import default_backend, kernels_ready
 from sim.control.laws import JointState, Law, WaveState, of_constraint, stiffness_check, wrap
 from sim.dynamics.integrators import make_integrator
-from sim.dynamics.joints import WorldJoint, stiffness_along
+from sim.dynamics.joints import WorldJoint
 from sim.errors import ConfigError, SimulationDiverged
 from sim.hydro.forces import Model
 from sim.hydro.hydrostatics import sampled_model_warning
@@ -23,6 +24,7 @@ from sim.lines.moorings import Moorings, moored
 from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.frame import Frame, observe
+from sim.system.frequency import stiffness
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
 from sim.system.tree import System, SystemState
 from sim.water.records import describe
@@ -78,9 +80,9 @@ class Simulation:
         """moorings.Moorings: the scene's mooring lines in MoorDyn, or None."""
         self.pto_energy = 0.0
         """The energy the joint's take-off has absorbed since the start, J."""
-        self.controller = None
-        """control.Controller: the joint's take-off control (None without a joint that moves)."""
-        self._custom = None  # a controller given from Python (`control`), kept over scene changes
+        self.controllers: list = []
+        """Each joint's take-off controller (control/laws.py): a body alone's, one on a slide or a hinge."""
+        self._custom: dict = {}  # controllers given from Python (`control`), by joint, kept over scene changes
         self.single = Single(self._model(body), make_integrator(scene.step.integrator, scene.step.rtol, scene.step.atol), None)
         """The step (system/single.py): the body's model, integrator and joint, and the compiled twin."""
         self.body_state = initial_state(body, scene)
@@ -152,29 +154,72 @@ class Simulation:
         self._check_backend()
 
     def _make_controller(self) -> None:
-        """The joint's take-off control: the one `control` gave, else the scene's (control/laws.py), a negative spring checked
-        against the joint's own stiffness."""
+        """The joint's take-off controller (_make_controllers), its law set for the first step."""
 
+        self.controllers = self._make_controllers()
         j = self.joint
-        self._law = Law()
+        self._law = Law() if self.controller is None else self.controller.linear or Law(0.0, j.stiffness, j.damping)
         """The take-off's law over the last step (the frame's force and power)."""
-        if j is None or not j.dofs:
-            self.controller = None
-            return
-        c = self.scene.constraint
-        if self._custom is None and c.pto_stiffness < 0:
-            stiffness_check(c.controller, c.pto_stiffness, [[stiffness_along(self.model, j)]], [1.0])
-        self.controller = self._custom or of_constraint(c)
-        self.controller.reset()
-        self._law = self.controller.linear or Law(0.0, j.stiffness, j.damping)
 
-    def control(self, controller) -> None:
-        """Drive the joint's take-off by `controller`: a callable (t, control.JointState, control.WaveState) -> force
-        (N or N m, held over each step), or a control.Controller; None: back to the scene's [constraint] controller."""
+    @property
+    def controller(self):
+        """control.Controller: the joint's take-off control (None without a joint that moves)."""
+        return self.controllers[0] if self.controllers else None
 
-        if self.joint is None or not self.joint.dofs:
-            raise ConfigError("a take-off controller needs the body on a prismatic or revolute joint ([constraint] joint)")
-        self._custom = None if controller is None else wrap(controller)
+    # take-off control (control/laws.py), one path for every scene: each joint of the system (a body alone: its own)
+
+    def _make_controllers(self) -> list:
+        """Each joint's take-off controller (the one `control` gave, else its [constraint]'s), reset; a negative spring checked
+        against the stiffness of the whole system at rest without it (system/frequency.stiffness, central differences)."""
+
+        system, stiff, out = self.system, None, []
+        for j, g in enumerate(system.joints):
+            c, where = self._constraint_of(g.name)
+            if j not in self._custom and c.pto_stiffness < 0:
+                if stiff is None:
+                    stiff = stiffness(system, replace(self._start, theta=np.zeros_like(self._start.theta), v=np.zeros_like(self._start.v)))
+                e = np.zeros(system.n_dofs)
+                e[g.dofs.start] = 1.0
+                stiffness_check(c.controller, c.pto_stiffness, stiff - c.pto_stiffness * np.outer(e, e), e, where)
+            controller = self._custom.get(j) or of_constraint(c)
+            controller.reset()
+            out.append(controller)
+        return out
+
+    def _constraint_of(self, name: str) -> tuple:
+        """(the [constraint] of the joint's body, where to say it is in a message)."""
+        return self.scene.constraint, ""
+
+    @property
+    def _start(self) -> SystemState:
+        """The system's starting state (the joints' coordinates are 0 there)."""
+        return self.state
+
+    @property
+    def switching(self) -> bool:
+        """Whether some take-off's law changes from step to step (a controller other than a spring and damper)."""
+        return any(c.linear is None for c in self.controllers)
+
+    def control(self, controller, body: str | None = None) -> None:
+        """Drive the take-off of `body`'s joint (one of several: the body a joint's group is named by; a body alone: its own)
+        by `controller`: a callable (t, control.JointState, control.WaveState) -> force (N or N m, held over each step) or a
+        control.Controller; None: back to the scene's [constraint] controller."""
+
+        names = [g.name for g in self.system.joints]
+        if body is None and not self.scene.bodies:
+            if not names:
+                raise ConfigError("a take-off controller needs the body on a prismatic or revolute joint ([constraint] joint)")
+            body = names[0]
+        if body not in names:
+            raise ConfigError(f"no take-off on {body!r}: the joints with one are on {', '.join(names) or 'no body'}")
+        j = names.index(body)
+        if controller is None:
+            self._custom.pop(j, None)
+        else:
+            self._custom[j] = wrap(controller)
+        self._controllers_changed()
+
+    def _controllers_changed(self) -> None:
         self._make_controller()
 
     def _next_law(self, s: State, theta: float):

@@ -20,13 +20,12 @@ from sim.bodies.state import State
 from sim.compiling import default_backend, kernels_ready, warm_up
 from sim.control.laws import JointState, WaveState
 from sim.errors import ConfigError, SimulationDiverged
-from sim.lines.moorings import Moorings, line_file
 from sim.scene.config import SceneConfig, validate, with_overrides
 from sim.simulation import Simulation
 from sim.system.compiled import CompiledStep
 from sim.system.frame import observe
 from sim.system.linear import exact_linear
-from sim.system.tree import System, SystemState, body_frames, build, lines_scene, moored_body
+from sim.system.tree import System, SystemState, body_frames, build
 
 
 class Assembly(Simulation):
@@ -46,9 +45,8 @@ class Assembly(Simulation):
         self.check_seconds = 0.0
         self.stepper = None
         """The compiled system step (system_compiled.CompiledStep) on the numba backend, else None: System.step."""
-        self.moored = moored_body(scene)
-        """The index of the body the mooring lines hold (None: no lines)."""
-        self.moorings = self._moorings()
+        self.moorings = None
+        self._moor()
         self.notes: list[str] = []
         self._custom: dict = {}  # controllers given from Python (`control`), by joint
         self.controllers = self._make_controllers()
@@ -248,11 +246,9 @@ class Assembly(Simulation):
         self.scene, self.system, self.state, self.start, self._frame = scene, system, state, start, None
         self.controllers = self._make_controllers()
         if self.moorings is not None and not (lines or restarted):
-            for b in self.attached:
-                self.system.held[b] = (self.moorings.loads[b] if len(self.moorings.bodies) > 1 else self.moorings.load).copy()
+            self._hold_lines()
         else:
-            self.close()
-            self.moorings = self._moorings()
+            self._moor()
         self._check_exact()
         self.use_backend(backend if backend == "numpy" or self.kernels_ready else "numpy")
 
@@ -260,31 +256,12 @@ class Assembly(Simulation):
 
         self.exact = None if self.switching else exact_linear(self.system, self.state)
 
-    def _moorings(self):
-        """The lines in MoorDyn at the starting state (lines/moorings.py), or None."""
-        if self.moored is None:
-            return None
+    def _kinematics_at_rest(self) -> list:
+        return self._kinematics(self.state, from_system=True)
 
-        k, s = self.moored, self.start
-        attach = self.scene.moorings.attach.split()
-        if not attach:  # every fairlead on the one body the lines hold
-            self.attached = [k]
-            pose = self.system.pose(s)
-            nu = pose.J[k] @ s.v
-            lines = Moorings.of_scene(lines_scene(self.scene, k), pose.x[k], pose.R[k], nu[:3], nu[3:])
-            self.system.held[k] = lines.load.copy()
-            return lines
-
-        names = self.body_names
-        owner = "nearest" if attach == ["nearest"] else [names.index(a) for a in attach]
-        bodies = self._kinematics(s, from_system=True)
-        path = line_file(self.scene)
-        lines = Moorings(path.read_text(), *bodies[0], bodies=bodies, owner=owner, folder=path.parent).counting(self.scene.moorings.energy)
-        self.attached = sorted(set(lines.owner.tolist()))
-        """The bodies the lines hold (scene order)."""
+    def _hold_lines(self) -> None:
         for b in self.attached:
-            self.system.held[b] = lines.loads[b].copy()
-        return lines
+            self.system.held[b] = (self.moorings.loads[b] if len(self.moorings.bodies) > 1 else self.moorings.load).copy()
 
     def _kinematics(self, s: SystemState, from_system: bool = False) -> list:
         """Each body's (x, R, u, omega) at s, from the kinematics of the step that runs."""
@@ -306,9 +283,7 @@ class Assembly(Simulation):
             controller.reset()
         self.system.laws = [c.linear or law for c, law in zip(self.controllers, self.system.passive_laws())]
         self._repack()
-        if self.moorings is not None:
-            self.moorings.close()
-            self.moorings = self._moorings()
+        self._moor()
         self._frame = None
 
     def close(self) -> None:

@@ -20,13 +20,13 @@ from sim.errors import ConfigError, SimulationDiverged
 from sim.hydro.forces import Model
 from sim.hydro.hydrostatics import sampled_model_warning
 from sim.hydro.radiation import make_radiation
-from sim.lines.moorings import Moorings, moored
+from sim.lines.moorings import Moorings, line_file, moored
 from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.frame import Frame, observe
 from sim.system.frequency import stiffness
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
-from sim.system.tree import System, SystemState
+from sim.system.tree import System, SystemState, lines_scene, moored_body
 from sim.water.records import describe
 from sim.water.seas import make_water
 
@@ -233,17 +233,41 @@ class Simulation:
                                         WaveState(self.model.water, j.x0[:2], s.t))  # fmt: skip
         return self._law
 
-    def _moor(self) -> None:
-        """(Re)start the mooring lines at the current state: MoorDyn finds their shape at rest for it."""
-        if self.moorings is not None:
-            self.moorings.close()
-            self.moorings = None
-        if not moored(self.scene):
-            return
+    # the mooring lines (MoorDyn, lines/moorings.py), one path for every scene: on one body, or shared by several
 
-        s, R = self.body_state, self.body_state.R_world_body
-        self.moorings = Moorings.of_scene(self.scene, s.x_world, R, s.u_world, angular_velocity(self.body, R, s.L_world))
-        self.moorings.t = s.t
+    def _moor(self) -> None:
+        """(Re)start the mooring lines where the bodies are now: MoorDyn finds their shape at rest there. Every fairlead on
+        the one body the lines hold ([moorings] body), or each on its own ([moorings] attach)."""
+        self.close()
+        self.moorings, self.attached = None, []
+        self.moored = moored_body(self.scene)
+        """The index of the body the mooring lines hold (None: no lines)."""
+        if self.moored is None:
+            return
+        k, bodies = self.moored, self._kinematics_at_rest()
+        attach = self.scene.moorings.attach.split()
+        if not attach:
+            lines = Moorings.of_scene(lines_scene(self.scene, k), *bodies[k])
+            self.attached = [k]
+            """The bodies the lines hold (scene order)."""
+        else:
+            owner = "nearest" if attach == ["nearest"] else [self.body_names.index(a) for a in attach]
+            path = line_file(self.scene)
+            lines = Moorings(path.read_text(), *bodies[0], bodies=bodies, owner=owner, folder=path.parent).counting(
+                self.scene.moorings.energy
+            )
+            self.attached = sorted(set(lines.owner.tolist()))
+        lines.t = self.state.t
+        self.moorings = lines
+        self._hold_lines()
+
+    def _kinematics_at_rest(self) -> list:
+        """Each body's (x, R, u, omega) now, as the lines start from it (a body alone: its own state, exactly)."""
+        s = self.body_state
+        return [(s.x_world, s.R_world_body, s.u_world, angular_velocity(self.body, s.R_world_body, s.L_world))]
+
+    def _hold_lines(self) -> None:
+        """The lines' pull now into the loads held on the bodies they hold (for the next step)."""
         self.model.held[:] = self.moorings.load
 
     @property
@@ -521,7 +545,7 @@ class Simulation:
             self.scene = old  # e.g. radiation asked for a body that sinks: nothing changed
             raise
         if self.moorings is not None:
-            self.model.held[:] = self.moorings.load  # (a new model starts with the pull as it is)
+            self._hold_lines()  # (a new model starts with the pull as it is)
         self._sync_memory()
         self._rebase_energy()
 

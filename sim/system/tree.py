@@ -665,8 +665,9 @@ def moored_body(scene) -> int | None:
 
 
 def lines_scene(scene, k: int):
-    """The scene as the lines of body k see it: its [initial] table is that body's (where their fairleads start)."""
-    return replace(scene, initial=scene.bodies[k].initial)
+    """The scene as the lines of body k see it: its [initial] table is that body's (where their fairleads start); a body
+    alone's scene is its own."""
+    return replace(scene, initial=scene.bodies[k].initial) if scene.bodies else scene
 
 
 def moored_lowest(scene, models: list, starts: list) -> float | None:

@@ -11,21 +11,21 @@ welded member's mass changed). A new joint kind or tree starts the scene afresh 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
-from sim.bodies.rotation import quat_to_matrix
 from sim.bodies.state import State
 from sim.compiling import default_backend, kernels_ready, warm_up
 from sim.control.laws import JointState, WaveState
 from sim.errors import ConfigError, SimulationDiverged
 from sim.scene.config import SceneConfig, validate, with_overrides
 from sim.simulation import Simulation
+from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
 from sim.system.compiled import CompiledStep
-from sim.system.frame import observe
+from sim.system.frame import AssemblyFrame, observe
 from sim.system.linear import exact_linear
-from sim.system.tree import System, SystemState, body_frames, build
+from sim.system.tree import SystemState, body_frames, build
 
 
 class Assembly(Simulation):
@@ -221,8 +221,8 @@ class Assembly(Simulation):
         old, scene = self.scene, with_overrides(self.scene, **changes)
         if scene == old:
             return
-        if _only_take_offs(old, scene):
-            groups = [_with_take_off(g, scene) for g in self.system.groups]
+        if only_take_offs(old, scene):
+            groups = [with_take_off(g, scene) for g in self.system.groups]
             joints = [g for g in groups if g.kind in ("prismatic", "revolute")]
             kept = (self.scene, self.system.groups, self.system.joints)
             self.scene, self.system.groups, self.system.joints = scene, groups, joints
@@ -238,8 +238,8 @@ class Assembly(Simulation):
                 self.use_backend("numba")
             return
         system, start = build(scene)  # a failure here leaves the run as it was
-        restarted = _tree(system) != _tree(self.system)
-        state = start if restarted else _carried(self.system, system, self.state, start)
+        restarted = tree_shape(system) != tree_shape(self.system)
+        state = start if restarted else carried(self.system, system, self.state, start)
         if restarted:
             self.notes.append("a joint's kind or the bodies' tree changed: the scene started again from its starting pose")
         backend, lines = self.backend, (old.moorings, old.fluid.rho, old.fluid.g) != (scene.moorings, scene.fluid.rho, scene.fluid.g)
@@ -367,102 +367,6 @@ class Assembly(Simulation):
     def columns(self) -> list[str]:
         """The CSV's header (AssemblyFrame.columns)."""
         return self.frame().columns()
-
-
-@dataclass(frozen=True, eq=False)
-class AssemblyFrame:
-    t: float
-    bodies: list
-    """Each body's dict: name, x, q, u, omega (body_frames)."""
-    joints: list
-    """Each joint's (name, theta, rate, P_pto, E_pto, F_pto): P_pto the power its take-off absorbs (its law's damper and
-    force: the spring's is stored, E_spring), F_pto its force by its controller's law."""
-    energies: dict
-    joint_axes: list = field(default_factory=list)
-    """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
-    lines: tuple = ()
-    """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
-    mooring: tuple = ()
-    """The lines' pull on the moored body (Fx, Fy, Fz, N), the largest fairlead tension and each fairlead's, in the order of
-    the lines' input (N); empty without lines."""
-    E_rad: float = 0.0
-    """Energy the radiated waves have carried away so far, J (0 without radiation)."""
-    line_tensions: tuple = ()
-    """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
-    line_energy: tuple = ()
-    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise)."""
-
-    @property
-    def E_pto(self) -> float:
-        return sum(j[4] for j in self.joints)
-
-    @property
-    def E_total(self) -> float:
-        """Kinetic, gravity, hydrostatic and the take-offs' springs, J (E_total + E_pto is conserved without damping, drag and waves)."""
-        return sum(self.energies.values())
-
-    def columns(self) -> list[str]:
-        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the lines'
-        pull; the energies, E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without
-        damping, drag and waves)."""
-        cols = ["t"]
-        for b in self.bodies:
-            cols += [f"{b['name']}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
-        for name, *_ in self.joints:
-            cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto", "F_pto")]
-        if self.mooring:
-            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max", *(f"T_fair_{i + 1}" for i in range(len(self.mooring) - 4))]
-        return (
-            cols
-            + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
-            + (["E_lines", "D_lines"] if self.line_energy else [])
-        )
-
-    def row(self) -> list[float]:
-        out = [self.t]
-        for b in self.bodies:
-            out += [*b["x"], *b["q"], *b["u"], *b["omega"]]
-        for _, *values in self.joints:
-            out += values
-        out += list(self.mooring)
-        e = self.energies
-        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad, *self.line_energy]
-
-
-def _only_take_offs(old: SceneConfig, new: SceneConfig) -> bool:
-    """Whether the scenes differ in their joints' take-offs alone."""
-
-    def strip(scene):
-        bodies = tuple(replace(e, constraint=replace(e.constraint, pto_damping=0.0, pto_stiffness=0.0, controller="passive", latch_time=0.0,
-                                                     declutch_time=0.0, pto_max_force=None)) for e in scene.bodies)  # fmt: skip
-        return replace(scene, bodies=bodies)
-
-    return strip(old) == strip(new)
-
-
-def _with_take_off(group, scene: SceneConfig):
-    """The group with its joint's take-off as the scene gives it (a group is named by its first body)."""
-    entry = next(e for e in scene.bodies if e.name == group.name)
-    return replace(group, stiffness=float(entry.constraint.pto_stiffness), damping=float(entry.constraint.pto_damping))
-
-
-def _tree(system: System) -> list:
-    return [(g.kind, g.parent, g.dofs, len(g.members)) for g in system.groups]
-
-
-def _carried(old: System, new: System, s: SystemState, start: SystemState) -> SystemState:
-    """The motion of `s` on the rebuilt system: coordinates and velocities as they are; a free group moved by the shift of
-    its centre of mass in its own frame (its frame's axes are the world's at the start), its velocity now that of its new
-    centre of mass; the memory kept where the
-    radiation is the same size (zeros otherwise: its states mean something else)."""
-    x, v = s.x_free.copy(), s.v.copy()
-    for g_old, g_new in zip(old.groups, new.groups):
-        if g_new.kind == "free":
-            shift = quat_to_matrix(s.q_free[g_new.coordinate]) @ (g_new.origin - g_old.origin)
-            x[g_new.coordinate] += shift
-            v[g_new.dofs.start : g_new.dofs.start + 3] += np.cross(v[g_new.dofs.start + 3 : g_new.dofs.stop], shift)  # u + omega x r
-    memory = s.memory if len(s.memory) == len(start.memory) else np.zeros_like(start.memory)
-    return replace(s, x_free=x, v=v, memory=memory, E_rad=s.E_rad if len(start.memory) else 0.0)
 
 
 Simulation.several = Assembly  # Simulation(scene) of several bodies makes one of these

@@ -134,7 +134,7 @@ class Snapshot(Posed):
     parts: tuple = ()
     """Every body (Part), in the scene's order (one body: itself)."""
     run_frame: object = None
-    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.assembly.AssemblyFrame)."""
+    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.system.frame.AssemblyFrame)."""
 
     @property
     def run(self):

@@ -1,9 +1,10 @@
-"""What a run shows of a body at one instant: its Frame (pose, velocities, loads, energies) for viewers, CSV and tests."""
+"""What a run shows at one instant, for viewers, CSV and tests: a body's Frame (pose, velocities, loads, energies), and a
+scene of several bodies' AssemblyFrame (each body's pose and twist, each joint's take-off, the lines, the energies)."""
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -159,3 +160,63 @@ def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: f
     if kernels is not None and model.water.flat:
         return float(kernels.surface.exact_hydrostatic_energy(x, R, model.body.packed, model.water.rho * model.water.g))
     return hydrostatic_energy(model.water, wet_panels(model.body, model.water, x, R, t))
+
+
+@dataclass(frozen=True, eq=False)
+class AssemblyFrame:
+    t: float
+    bodies: list
+    """Each body's dict: name, x, q, u, omega (body_frames)."""
+    joints: list
+    """Each joint's (name, theta, rate, P_pto, E_pto, F_pto): P_pto the power its take-off absorbs (its law's damper and
+    force: the spring's is stored, E_spring), F_pto its force by its controller's law."""
+    energies: dict
+    joint_axes: list = field(default_factory=list)
+    """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
+    lines: tuple = ()
+    """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
+    mooring: tuple = ()
+    """The lines' pull on the moored body (Fx, Fy, Fz, N), the largest fairlead tension and each fairlead's, in the order of
+    the lines' input (N); empty without lines."""
+    E_rad: float = 0.0
+    """Energy the radiated waves have carried away so far, J (0 without radiation)."""
+    line_tensions: tuple = ()
+    """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
+    line_energy: tuple = ()
+    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise)."""
+
+    @property
+    def E_pto(self) -> float:
+        return sum(j[4] for j in self.joints)
+
+    @property
+    def E_total(self) -> float:
+        """Kinetic, gravity, hydrostatic and the take-offs' springs, J (E_total + E_pto is conserved without damping, drag and waves)."""
+        return sum(self.energies.values())
+
+    def columns(self) -> list[str]:
+        """The CSV's header: t; each body's pose and twist; each joint's coordinate, rate, take-off power and energy; the lines'
+        pull; the energies, E_rad the radiated waves' (as the one-body CSV's: E_total + E_pto + E_rad is conserved without
+        damping, drag and waves)."""
+        cols = ["t"]
+        for b in self.bodies:
+            cols += [f"{b['name']}_{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz", "ux", "uy", "uz", "wx", "wy", "wz")]
+        for name, *_ in self.joints:
+            cols += [f"{name}_{c}" for c in ("theta", "rate", "P_pto", "E_pto", "F_pto")]
+        if self.mooring:
+            cols += ["Fx_moor", "Fy_moor", "Fz_moor", "T_fair_max", *(f"T_fair_{i + 1}" for i in range(len(self.mooring) - 4))]
+        return (
+            cols
+            + ["E_kin", "E_grav", "E_hyd", "E_spring", "E_pto", "E_total", "E_rad"]
+            + (["E_lines", "D_lines"] if self.line_energy else [])
+        )
+
+    def row(self) -> list[float]:
+        out = [self.t]
+        for b in self.bodies:
+            out += [*b["x"], *b["q"], *b["u"], *b["omega"]]
+        for _, *values in self.joints:
+            out += values
+        out += list(self.mooring)
+        e = self.energies
+        return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad, *self.line_energy]

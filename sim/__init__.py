@@ -6,7 +6,6 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from sim import assembly  # noqa: F401, E402  (registers the runner of several bodies: Simulation(scene) of [[bodies]] makes one)
 from sim.bodies.body import Body, make_body  # noqa: E402
 from sim.bodies.state import State
 from sim.dynamics.integrators import INTEGRATORS, make_integrator

@@ -152,7 +152,7 @@ def rested(mesh, **changes):
     from sim.hydro.hydrostatics import at_rest
 
     sim = Simulation(with_overrides(load_scene("rest"), body__density=500.0, fluid__damping=0.0, **changes), mesh=mesh)
-    sim.state = dataclasses.replace(sim.body_state, x_world=np.array([0.0, 0.0, at_rest(sim.body, sim.params)[0]]))
+    sim.body_state = dataclasses.replace(sim.body_state, x_world=np.array([0.0, 0.0, at_rest(sim.body, sim.params)[0]]))
     return sim
 
 

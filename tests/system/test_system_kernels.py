@@ -1,5 +1,5 @@
 """The compiled system step (sim/kernels/system.py, kinematics.py, expm.py; sim/system/compiled.py) against the numpy
-reference (sim/system/tree.py): each stage to round-off, then whole trajectories, and an Assembly switching between them."""
+reference (sim/system/tree.py): each stage to round-off, then whole trajectories, and a run of several bodies switching between them."""
 
 import dataclasses
 
@@ -140,7 +140,7 @@ def test_a_hinged_chain_steps_as_the_reference(tmp_path):
     assert gap < 1e-9 and motion > 0.05
 
 
-def test_an_assembly_switches_between_backends_between_steps():
+def test_a_run_of_several_bodies_switches_between_backends_between_steps():
     """The same run stepped numpy, compiled, numpy: the all-numpy trajectory to 1e-9; the compiled step is what ran."""
     a, b = Simulation(planar_rm3(), backend="numpy"), Simulation(planar_rm3(), backend="numpy")
     a.step(60)
@@ -159,7 +159,7 @@ def test_an_assembly_switches_between_backends_between_steps():
 @pytest.mark.slow
 def test_rm3_with_its_compiled_loads_steps_as_the_reference():
     """The rm3 preset (panels, regular waves): each body's compiled loads from Python, the rest compiled, against the all-numpy
-    Assembly over 200 steps, to the sea expansion's bound (the loads' twin sums the sea differently: 1e-9)."""
+    run over 200 steps, to the sea expansion's bound (the loads' twin sums the sea differently: 1e-9)."""
     a, b = Simulation(load_scene("rm3"), backend="numpy"), Simulation(load_scene("rm3"), backend="numpy")
     a.use_backend("numba")
     a.step(200)

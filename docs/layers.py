@@ -72,7 +72,7 @@ def diagram(layers: list[list[str]], graph: grimp.ImportGraph) -> list[str]:
 
 def picture() -> str:
     """The layers, high to low, as markdown: per contract a diagram, then a table of layer, module, job and imports."""
-    graph = grimp.build_graph("sim", "app", include_external_packages=False, exclude_type_checking_imports=True)
+    graph = grimp.build_graph("sim", "app", include_external_packages=False, exclude_type_checking_imports=True, cache_dir=None)
     out = [START, ""]
     for contract in contracts():
         layers = layers_of(contract)

@@ -44,7 +44,7 @@ from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
 from sim.system.compiled import CompiledStep
-from sim.system.frame import AssemblyFrame, Frame, observe
+from sim.system.frame import AssemblyFrame, Frame, assembly_frame, observe
 from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
@@ -671,22 +671,7 @@ class Simulation:
 
     def _bodies_frame(self) -> AssemblyFrame:
         if self._frame[0] is not self.state:
-            s = self.state
-            joints = []
-            for g, law in zip(self.system.joints, self.system.laws):
-                theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
-                joints.append(
-                    (g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate))
-                )
-            lines, pull, tensions, energy = (), (), (), ()
-            if self.moorings is not None:
-                energy = self.moorings.energy_now()
-                lines, tensions = tuple(self.moorings.lines()), tuple(self.moorings.line_tensions())
-                each = self.moorings.fairlead_tensions()
-                total = self.moorings.loads[:, :3].sum(axis=0) if len(self.moorings.bodies) > 1 else self.moorings.load[:3]
-                pull = (*total, float(each.max()), *(float(t) for t in each))
-            self._frame = (s, AssemblyFrame(s.t, body_frames(self.system, s), joints, self.system.energies(s), self.system.joint_axes(s), lines,
-                                            pull, float(s.E_rad), tensions, energy))  # fmt: skip
+            self._frame = (self.state, assembly_frame(self.system, self.state, self.moorings))
         return self._frame[1]
 
     def parts(self) -> list[Frame]:

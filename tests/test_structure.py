@@ -34,7 +34,7 @@ def test_the_layers_hold_as_written():
 def test_no_module_imports_one_that_imports_it_back():
     """No import cycle among the modules of sim, app and studies, however long, counting imports inside functions
     (a type named only for annotations, under TYPE_CHECKING, is no import at run time)."""
-    graph = grimp.build_graph("sim", "app", "studies", include_external_packages=False, exclude_type_checking_imports=True)
+    graph = grimp.build_graph("sim", "app", "studies", include_external_packages=False, exclude_type_checking_imports=True, cache_dir=None)
     cycles = [c for c in _strongly_connected(graph) if len(c) > 1]
     assert not cycles, cycles
 

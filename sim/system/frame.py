@@ -11,6 +11,7 @@ import numpy as np
 from sim.bodies.state import State, angular_velocity
 from sim.bodies.surface import wet_panels
 from sim.hydro.forces import Model, hydrostatic_energy
+from sim.system.tree import body_frames
 
 CSV_COLUMNS = (
     "t,x,y,z,qw,qx,qy,qz,ux,uy,uz,wx,wy,wz,Lx,Ly,Lz,Fx,Fy,Fz,Tx,Ty,Tz,E_kin,E_grav,E_hyd,E_total,A_sub,V_sub,eta,E_rad,E_hyd_model,P_diff,"
@@ -220,3 +221,20 @@ class AssemblyFrame:
         out += list(self.mooring)
         e = self.energies
         return out + [e["E_kin"], e["E_grav"], e["E_hyd"], e["E_spring"], self.E_pto, self.E_total, self.E_rad, *self.line_energy]
+
+
+def assembly_frame(system, s, moorings=None) -> AssemblyFrame:
+    """The frame of several bodies (system/tree.py) at the state s, with the mooring lines (lines/moorings.Moorings) or none."""
+    joints = []
+    for g, law in zip(system.joints, system.laws):
+        theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
+        joints.append((g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate)))
+    lines, pull, tensions, energy = (), (), (), ()
+    if moorings is not None:
+        energy = moorings.energy_now()
+        lines, tensions = tuple(moorings.lines()), tuple(moorings.line_tensions())
+        each = moorings.fairlead_tensions()
+        total = moorings.loads[:, :3].sum(axis=0) if len(moorings.bodies) > 1 else moorings.load[:3]
+        pull = (*total, float(each.max()), *(float(t) for t in each))
+    return AssemblyFrame(s.t, body_frames(system, s), joints, system.energies(s), system.joint_axes(s), lines, pull, float(s.E_rad), tensions,
+                         energy)  # fmt: skip

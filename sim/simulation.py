@@ -113,7 +113,7 @@ class Simulation:
         self._memory_of = None  # the radiation whose memory the state carries
         start = initial_state(body, scene)
         self.system = system_of_one(self.model, None, start)
-        self.state = to_system(self.system, None, Motion(start))
+        self._m, self._view = Motion(start), (None, None, None)
         self._join()
         self._moor()
         norm = float(np.linalg.norm(scene.initial.orientation))
@@ -154,11 +154,29 @@ class Simulation:
     @property
     def _motion(self) -> Motion:
         """A body alone's motion: its own state, its joint's coordinate and its take-off's absorbed energy."""
-        return from_system(self.system, self.joint, self.state)
+        return self._m
 
     def _move(self, m: Motion) -> None:
-        """A body alone to the motion m (its system of one's state)."""
-        self.state = to_system(self.system, self.joint, m)
+        """A body alone to the motion m (its system of one's state is made from it when asked: `state`)."""
+        self._m = m
+
+    @property
+    def state(self) -> SystemState:
+        """The run's state: its system's (a body alone's, made from its motion when asked, whose .x_world, .q_world_body,
+        .u_world, .L_world and .body read the body's own state exactly)."""
+        if self.single is None:
+            return self._state
+        m, system, view = self._view
+        if m is not self._m or system is not self.system:
+            self._view = (self._m, self.system, to_system(self.system, self.joint, self._m))
+        return self._view[2]
+
+    @state.setter
+    def state(self, state: SystemState) -> None:
+        if self.single is None:
+            self._state = state
+        else:
+            self._m = from_system(self.system, self.joint, state)
 
     def _resystem(self, model: Model, joint: WorldJoint | None) -> None:
         """A body alone's model or joint replaced: its system of one made again, its motion kept."""
@@ -170,7 +188,7 @@ class Simulation:
     @property
     def body_state(self) -> State:
         """A body alone's own state (bodies/state.State: x_world, q_world_body, u_world, L_world, exact)."""
-        return self.state.body
+        return self._m.state
 
     @body_state.setter
     def body_state(self, state: State) -> None:
@@ -428,7 +446,7 @@ class Simulation:
             lines = Moorings(path.read_text(), *bodies[0], bodies=bodies, owner=owner, folder=path.parent)
             lines = lines.counting(self.scene.moorings.energy)
             self.attached = sorted(set(lines.owner.tolist()))
-        lines.t = self.state.t
+        lines.t = self._m.state.t if self.single is not None else self.state.t
         self.moorings = lines
         self._hold_lines()
 
@@ -556,7 +574,7 @@ class Simulation:
         return self.state
 
     def _step_body(self, n: int) -> None:
-        checked = self.state
+        checked = self._m
         self.single.compiled = self.compiled
         law = None if self.controller is None else self._next_law
         try:
@@ -575,7 +593,7 @@ class Simulation:
         energy = frame.E_total
         if not m.state.is_finite() or not np.isfinite(energy) or energy - self._E_ref > 10.0 * self._E_scale:
             # a finite state far off (z = -8.6e211 after 50 compiled steps) overflows the energy to nan: diverged too
-            t, self.state = m.state.t, checked  # back to the last state that passed this check
+            t, self._m = m.state.t, checked  # back to the last state that passed this check
             what = (
                 f"the energy blew up ({energy:.3g} J from {self._E_ref:.3g} J)"
                 if np.isfinite(energy)
@@ -736,7 +754,7 @@ class Simulation:
     def _update_body(self, old: SceneConfig, scene: SceneConfig) -> None:
         """A body alone: a new geometry rebuilds the body and carries the motion over; a new mass keeps u and omega (so L
         scales with I); fluid changes replace the model; step changes the integrator or dt. Velocities are kept."""
-        kept = (self.state, self.system, self.model, self.joint, self.integrator)
+        kept = (self._m, self.system, self.model, self.joint, self.integrator)
         self.scene = scene
         try:
             self._apply(old, scene)
@@ -746,7 +764,7 @@ class Simulation:
                 self._rejoin()
         except Exception:  # e.g. radiation asked for a body that sinks: nothing changed
             self.scene = old
-            self.state, self.system, self.single.model, self.single.joint, self.single.integrator = kept
+            self._m, self.system, self.single.model, self.single.joint, self.single.integrator = kept
             raise
         if self.moorings is not None:
             self._hold_lines()  # (a new model starts with the pull as it is)

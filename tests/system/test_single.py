@@ -95,3 +95,23 @@ def test_a_joint_of_one_is_the_systems_joint():
     (point, direction) = system.joint_axes(s)[0]
     assert np.allclose(direction, sim.joint.axis) and abs(np.cross(point - sim.frame().joint_axis[0], direction)).max() < 1e-12
     assert dataclasses.replace(s).v.shape == (1,)
+
+
+@pytest.mark.parametrize("name", ["spin", "point-absorber"])
+def test_a_run_of_one_body_is_a_system_of_one(name):
+    """The runner's state is the system's for a body alone too (its body's own state inside), its joints the system's,
+    and a run reset to another's state goes on as that run does (the pose and twist to round-off)."""
+    from sim.system.tree import SystemState
+
+    run = Simulation(load_scene(name), backend="numpy")
+    run.step(40)
+    assert type(run.state) is SystemState and run.body_names == ["body"] and run.state.body is run.body_state
+    assert [g.kind for g in run.system.joints] == ([run.joint.kind] if run.joint is not None else [])
+    fresh = Simulation(load_scene(name), backend="numpy")
+    fresh.reset(run.state)
+    run.step(30)
+    fresh.step(30)
+    a, b = run.frame(), fresh.frame()
+    for got, want in ((a.x_world, b.x_world), (a.q_world_body, b.q_world_body), (a.u_world, b.u_world), (a.omega_world, b.omega_world)):
+        assert np.allclose(got, want, rtol=1e-10, atol=1e-12)
+    assert a.t == b.t

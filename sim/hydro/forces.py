@@ -143,11 +143,25 @@ class Term:
         return fluid.rho != 0.0 and all(getattr(fluid, p.key) != 0 for p in self.params)
 
 
+HEAVE_DAMPING = Param("fluid", "heave_damping", 0.0, "Linear heave damping B_33: the body feels -B_33 w (w its vertical velocity) while "
+                      "wet, as the heave entry of a linear damping matrix (WEC-Sim's linearDamping)", "N s/m", lo=0.0, hi=1.0e9,
+                      label="Heave damping", gui=(0.0, 1.0e5, 100.0))  # fmt: skip
+
+
+def heave_damping(body, water, fluid, wet, twist, t) -> Load:
+    """-B_33 w on the centre of mass (no torque): the heave entry of a linear damping matrix, on the body's own vertical
+    velocity (as WEC-Sim's body linearDamping, not relative to the water); D = B_33 at (2, 2), the affine part zero."""
+    D = np.zeros((6, 6))
+    D[2, 2] = fluid.heave_damping
+    return Load(np.array([0.0, 0.0, -fluid.heave_damping * twist[2]]), np.zeros(3), D, np.zeros(6))
+
+
 TERMS: tuple[Term, ...] = (
     Term("gravity", gravity, used=lambda f: f.g != 0.0),
     Term("pressure", pressure, used=lambda f: f.rho * f.g != 0.0),
     Term("damping", damping, (DAMPING,), twist=True),
     Term("drag", drag, (DRAG_COEFFICIENT,), twist=True, linear=False),
+    Term("heave_damping", heave_damping, (HEAVE_DAMPING,), twist=True, used=lambda f: f.heave_damping != 0.0),
 )
 """Every force term, in the order the compiled kernels number them (bit i of their `terms` mask)."""
 

@@ -12,15 +12,15 @@ import numpy as np
 
 from .jit import JIT, njit
 from .layout import HELD
-from .spec import DAMPING, DRAG, GRAVITY, HAS_NONLINEAR, HOLDING, PRESSURE, TWIST_TERMS, USED, WET_TERMS
-from .terms import damping, drag, gravity, pressure
+from .spec import DAMPING, DRAG, GRAVITY, HAS_NONLINEAR, HEAVE_DAMPING, HOLDING, LINEAR_TWIST, PRESSURE, TWIST_TERMS, USED, WET_TERMS
+from .terms import damping, drag, gravity, heave_damping, pressure
 from .wet import wet_surface
 
 
 @njit(inline="always", **JIT)
 def pose_loads(x, R, t, model, s, sea):
-    """(F, T, D, wet): the pose terms' force and torque at a pose and time (and the held load), the linear damping matrix D
-    there, and whether any twist term has a wet surface to act on. Damping's part from the water's
+    """(F, T, D, wet): the pose terms' force and torque at a pose and time (and the held load), the linear twist terms' matrix
+    D there (damping's and the heave damping's), and whether any twist term has a wet surface to act on. Damping's part from the water's
     motion (its affine part, zero in still water) goes to s.ws[4] for twist_loads and linearised."""
     load = np.zeros(6)
     D = np.zeros((6, 6))
@@ -38,6 +38,8 @@ def pose_loads(x, R, t, model, s, sea):
         if is_wet and USED & DAMPING:
             D, affine = damping(model, wet)
             s.ws[4][:] = affine
+        if is_wet and USED & HEAVE_DAMPING:
+            D[2, 2] += heave_damping(model, wet)
     return load[:3], load[3:], D, is_wet
 
 
@@ -61,7 +63,7 @@ def twist_loads(x, R, u, w, model, D, wet, s, F, T):
     hot loop): d u_water - D (u, w) for linear damping (ws[4], zero in still water), plus the nonlinear ones."""
     if not wet:
         return
-    if USED & DAMPING:
+    if USED & LINEAR_TWIST:
         affine = s.ws[4]
         for i in range(3):
             F[i] += affine[i] - (D[i, 0] * u[0] + D[i, 1] * u[1] + D[i, 2] * u[2] + D[i, 3] * w[0] + D[i, 4] * w[1] + D[i, 5] * w[2])

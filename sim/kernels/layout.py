@@ -41,7 +41,7 @@ SCHEMES = {"euler": 0, "splitting": 1, "implicit": 2, "rk4": 3}
 MODELS = {"points": 0, "panels": 1, "cells": 2}
 """Force models (`surface.FORCE_MODELS`) by their number in the kernels."""
 TERM_PARAMS = [p.key for term in TERMS for p in term.params]
-COMPILED_TERMS = ("gravity", "pressure", "damping", "drag")
+COMPILED_TERMS = ("gravity", "pressure", "damping", "drag", "heave_damping")
 """The terms kernels/terms.py compiles, in registry order: a scene with any other runs on the numpy
 reference, with a note (a test checks this list against forces.TERMS)."""
 

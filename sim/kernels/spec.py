@@ -36,7 +36,9 @@ RADIATING = bool(SPEC.radiating)
 HOLDING = bool(SPEC.held)
 """Whether another model gives the body a load held over each step (the mooring lines: layout.HELD)."""
 
-GRAVITY, PRESSURE, DAMPING, DRAG = bit("gravity"), bit("pressure"), bit("damping"), bit("drag")
+GRAVITY, PRESSURE, DAMPING, DRAG, HEAVE_DAMPING = bit("gravity"), bit("pressure"), bit("damping"), bit("drag"), bit("heave_damping")
+LINEAR_TWIST = DAMPING | HEAVE_DAMPING
+"""Twist terms whose load is affine in the twist: their Jacobians sum into the pose's D (kernels/forces.py)."""
 USED = sum(bit(name) for name in SPEC.terms)
 """The scene's terms (bit i: forces.TERMS[i])."""
 TWIST_TERMS = sum(bit(t.name) for t in TERMS if t.twist)

@@ -16,7 +16,7 @@ from .layout import RHO, G, slot
 from .spec import CELLS, MODEL, MOVING, PANELS
 from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, clip, world_normal
 
-C_DAMPING, C_DRAG = slot("damping"), slot("drag_coefficient")
+C_DAMPING, C_DRAG, C_HEAVE_DAMPING = slot("damping"), slot("drag_coefficient"), slot("heave_damping")
 
 
 @njit(**JIT)
@@ -152,3 +152,10 @@ def drag(x, R, u, w, model, s, need_D):
                 if vq > 0.0:
                     _drag_node(lx, ly, lz, nx, ny, nz, tri_area * DUNAVANT4_WEIGHTS[q], vq, half_rc, F, T, D, need_D, g)
     return F, T, _mirrored(D)
+
+
+@njit(**JIT)
+def heave_damping(model, wet):
+    """B_33, its Jacobian's one entry (at (2, 2)): -B_33 w on the centre of mass (forces.heave_damping); no affine part.
+    (kernels/forces.py adds it into the pose's D in place: no 6 x 6 matrix a step where B_33 is 0.)"""
+    return model.coef[C_HEAVE_DAMPING]

@@ -15,15 +15,18 @@ from sim.water.seas import StillWater
 def numbers(model: Model, dt: float) -> dict[str, float]:
     """dt * omega_heave (water-plane area ~ V^(2/3)) and dt * lambda_max, the fastest damping rate:
     the largest eigenvalue of diag(M, I)^(-1/2) D diag(M, I)^(-1/2) with the whole surface wet (sway
-    and roll couple, so it exceeds d A / M). Quadratic drag's rate depends on the speed and is not
+    and roll couple, so it exceeds d A / M), the heave damping's B_33 in it. Quadratic drag's rate depends on the speed and is not
     counted here."""
     body, p = model.body, model.fluid
     omega = math.sqrt(p.rho * p.g * body.volume ** (2 / 3) / body.mass)
     rate = 0.0
-    if model.has("damping"):
-        all_wet = wet_points(body, StillWater(p.rho, p.g), np.array([0.0, 0.0, -1e9]), np.eye(3), 0.0)
+    if model.has("damping") or model.has("heave_damping"):
+        D = np.zeros((6, 6))
+        if model.has("damping"):
+            D += damping_matrix(p, wet_points(body, StillWater(p.rho, p.g), np.array([0.0, 0.0, -1e9]), np.eye(3), 0.0))
+        D[2, 2] += p.heave_damping  # (forces.heave_damping)
         w = np.concatenate([np.full(3, body.mass), body.inertia]) ** -0.5
-        rate = float(np.linalg.eigvalsh(w[:, None] * damping_matrix(p, all_wet) * w[None, :]).max())
+        rate = float(np.linalg.eigvalsh(w[:, None] * D * w[None, :]).max())
     return {"heave": dt * omega, "damping": dt * rate}
 
 

@@ -152,15 +152,6 @@ class Simulation:
         return Model(body, water, fluid, radiation, held=moored(scene))
 
     @property
-    def _motion(self) -> Motion:
-        """A body alone's motion: its own state, its joint's coordinate and its take-off's absorbed energy."""
-        return self._m
-
-    def _move(self, m: Motion) -> None:
-        """A body alone to the motion m (its system of one's state is made from it when asked: `state`)."""
-        self._m = m
-
-    @property
     def state(self) -> SystemState:
         """The run's state: its system's (a body alone's, made from its motion when asked, whose .x_world, .q_world_body,
         .u_world, .L_world and .body read the body's own state exactly)."""
@@ -179,11 +170,9 @@ class Simulation:
             self._m = from_system(self.system, self.joint, state)
 
     def _resystem(self, model: Model, joint: WorldJoint | None) -> None:
-        """A body alone's model or joint replaced: its system of one made again, its motion kept."""
-        m = self._motion
+        """A body alone's model or joint replaced: its system of one made again (its motion is kept as it is)."""
         self.single.model, self.single.joint = model, joint
         self.system = system_of_one(model, joint, initial_state(model.body, self.scene))
-        self._move(m)
 
     @property
     def body_state(self) -> State:
@@ -192,18 +181,17 @@ class Simulation:
 
     @body_state.setter
     def body_state(self, state: State) -> None:
-        m = self._motion
-        self._move(Motion(state, m.theta, m.absorbed))
+        self._m = replace(self._m, state=state)
 
     @property
     def joint_theta(self) -> float:
         """A body alone's joint coordinate, a hinge's whole turns counted (the pose alone gives it up to them); 0 when free."""
-        return self._motion.theta
+        return self._m.theta
 
     @property
     def pto_energy(self) -> float:
         """The energy a body alone's take-off has absorbed since the start, J."""
-        return self._motion.absorbed
+        return self._m.absorbed
 
     def _join(self) -> None:
         """The joint to the world about the scene's starting pose; the state put on it (its velocity projected)."""
@@ -214,12 +202,12 @@ class Simulation:
         if joint is not None:
             theta = joint.coordinate(s)
             s = joint.state(self.body, s.t, theta, joint.rate(self.body, s), s)
-        self._move(Motion(s, theta, 0.0))
+        self._m = Motion(s, theta, 0.0)
         self._make_controller()
 
     def _rejoin(self) -> None:
         """A changed joint or take-off: about the same starting pose, the run carried on (a new kind of joint: from where the body is)."""
-        old, m = self.joint, self._motion
+        old, m = self.joint, self._m
         s = m.state
         start = (old.x0, old.R0) if old is not None else (s.x_world, s.R_world_body)
         self._resystem(self.model, WorldJoint.of_scene(self.scene, *start))
@@ -227,7 +215,7 @@ class Simulation:
         if joint is not None:
             theta = joint.coordinate(s, near=m.theta if old is not None and old.kind == joint.kind else 0.0)
             s = joint.state(self.body, s.t, theta, joint.rate(self.body, s), s)
-        self._move(Motion(s, theta, m.absorbed))
+        self._m = Motion(s, theta, m.absorbed)
         self._make_controller()
         self._check_backend()
 
@@ -578,11 +566,11 @@ class Simulation:
         self.single.compiled = self.compiled
         law = None if self.controller is None else self._next_law
         try:
-            m = self.single.advance(self._motion, n, self.dt, law, self.moorings)
+            m = self.single.advance(self._m, n, self.dt, law, self.moorings)
         except StepFailed as e:
-            self._move(Motion(e.state, e.theta, e.absorbed))
+            self._m = e.motion
             raise SimulationDiverged(self.diagnose(e.t, e.why)) from None
-        self._move(m)
+        self._m = m
         if self.model.radiation is not None:
             rest = initial_state(self.body, self.scene).q_world_body
             turn = 2 * np.degrees(np.arccos(min(1.0, abs(float(rest @ m.state.q_world_body)))))
@@ -776,11 +764,11 @@ class Simulation:
         if any(getattr(old.body, k) != getattr(scene.body, k) for k in GEOMETRY) or exact_inertia(old) != exact_inertia(scene):
             self._rebuild_body(self._make_body(scene))
         elif body_mass(scene, body.volume) != body.mass:
-            m = self._motion
+            m = self._m
             R = m.state.R_world_body
             omega = angular_velocity(body, R, m.state.L_world)
             self._resystem(self._model(with_mass(body, body_mass(scene, body.volume), scene.body.inertia)), self.joint)
-            self._move(replace(m, state=dataclasses.replace(m.state, L_world=angular_momentum(self.body, R, omega))))
+            self._m = replace(m, state=dataclasses.replace(m.state, L_world=angular_momentum(self.body, R, omega)))
         elif (
             old.fluid != scene.fluid
             or old.waves != scene.waves
@@ -796,14 +784,14 @@ class Simulation:
     def _rebuild_body(self, body: Body) -> None:
         """Swap in a new body of the same shape given in the same world orientation (its principal frame may differ
         slightly), with the same position, velocity and angular velocity."""
-        old, m = self.body, self._motion
+        old, m = self.body, self._m
         state = m.state
         omega = angular_velocity(old, state.R_world_body, state.L_world)
         q_input = normalized(quat_multiply(state.q_world_body, old.q_input_body * np.array([1.0, -1.0, -1.0, -1.0])))
         q = normalized(quat_multiply(q_input, body.q_input_body))
         self._resystem(self._model(body), self.joint)
         turned = dataclasses.replace(state, q_world_body=q)
-        self._move(replace(m, state=dataclasses.replace(turned, L_world=angular_momentum(body, turned.R_world_body, omega))))
+        self._m = replace(m, state=dataclasses.replace(turned, L_world=angular_momentum(body, turned.R_world_body, omega)))
 
     def _sync_memory(self) -> None:
         """A body alone's state carries the memory of its model's radiation: zeros when a new fit comes in (its states mean
@@ -811,8 +799,8 @@ class Simulation:
         radiation = self.model.radiation
         if radiation is not self._memory_of:
             n = 0 if radiation is None else radiation.states
-            m = self._motion
-            self._move(replace(m, state=dataclasses.replace(m.state, memory=np.zeros(n), E_rad=m.state.E_rad if n else 0.0)))
+            m = self._m
+            self._m = replace(m, state=dataclasses.replace(m.state, memory=np.zeros(n), E_rad=m.state.E_rad if n else 0.0))
             self._memory_of = radiation
 
     def _update_take_offs(self, scene: SceneConfig) -> None:
@@ -880,7 +868,7 @@ class Simulation:
         if isinstance(state, SystemState):
             state = from_system(self.system, self.joint, state).state
         s = state or initial_state(self.body, self.scene)
-        self._move(Motion(s))
+        self._m = Motion(s)
         self.largest_turn = 0.0
         self._join()
         self._moor()

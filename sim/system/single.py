@@ -28,11 +28,11 @@ WIDTHS = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1}
 
 
 class StepFailed(Exception):
-    """A step left the finite numbers: `state` is the last good one, `t` the time it failed at, `why` what went wrong."""
+    """A step left the finite numbers: `motion` is the last good one, `t` the time it failed at, `why` what went wrong."""
 
-    def __init__(self, state: State, t: float, why: str, theta: float = 0.0, absorbed: float = 0.0):
+    def __init__(self, motion: Motion, t: float, why: str):
         super().__init__(why)
-        self.state, self.t, self.why, self.theta, self.absorbed = state, t, why, theta, absorbed
+        self.motion, self.t, self.why = motion, t, why
 
 
 @dataclass
@@ -157,16 +157,6 @@ class Single:
 
     # stepping
 
-    def step(self, system: System, s: SystemState, n: int, dt: float, law=None, lines=None) -> SystemState:
-        """`advance` on the system of one's state (its body's own state carried exactly, from_system)."""
-        m = from_system(system, self.joint, s)
-        try:
-            m = self.advance(m, n, dt, law, lines)
-        except StepFailed as e:  # the last good state as the system's too
-            e.system_state = to_system(system, self.joint, Motion(e.state, e.theta, e.absorbed))
-            raise
-        return to_system(system, self.joint, m)
-
     def advance(self, m: Motion, n: int, dt: float, law: Callable[[State, float], Law] | None = None, lines=None) -> Motion:
         """`m` after n steps of dt; `law(s, theta)`: the take-off's law for the step from s at the coordinate theta (None: the joint's spring and damper);
         `lines`: the mooring lines (lines/moorings.Moorings) whose pull the model holds. Raises StepFailed."""
@@ -188,7 +178,7 @@ class Single:
             else:
                 why = "the state became non-finite"
             if new is None or not new.is_finite():
-                raise StepFailed(state, state.t + dt, why)
+                raise StepFailed(Motion(state), state.t + dt, why)
             state = new
         return state
 
@@ -206,11 +196,11 @@ class Single:
                     try:
                         state = self._compiled(state, 1, dt) if self.compiled else self._numpy(state, 1, dt)
                     except StepFailed as e:
-                        raise StepFailed(e.state, e.t, e.why, theta, absorbed) from None
+                        raise StepFailed(Motion(e.motion.state, theta, absorbed), e.t, e.why) from None
                     continue
                 new, work, new_theta = joint_step(self.model, joint, state, dt, theta, None if law is None else law(state, theta))
                 if not new.is_finite():
-                    raise StepFailed(state, state.t + dt, "the state became non-finite", theta, absorbed)
+                    raise StepFailed(Motion(state, theta, absorbed), state.t + dt, "the state became non-finite")
                 state, absorbed, theta = new, absorbed + work, new_theta
         finally:
             if lines is not None:
@@ -240,7 +230,7 @@ class Single:
         y, done = compiled.schemes.advance(state.as_vector(), state.t, n, dt, packed, sea, rad)
         new = _state_of(y, state.t + done * dt)
         if done < n:
-            raise StepFailed(new, new.t + dt, "the state became non-finite")
+            raise StepFailed(Motion(new), new.t + dt, "the state became non-finite")
         return new
 
     def _moored(self, state: State, n: int, dt: float, lines) -> State:
@@ -273,7 +263,7 @@ class Single:
             lines.settle(keep[0])
             self.model.held[:] = lines.load
         if failed is not None:
-            raise StepFailed(reached, failed, "the state became non-finite")
+            raise StepFailed(Motion(reached), failed, "the state became non-finite")
         return reached
 
 

@@ -4,7 +4,6 @@ damped oscillator's closed form, for a body alone and for one body of several, e
 import math
 
 import numpy as np
-import pytest
 
 from sim import Simulation, load_scene, with_overrides
 from tests.system.test_system import scene_file

@@ -6,18 +6,16 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sim.bodies.state import initial_state
 from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
-from sim.system.single import Motion, from_system, system_of_one, to_system
+from sim.system.single import Motion, from_system, to_system
 from sim.system.tree import body_frames
 
 
 def system_run(scene, backend: str):
-    """A run, and its body as a system of one with the system's state at its start."""
+    """A run, its body as a system of one, and the system's state at its start."""
     sim = Simulation(scene, backend=backend)
-    system = system_of_one(sim.model, sim.joint, initial_state(sim.body, sim.scene))
-    return sim, system, to_system(system, sim.joint, Motion(sim.state, sim.joint_theta, sim.pto_energy))
+    return sim, sim.system, sim.state
 
 
 def vectors(s) -> np.ndarray:
@@ -35,8 +33,9 @@ CASES = [
 
 @pytest.mark.parametrize("name,changes,backend", CASES, ids=[f"{c[0]}-{c[2]}{'-rk4' if c[1] else ''}" for c in CASES])
 def test_a_system_of_one_steps_as_the_body_does(name, changes, backend):
-    """The one-body run, and its step driven through the system of one's state from another run of the same scene (its own
-    lines and controller): the same states bit for bit, over calls of several steps."""
+    """The one-body run, and its step (Single.advance) driven through the system of one's state from another run of the
+    same scene (its own lines and controller), the state made and read back between calls: the same states bit for bit,
+    over calls of several steps."""
     scene = with_overrides(load_scene(name), **changes)
     reference = Simulation(scene, backend=backend)
     sim, system, s = system_run(scene, backend)
@@ -44,9 +43,8 @@ def test_a_system_of_one_steps_as_the_body_does(name, changes, backend):
     law = None if sim.controller is None else sim._next_law
     for n in (1, 7, 12):
         reference.step(n)
-        s = sim.single.step(system, s, n, sim.dt, law, sim.moorings)
-        expected = to_system(system, reference.joint, Motion(reference.state, reference.joint_theta, reference.pto_energy))
-        assert np.array_equal(vectors(s), vectors(expected))
+        s = to_system(system, sim.joint, sim.single.advance(from_system(system, sim.joint, s), n, sim.dt, law, sim.moorings))
+        assert np.array_equal(vectors(s), vectors(reference.state))
     reference.close()
     sim.close()
 
@@ -57,7 +55,7 @@ def test_the_systems_state_and_the_bodys_are_one_motion(name):
     the coordinates and velocities alone (a state made by hand, a reset's)."""
     sim, system, _ = system_run(load_scene(name), "numpy")
     sim.step(25)
-    m = Motion(sim.state, sim.joint_theta, sim.pto_energy)
+    m = Motion(sim.body_state, sim.joint_theta, sim.pto_energy)
     s = to_system(system, sim.joint, m)
     assert from_system(system, sim.joint, s).state is m.state  # its body's own state, carried
     made = dataclasses.replace(s)  # a state made from another keeps no body of its own: its coordinates give it
@@ -75,7 +73,7 @@ def test_a_system_of_one_sees_the_body_where_it_is(name):
     hydrostatic energy of the mesh clipped at the surface."""
     sim, system, _ = system_run(with_overrides(load_scene(name), fluid__radiation="none"), "numpy")
     sim.step(30)
-    s, frame = to_system(system, sim.joint, Motion(sim.state, sim.joint_theta, sim.pto_energy)), sim.frame()
+    s, frame = sim.state, sim.frame()
     (b,) = body_frames(system, s)
     q = b["q"] * np.sign(b["q"][0] * frame.q_world_body[0])
     for got, want in ((b["x"], frame.x_world), (q, frame.q_world_body), (b["u"], frame.u_world), (b["omega"], frame.omega_world)):

@@ -44,7 +44,12 @@ def test_each_term_alone_matches_the_reference(name, forces, water):
     waves = water != "still"
     sea_state = replace(regular_waves(1000.0, 9.81, 0.4, 5.0, 20.0), ramp=5.0) if waves else StillWater()
     model = alone(
-        Model(make_box((1.0, 0.8, 0.6), 6, 400.0), sea_state, FluidConfig(forces=forces, damping=40.0, drag_coefficient=0.8, heave_damping=900.0)), name
+        Model(
+            make_box((1.0, 0.8, 0.6), 6, 400.0),
+            sea_state,
+            FluidConfig(forces=forces, damping=40.0, drag_coefficient=0.8, heave_damping=900.0),
+        ),
+        name,
     )
     kernels = specialised(Spec("implicit", forces, (name,), waves, False))
     forces_kernel = kernels.forces

@@ -8,8 +8,9 @@ controllers (control/laws.py) and the mooring lines (MoorDyn, lines/moorings.py)
   joint to the world, or its compiled twin many steps a call; the lines coupled each step;
 - bodies on joints step by the tree's Stormer-Verlet (system/tree.py), its compiled twin (system/compiled.py), or exactly
   where the system is linear (system/linear.py); the lines coupled each step.
-A body alone's frame is its Frame (system/frame.py: its loads, wet surface and energies, the CSV's columns since the
-start); several bodies' is an AssemblyFrame (each body's pose and twist, each joint, the lines, the energies).
+Every scene's frame has the same Readings (system/frame.py: each joint's take-off, the lines, the radiated energy); a
+body alone's is its Frame besides (its loads, wet surface and energies, the CSV's columns since the start), several
+bodies' an AssemblyFrame (each body's pose and twist, the energies of all).
 
 `update` names a body's parameters 'BODY__key' (float__pto_damping=1e6, spar__density=900; a body alone's: 'body__key'
 or 'fluid__key'; config.with_overrides). A take-off's damping or stiffness changes in place; any other change rebuilds
@@ -44,7 +45,7 @@ from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
 from sim.system.compiled import CompiledStep
-from sim.system.frame import AssemblyFrame, Frame, assembly_frame, observe
+from sim.system.frame import AssemblyFrame, Frame, assembly_frame, joint_reading, lines_reading, observe
 from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
@@ -647,12 +648,12 @@ class Simulation:
 
     def frame(self):
         """What the run shows now (computed once per state): a body alone's Frame, with its lines' nodes; several bodies'
-        AssemblyFrame."""
+        AssemblyFrame. Both have the Readings of every scene (system/frame.py): its joints, its lines, its radiated energy."""
         if self.single is None:
             return self._bodies_frame()
         frame = self._checked()
         if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
-            frame = dataclasses.replace(frame, lines=tuple(self.moorings.lines()), line_tensions=tuple(self.moorings.line_tensions()))
+            frame = dataclasses.replace(frame, **lines_reading(self.moorings))
             self._frame = (self._frame[0], frame)
         return frame
 
@@ -662,17 +663,12 @@ class Simulation:
         key = (s, self.model)
         if self._frame[0] != key:
             frame = observe(self.model, s, self.kernels() if self.compiled else None, self.expand_waves)
-            if self.moorings is not None:
-                frame = dataclasses.replace(frame, mooring_force=self.moorings.load[:3].copy(),
-                                            fairlead_tensions=self.moorings.fairlead_tensions(), line_energy=self.moorings.energy_now())  # fmt: skip
+            readings = lines_reading(self.moorings, shapes=False)
             j = self.joint
-            if j is not None:
-                rate, theta = j.rate(self.body, s), self.joint_theta
-                axis = None if j.kind == "fixed" else ((j.pivot if j.kind == "revolute" else j.x0), j.axis)
-                law = self._law  # its spring's power is stored, not absorbed
-                frame = dataclasses.replace(frame, P_pto=(law.damping * rate - law.force) * rate, E_pto=self.pto_energy,
-                                            F_pto=law.at(theta, rate), joint_axis=axis)  # fmt: skip
-            self._frame = (key, frame)
+            if j is not None and j.kind != "fixed":
+                reading = joint_reading(self.system.joints[0].name, self._law, self.joint_theta, j.rate(self.body, s), self.pto_energy)
+                readings.update(joints=(reading,), joint_axes=(((j.pivot if j.kind == "revolute" else j.x0), j.axis),))
+            self._frame = (key, dataclasses.replace(frame, **readings) if readings else frame)
         return self._frame[1]
 
     def _bodies_frame(self) -> AssemblyFrame:

@@ -178,26 +178,44 @@ def _model_energy(f) -> str:
     return f" (exact potential; the model's own {f.E_kin + f.E_grav + f.E_hyd_model:.6g} J)"
 
 
+def quantity(value: float, unit: str) -> str:
+    """A value in its unit with the SI prefix that suits its size (6 559 W: "6.559 kW"; 0.5 N: "0.5 N"), four figures."""
+    size = abs(value)
+    for scale, prefix in ((1e9, "G"), (1e6, "M"), (1e3, "k")):
+        if size >= scale:
+            return f"{value / scale:.4g} {prefix}{unit}"
+    return f"{value:.4g} {unit}"
+
+
 def _line_energy(energy: tuple) -> str:
     """The lines' energy where the scene counts it ([moorings] energy): what they store, what they have dissipated."""
-    return f" · lines store {energy[0]:.6g} J, have dissipated **{energy[1]:.4g} J**" if energy else ""
+    return f" · lines store {quantity(energy[0], 'J')}, have dissipated **{quantity(energy[1], 'J')}**" if energy else ""
+
+
+def _readings(snap: Snapshot) -> list[str]:
+    """What every scene's run reads (system/frame.Readings): each joint's take-off, the mooring lines' pull."""
+    run, s, out = snap.run, snap.settings, []
+    for name, theta, _, p, e, force in run.joints:
+        what = (
+            f"Joint {name}: stroke **{theta:+.4f}** · take-off"
+            if snap.system
+            else f"Joint: {s.joint} to the seabed · power take-off ({s.controller})"
+        )
+        out.append(f"{what} **{quantity(force, 'N m' if s.joint == 'revolute' and not snap.system else 'N')}**, "
+                   f"**{quantity(p, 'W')}** now, **{quantity(e, 'J')}** absorbed")  # fmt: skip
+    if run.mooring:
+        (fx, fy, fz, largest), lines = run.mooring[:4], len(run.mooring) - 4
+        out.append(f"Mooring: {lines} line{'s' if lines != 1 else ''} pull **{quantity(math.hypot(fx, fy), 'N')}** sideways, "
+                   f"**{quantity(-fz, 'N')}** down · largest fairlead tension **{quantity(largest, 'N')}**" + _line_energy(run.line_energy))  # fmt: skip
+    return out
 
 
 def _system(snap: Snapshot) -> list[str]:
-    """A scene of several bodies: where each body is, each joint's stroke and take-off, the lines' pull, the energies of all."""
+    """A scene of several bodies: where each body is and the energies of all."""
     run = snap.run
-    out = [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies)]
-    for name, theta, _, p, e, force in run.joints:
-        out.append(f"Joint {name}: stroke **{theta:+.4f}** · take-off **{force / 1e3:.4g} kN**, **{p / 1e3:.4g} kW** now, "
-                   f"**{e / 1e6:.4g} MJ** absorbed")  # fmt: skip
-    if run.mooring:
-        out.append(
-            f"Mooring: pull **{np.linalg.norm(run.mooring[:3]) / 1e3:.4g} kN**, largest fairlead tension **{run.mooring[3] / 1e3:.4g} kN**"
-            + _line_energy(run.line_energy)
-        )
-    out.append(f"All bodies: E total = **{run.E_total:.6g} J**, with the take-offs' {run.E_pto:.4g} J and the radiated {run.E_rad:.4g} J · "
-               f"the numbers above are {snap.settings.focus}'s (choose the body under Body)")  # fmt: skip
-    return out
+    return [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies),
+            f"All bodies: E total = **{run.E_total:.6g} J**, with the take-offs' {quantity(run.E_pto, 'J')} and the radiated "
+            f"{quantity(run.E_rad, 'J')} · the numbers above are {snap.settings.focus}'s (choose the body under Body)"]  # fmt: skip
 
 
 def describe(snap: Snapshot) -> str:
@@ -212,15 +230,7 @@ def describe(snap: Snapshot) -> str:
         f"inertia {'exact (mesh shell)' if snap.body.exact_inertia else 'of the samples'}",
         f"Speed: {state} (asked {s.speed:g}×){' on the ' + snap.engine if snap.engine else ''} · {snap.body.n_samples} samples",
     ]
-    if snap.system:
-        lines += _system(snap)
-    if f.lines:
-        pull = f.mooring_force
-        lines.append(f"Mooring: {len(f.lines)} lines pull **{math.hypot(pull[0], pull[1]):.4g} N** sideways, **{-pull[2]:.4g} N** down · "
-                     f"largest fairlead tension **{f.fairlead_tensions.max():.4g} N**" + _line_energy(f.line_energy))  # fmt: skip
-    if s.joint != "free" and not snap.system:
-        lines.append(f"Joint: {s.joint} to the seabed · power take-off ({s.controller}) **{f.F_pto:.4g} N**, "
-                     f"**{f.P_pto:.4g} W** now, **{f.E_pto:.4g} J** absorbed")  # fmt: skip
+    lines += _readings(snap) + (_system(snap) if snap.system else [])
     if (h := snap.hydrostatics) is not None:
         verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
         lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "

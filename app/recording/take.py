@@ -15,7 +15,7 @@ import numpy as np
 
 import sim
 from app.live.loop import Part, Posed
-from sim.system.frame import CSV_COLUMNS
+from sim.system.frame import CSV_COLUMNS, csv_line
 
 MAX_SHOTS = 30 * 600
 """Ten minutes at 30 frames a second: a longer recording stops itself (memory and file size)."""
@@ -117,7 +117,7 @@ class Take:
     def csv(self) -> str:
         """Every shot as a row of the run CSV (the columns of `floatsim run --out`)."""
         out = io.StringIO()
-        out.write(",".join(self._shots[0].run.columns() if self._shots else CSV_COLUMNS) + "\n")
+        out.write(csv_line(self._shots[0].run.columns() if self._shots else CSV_COLUMNS) + "\n")
         for shot in self._shots:
-            out.write(",".join(f"{v:.12g}" for v in shot.run.row()) + "\n")
+            out.write(csv_line(shot.run.row()) + "\n")
         return out.getvalue()

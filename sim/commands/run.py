@@ -19,6 +19,7 @@ from sim.hydro.radiation import misfit_note
 from sim.limits import step_time
 from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
 from sim.simulation import Simulation, SimulationDiverged
+from sim.system.frame import csv_line
 
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
@@ -234,14 +235,23 @@ def summarise(sim: Simulation, first, last) -> None:
           f"E_total = {last.E_total:.6g} J (change {drift:+.3g} J)" + (f", E_rad = {last.E_rad:.6g} J radiated" if sim.model.radiation else ""))  # fmt: skip
     if sim.joint is not None:
         j = sim.joint
-        print(f"joint: {j.kind} to the seabed, take-off k {j.stiffness:g}, c {j.damping:g}: {last.E_pto:.6g} J absorbed, "
-              f"{last.E_pto / last.t if last.t > 0 else 0.0:.4g} W on average")  # fmt: skip
-    if sim.moorings is not None:
-        n = len(last.lines)
-        print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring_force):.4g} N, largest fairlead tension "
-              f"{last.fairlead_tensions.max():.4g} N")  # fmt: skip
-        if last.line_energy:
-            print(line_energy_summary(first, last, last.E_total + last.E_pto - first.E_total - first.E_pto))
+        print(f"joint: {j.kind} to the seabed, take-off k {j.stiffness:g}, c {j.damping:g}")
+    summarise_readings(first, last, last.E_total + last.E_pto - first.E_total - first.E_pto)
+
+
+def summarise_readings(first, last, body_change: float) -> None:
+    """What every scene's run reads at its end (system/frame.Readings): each joint's take-off, the mooring lines' pull and
+    energy; body_change is the bodies' and take-offs' energy change over the run."""
+    for name, theta, _, _, absorbed, *_ in last.joints:
+        print(
+            f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)"
+        )
+    if last.mooring:
+        n = len(last.mooring) - 4
+        print(f"moorings: {n} line{'s' if n != 1 else ''} (MoorDyn), pull now {np.linalg.norm(last.mooring[:3]):.4g} N, largest fairlead "
+              f"tension {last.mooring[3]:.4g} N")  # fmt: skip
+    if last.line_energy:
+        print(line_energy_summary(first, last, body_change))
 
 
 def line_energy_summary(first, last, body_change: float) -> str:
@@ -264,14 +274,9 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
         print(note)
     for b in last.bodies:
         print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
-    for name, theta, _, _, absorbed, *_ in last.joints:
-        print(
-            f"joint {name}: coordinate {theta:.6g}, take-off absorbed {absorbed:.6g} J ({absorbed / last.t if last.t > 0 else 0.0:.4g} W on average)"
-        )
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J")
-    if last.line_energy:
-        print(line_energy_summary(first, last, drift))
+    summarise_readings(first, last, drift)
 
 
 def how_stepped(sim: Simulation) -> tuple[str, float, str]:
@@ -309,11 +314,11 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
 
     def write(frame):
         if out:
-            out.write(",".join(f"{v:.12g}" for v in frame.row()))
+            out.write(csv_line(frame.row()))
 
     try:  # numpy's overflow warnings would only repeat what the divergence message says better
         if out:
-            out.write(",".join(columns))
+            out.write(csv_line(columns))
         write(sim.frame())
         if watch is not None:
             watch(sim)

@@ -1,10 +1,11 @@
-"""What a run shows at one instant, for viewers, CSV and tests: a body's Frame (pose, velocities, loads, energies), and a
-scene of several bodies' AssemblyFrame (each body's pose and twist, each joint's take-off, the lines, the energies)."""
+"""What a run shows at one instant, for viewers, CSV and tests. Every scene's frame has its Readings: each joint's
+take-off (joint_reading), the mooring lines' pull, shape and energy (lines_reading), the radiated energy. A body alone's
+frame is its Frame (its pose, velocities, loads and energies besides); several bodies' is an AssemblyFrame (each body's
+pose and twist, the energies of all). Their `row`s are the CSV's, by `csv_line`."""
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,11 +20,68 @@ CSV_COLUMNS = (
 )
 
 
-@dataclass(frozen=True, eq=False)
-class Frame:
-    """A snapshot for viewers, CSV and tests. World frame, SI units."""
+def csv_line(values) -> str:
+    """One CSV line of a frame's `columns` or `row`: the one format of `floatsim run --out` and the viewer's recording."""
+    return ",".join(v if isinstance(v, str) else f"{v:.12g}" for v in values)
+
+
+def joint_reading(name: str, law, theta: float, rate: float, absorbed: float) -> tuple:
+    """A joint's (name, theta, rate, P_pto, E_pto, F_pto) under its take-off's law F = f - k theta - c theta_dot
+    (control/laws.Law): P_pto the power it absorbs, (c theta_dot - f) theta_dot (its spring's is stored, not absorbed),
+    E_pto the energy absorbed so far, F_pto its force on the coordinate (N, a hinge's N m)."""
+    return (name, theta, rate, (law.damping * rate - law.force) * rate, absorbed, law.at(theta, rate))
+
+
+def lines_reading(moorings, shapes: bool = True) -> dict:
+    """The Readings of the mooring lines (lines/moorings.Moorings, or None): their pull on the bodies, each fairlead's
+    tension, their energy, and (if `shapes`: asked of MoorDyn node by node) each line's nodes and tensions."""
+    if moorings is None:
+        return {}
+    each = moorings.fairlead_tensions()
+    total = moorings.loads[:, :3].sum(axis=0) if len(moorings.bodies) > 1 else moorings.load[:3]
+    out = dict(
+        mooring=(*(float(f) for f in total), float(each.max(initial=0.0)), *(float(t) for t in each)), line_energy=moorings.energy_now()
+    )
+    if shapes:
+        out.update(lines=tuple(moorings.lines()), line_tensions=tuple(moorings.line_tensions()))
+    return out
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Readings:
+    """What every scene's frame reads, whatever its bodies: the joints' take-offs, the mooring lines, the radiated energy.
+    World frame, SI units."""
 
     t: float
+    joints: tuple = ()
+    """Each joint's (name, theta, rate, P_pto, E_pto, F_pto) (joint_reading), in the order of the system's joints."""
+    joint_axes: tuple = ()
+    """Each joint's axis: (a point on it, its unit direction), world frame: the axis a prismatic joint slides along or a
+    revolute one turns about (none when free or fixed)."""
+    mooring: tuple = ()
+    """The lines' pull on the bodies (Fx, Fy, Fz, N), the largest fairlead tension and each fairlead's, in the order of
+    the lines' input (N); empty without lines."""
+    lines: tuple = ()
+    """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
+    line_tensions: tuple = ()
+    """Each mooring line's tension at those nodes, (segments + 1,), N."""
+    line_energy: tuple = ()
+    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise):
+    E_total + E_pto + E_lines + D_lines is conserved in still water without damping, drag or radiation."""
+    E_rad: float = 0.0
+    """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
+
+    @property
+    def E_pto(self) -> float:
+        """The energy the take-offs have absorbed so far, J."""
+        return sum(j[4] for j in self.joints)
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Frame(Readings):
+    """A body alone's snapshot for viewers, CSV and tests (and each body's of several, without the Readings): its pose,
+    velocities, loads and energies. World frame, SI units."""
+
     x_world: np.ndarray
     """(3,) centre of mass, m."""
     q_world_body: np.ndarray
@@ -51,39 +109,36 @@ class Frame:
     """Indices of the samples under the water surface (for either force model)."""
     eta: float = 0.0
     """Water surface elevation at the centre of mass's (x, y), m."""
-    E_rad: float = 0.0
-    """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
     E_hyd_model: float | None = None
     """The force model's own hydrostatic potential, -(rho g / 2) * sum of w z^2 nu_z over its wet nodes, J:
     E_hyd for panels; for points and cells their quadrature of it (None: as E_hyd)."""
     P_diff: float = 0.0
     """The power of the diffraction force on the body, F_d . (u, omega), W (0 without diffraction)."""
-    mooring_force: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
-    """(3,) the mooring lines' pull on the body, N (in force_world too; zero without lines)."""
-    fairlead_tensions: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
-    """(k,) each fairlead's tension, N."""
-    lines: tuple = ()
-    """Each mooring line's nodes, (segments + 1, 3), world frame, m: anchor end first."""
-    line_tensions: tuple = ()
-    """Each mooring line's tension at those nodes, (segments + 1,), N."""
-    line_energy: tuple = ()
-    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise):
-    E_total + E_lines + D_lines is conserved in still water without damping, drag or radiation."""
-    P_pto: float = 0.0
-    """The power the joint's take-off absorbs, (c theta_dot - f) theta_dot of its law F = f - k theta - c theta_dot, W (its
-    spring's power is stored, not absorbed; 0 without a joint)."""
-    E_pto: float = 0.0
-    """The energy it has absorbed so far, J."""
-    F_pto: float = 0.0
-    """The take-off's force on the joint's coordinate, N (a hinge's moment, N m), by its controller's law."""
-    joint_axis: tuple | None = None
-    """(point, unit direction), world frame: the axis a prismatic joint slides along or a revolute one turns
-    about (None: free or fixed)."""
 
     @property
-    def joint_axes(self) -> list:
-        """The joint's axis as a list (none when free or fixed), as a scene of several bodies lists its joints'."""
-        return [] if self.joint_axis is None else [self.joint_axis]
+    def mooring_force(self) -> np.ndarray:
+        """(3,) the mooring lines' pull on the body, N (in force_world too; zero without lines)."""
+        return np.array(self.mooring[:3]) if self.mooring else np.zeros(3)
+
+    @property
+    def fairlead_tensions(self) -> np.ndarray:
+        """(k,) each fairlead's tension, N."""
+        return np.array(self.mooring[4:])
+
+    @property
+    def P_pto(self) -> float:
+        """The power the joint's take-off absorbs, W (0 without a joint that moves)."""
+        return self.joints[0][3] if self.joints else 0.0
+
+    @property
+    def F_pto(self) -> float:
+        """The take-off's force on the joint's coordinate, N (a hinge's moment, N m), by its controller's law."""
+        return self.joints[0][5] if self.joints else 0.0
+
+    @property
+    def joint_axis(self) -> tuple | None:
+        """(point, unit direction), world frame: the joint's axis (None: free or fixed)."""
+        return self.joint_axes[0] if self.joint_axes else None
 
     @property
     def E_hyd_of_model(self) -> float:
@@ -163,32 +218,14 @@ def physical_hydrostatic_energy(model: Model, x: np.ndarray, R: np.ndarray, t: f
     return hydrostatic_energy(model.water, wet_panels(model.body, model.water, x, R, t))
 
 
-@dataclass(frozen=True, eq=False)
-class AssemblyFrame:
-    t: float
+@dataclass(frozen=True, eq=False, kw_only=True)
+class AssemblyFrame(Readings):
+    """Several bodies' snapshot: their Readings, each body's pose and twist, the energies of all. World frame, SI units."""
+
     bodies: list
     """Each body's dict: name, x, q, u, omega (body_frames)."""
-    joints: list
-    """Each joint's (name, theta, rate, P_pto, E_pto, F_pto): P_pto the power its take-off absorbs (its law's damper and
-    force: the spring's is stored, E_spring), F_pto its force by its controller's law."""
     energies: dict
-    joint_axes: list = field(default_factory=list)
-    """Each joint's axis: (a point on it, its unit direction), world frame (System.joint_axes)."""
-    lines: tuple = ()
-    """Each mooring line's nodes, (segments + 1, 3), world frame (none without lines)."""
-    mooring: tuple = ()
-    """The lines' pull on the moored body (Fx, Fy, Fz, N), the largest fairlead tension and each fairlead's, in the order of
-    the lines' input (N); empty without lines."""
-    E_rad: float = 0.0
-    """Energy the radiated waves have carried away so far, J (0 without radiation)."""
-    line_tensions: tuple = ()
-    """Each mooring line's tension at its nodes, (segments + 1,), N (none without lines)."""
-    line_energy: tuple = ()
-    """(E_lines, D_lines): the energy the lines store and have dissipated, J ([moorings] energy; empty otherwise)."""
-
-    @property
-    def E_pto(self) -> float:
-        return sum(j[4] for j in self.joints)
+    """E_kin, E_grav, E_hyd and E_spring (the take-offs' springs) of all the bodies, J (System.energies)."""
 
     @property
     def E_total(self) -> float:
@@ -225,16 +262,7 @@ class AssemblyFrame:
 
 def assembly_frame(system, s, moorings=None) -> AssemblyFrame:
     """The frame of several bodies (system/tree.py) at the state s, with the mooring lines (lines/moorings.Moorings) or none."""
-    joints = []
-    for g, law in zip(system.joints, system.laws):
-        theta, rate = float(s.theta[g.coordinate]), float(s.v[g.dofs.start])
-        joints.append((g.name, theta, rate, (law.damping * rate - law.force) * rate, float(s.absorbed[g.coordinate]), law.at(theta, rate)))
-    lines, pull, tensions, energy = (), (), (), ()
-    if moorings is not None:
-        energy = moorings.energy_now()
-        lines, tensions = tuple(moorings.lines()), tuple(moorings.line_tensions())
-        each = moorings.fairlead_tensions()
-        total = moorings.loads[:, :3].sum(axis=0) if len(moorings.bodies) > 1 else moorings.load[:3]
-        pull = (*total, float(each.max()), *(float(t) for t in each))
-    return AssemblyFrame(s.t, body_frames(system, s), joints, system.energies(s), system.joint_axes(s), lines, pull, float(s.E_rad), tensions,
-                         energy)  # fmt: skip
+    joints = tuple(joint_reading(g.name, law, float(s.theta[g.coordinate]), float(s.v[g.dofs.start]), float(s.absorbed[g.coordinate]))
+                   for g, law in zip(system.joints, system.laws))  # fmt: skip
+    return AssemblyFrame(t=s.t, joints=joints, joint_axes=tuple(system.joint_axes(s)), E_rad=float(s.E_rad), **lines_reading(moorings),
+                         bodies=body_frames(system, s), energies=system.energies(s))  # fmt: skip

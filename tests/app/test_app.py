@@ -30,7 +30,7 @@ pytest.importorskip("viser")
 
 import sim
 from app.args import ViewArgs
-from app.live.readouts import describe
+from app.live.readouts import describe, quantity
 from app.main import start
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -735,10 +735,17 @@ def test_the_moored_scene_shows_its_lines_and_their_pull(make_app):
     assert app.scene.lines is not None and app.scene.lines.visible and app.scene.lines.points.shape == (60, 2, 3)
     first = app.scene.lines.points.copy()
     text = describe(snap)
-    assert "Mooring: 3 lines" in text and f"{snap.frame.fairlead_tensions.max():.4g} N" in text
+    assert "Mooring: 3 lines" in text and f"tension **{quantity(snap.frame.fairlead_tensions.max(), 'N')}**" in text
     while time.monotonic() < deadline + 10.0 and np.array_equal(app.scene.lines.points, first):
         time.sleep(0.05)
     assert not np.array_equal(app.scene.lines.points, first)  # streamed as the lines move
+
+
+@pytest.mark.parametrize(("value", "unit", "shown"), [(6.559, "W", "6.559 W"), (6559.0, "W", "6.559 kW"), (-1.2e6, "N", "-1.2 MN"),
+                                                    (0.0, "J", "0 J"), (2.5e9, "J", "2.5 GJ")])  # fmt: skip
+def test_a_readout_quantity_takes_the_prefix_its_size_asks(value, unit, shown):
+    """A take-off's 6.559 W reads as W, not as "0.006559 kW"; a converter's 1.2 MN as MN: four figures either way."""
+    assert quantity(value, unit) == shown
 
 
 def test_a_joint_with_a_take_off_from_the_viewer(make_app):
@@ -753,7 +760,7 @@ def test_a_joint_with_a_take_off_from_the_viewer(make_app):
     while time.monotonic() < deadline and app.sync().frame.E_pto <= 0.0:
         time.sleep(0.05)
     snap = app.sync()
-    assert snap.frame.E_pto > 0.0 and f"**{snap.frame.E_pto:.4g} J** absorbed" in describe(snap)
+    assert snap.frame.E_pto > 0.0 and f"**{quantity(snap.frame.E_pto, 'J')}** absorbed" in describe(snap)
     assert not snap.frame.u_world[:2].any() and not snap.frame.omega_world.any()
     deadline = time.monotonic() + 5.0
     while time.monotonic() < deadline and not (app.readouts.plots["P"].visible and len(app.readouts.plots["P"].data[0]) > 3):

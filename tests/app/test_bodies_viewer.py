@@ -127,13 +127,13 @@ def test_the_mooring_lines_of_a_body_among_several_are_drawn(tmp_path):
 
         async def watch():
             async with Page.open(app.port) as page:
-                await page.read(2.0, until=lambda p: "/world/moorings" in p.nodes and p.text("Mooring: pull"))
+                await page.read(2.0, until=lambda p: "/world/moorings" in p.nodes and p.text("Mooring: 3 lines pull"))
                 return page
 
         page = asyncio.run(watch())
         snap = app.sync()
         assert "/world/moorings" in page.nodes and len(snap.run.lines) == 3
-        assert "largest fairlead tension" in page.text("Mooring: pull")
+        assert "largest fairlead tension" in page.text("Mooring: 3 lines pull")
 
 
 def embedded_messages(html: str) -> list:

@@ -174,7 +174,8 @@ def test_the_csv_carries_the_take_off_power_and_energy(tmp_path):
                           capture_output=True, text=True, timeout=300)  # fmt: skip
     assert done.returncode == 0, done.stderr
     rows = np.genfromtxt(out, delimiter=",", names=True)
-    assert f"joint: prismatic to the seabed, take-off k 0, c 1000: {rows['E_pto'][-1]:.6g} J absorbed" in done.stdout, done.stdout
+    assert "joint: prismatic to the seabed, take-off k 0, c 1000" in done.stdout, done.stdout
+    assert f"take-off absorbed {rows['E_pto'][-1]:.6g} J" in done.stdout, done.stdout
     np.testing.assert_allclose(rows["P_pto"], 1000.0 * rows["uz"] ** 2, rtol=1e-9, atol=1e-12)
     assert np.all(np.diff(rows["E_pto"]) >= 0) and rows["E_pto"][-1] == pytest.approx(np.trapezoid(rows["P_pto"], rows["t"]), rel=2e-3)
     assert not np.any(rows["ux"]) and not np.any(rows["wx"])  # a slide: no sideways motion, no turning

@@ -1,15 +1,69 @@
 """`python -m sim.commands.compile PID [SPEC ...]`: the child that compiles kernels into the disk cache (compiling.Compiler
-starts it; the tests' session start hands it specs on stdin). With no spec: every preset's."""
+starts it; the tests' session start hands it specs on stdin). With no spec: every preset's.
+
+Where a compile's CPU goes (FLOATSIM_COMPILE_PROFILE=FILE, as `floatsim bench --startup` asks): numba announces each
+function it compiles ("numba:compile", nested: a kernel compiles the kernels it calls first); `Profile` takes each one's
+CPU time less that of the compiles nested in it, so the shares add up to the whole, and each one's LLVM seconds with its
+callees' from numba's own timers (its overload's `llvm_lock`: optimising, linking and emitting machine code)."""
 
 from __future__ import annotations
 
+import collections
+import json
 import os
 import sys
+import time
+
+from numba.core import event
 
 from sim.compiling import load, parse_spec, spec_argument
 from sim.scene.config import available_scenes, load_scene
 from sim.simulation import Simulation
 from sim.sweeps.backends import die_with
+
+from .startup import PROFILE_ENV
+
+
+def _name(dispatcher) -> str:
+    f = dispatcher.py_func
+    return f"{f.__module__.split('.')[-1]}.{f.__name__}"
+
+
+class Profile(event.Listener):
+    """Each compiled function's own CPU seconds (`own`), and each one's LLVM seconds with its callees' (`llvm`)."""
+
+    def __init__(self):
+        self.own: collections.Counter = collections.Counter()
+        self.llvm: collections.Counter = collections.Counter()
+        self._open: list = []
+        self._seen: set = set()
+
+    def on_start(self, ev) -> None:
+        self._open.append([ev.data["dispatcher"], time.process_time(), 0.0])
+
+    def on_end(self, ev) -> None:
+        dispatcher, started, nested = self._open.pop()
+        spent = time.process_time() - started
+        name = _name(dispatcher)
+        self.own[name] += spent - nested
+        if self._open:
+            self._open[-1][2] += spent
+        self._seen.add(dispatcher)
+
+    def __enter__(self):
+        event.register("numba:compile", self)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        event.unregister("numba:compile", self)
+
+    def write(self, path: str) -> None:
+        for dispatcher in self._seen:  # (its timers are set once its compile has ended)
+            for result in dispatcher.overloads.values():
+                timers = (result.metadata or {}).get("timers", {})
+                self.llvm[_name(dispatcher)] = max(self.llvm[_name(dispatcher)], timers.get("llvm_lock", 0.0))
+        with open(path, "w") as out:
+            json.dump({"own": dict(self.own), "llvm": dict(self.llvm)}, out)
 
 
 def preset_specs() -> list:
@@ -28,10 +82,13 @@ def _main(parent: int, specs: list[str]) -> int:
     stdin, a line each, until it closes (so that a parent hands the next to whichever child is free)."""
     die_with(parent)  # a viewer stopped by SIGKILL leaves no compiler behind
     words = (line.strip() for line in sys.stdin) if specs == ["-"] else iter(specs or [spec_argument(s) for s in preset_specs()])
-    for word in words:
-        spec = parse_spec(word)
-        seconds = load(spec)
-        print(f"floatsim: compiled the kernels for the {spec.describe()} in {seconds:.1f} s", flush=True)
+    with Profile() as profile:
+        for word in words:
+            spec = parse_spec(word)
+            seconds = load(spec)
+            print(f"floatsim: compiled the kernels for the {spec.describe()} in {seconds:.1f} s", flush=True)
+    if os.environ.get(PROFILE_ENV):
+        profile.write(os.environ[PROFILE_ENV])
     return 0
 
 

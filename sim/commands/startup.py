@@ -4,41 +4,69 @@ Each preset is run as a user runs it, `python -m sim run --scene NAME --t-end T`
 with an empty kernel cache of its own (a first run on a machine: a short run stays on the numpy reference),
 then the kernels that preset needs are compiled into that cache in a fresh process, as the viewer's
 background compiler and a longer run do (`python -m sim.commands.compile`), then the run again (every later run:
-the kernels load from the cache). Wall time and the peak memory of each process are reported.
+the kernels load from the cache). Wall and CPU time and the peak memory of each process are reported, and the kernels
+whose own compile took the most CPU (numba's compile events and LLVM timers: sim/commands/compile_profile.py).
 """
 
 from __future__ import annotations
 
+import collections
+import json
 import os
 import subprocess
 import sys
 import tempfile
 import time
+from typing import NamedTuple
 
 from sim.commands.tables import machine, table
 from sim.compiling import spec_argument
 from sim.scene.config import ConfigError, available_scenes, load_scene
 from sim.simulation import Simulation
 
+PROFILE_ENV = "FLOATSIM_COMPILE_PROFILE"
+"""Where the compile child (sim/commands/compile.py) writes its profile: each kernel's own compile CPU, its LLVM's."""
 
-def timed_run(scene: str, t_end: float, cache: str) -> tuple[float, float, int, str]:
-    """(wall seconds, peak MiB, exit status, the compile announcement if any) of one run in a fresh process."""
+
+def top(path: str, n: int = 3) -> str:
+    """The n kernels whose own compile took the most CPU, from a written profile: "name 12.3 s (LLVM 8.1 s), ..."."""
+    with open(path) as f:
+        data = json.load(f)
+    own, llvm = collections.Counter(data["own"]), data["llvm"]
+    return ", ".join(f"{name} {s:.1f} s (LLVM {llvm.get(name, 0.0):.1f} s with callees)" for name, s in own.most_common(n))
+
+
+class Timed(NamedTuple):
+    wall: float
+    """Seconds."""
+    cpu: float
+    """The process's user and system CPU seconds."""
+    peak: float
+    """Its peak resident memory, MiB."""
+    status: int
+    said: str
+    """Its compile announcement, if any."""
+
+
+def timed_run(scene: str, t_end: float, cache: str) -> Timed:
+    """One run in a fresh process."""
     return timed([sys.executable, "-m", "sim", "run", "--scene", scene, "--t-end", f"{t_end:g}", "--every", "1000000"], cache)
 
 
-def timed_compile(scene: str, cache: str) -> tuple[float, float, int, str]:
-    """timed_run of compiling the kernels the preset needs (its kernels.Spec) in a fresh process."""
+def timed_compile(scene: str, cache: str, profile: str | None = None) -> Timed:
+    """Compiling the kernels the preset needs (its kernels.Spec) in a fresh process; its compile profile into `profile`."""
 
     run = Simulation(load_scene(scene), backend="numpy")
     specs = run.specs if run.has_twin else []
     run.close()
     if not specs:  # nothing to compile (sim.compiling with no spec would compile every preset's)
-        return 0.0, 0.0, 0, ""
-    return timed([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), *map(spec_argument, specs)], cache)
+        return Timed(0.0, 0.0, 0.0, 0, "")
+    return timed([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), *map(spec_argument, specs)], cache,
+                 {PROFILE_ENV: profile} if profile else {})  # fmt: skip
 
 
-def timed(command: list[str], cache: str) -> tuple[float, float, int, str]:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+def timed(command: list[str], cache: str, env: dict | None = None) -> Timed:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache, **(env or {})}
     started = time.perf_counter()
     child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, text=True)
     err = child.stdout.read()
@@ -46,7 +74,7 @@ def timed(command: list[str], cache: str) -> tuple[float, float, int, str]:
     wall = time.perf_counter() - started
     child.returncode = os.waitstatus_to_exitcode(status)
     said = next((line for line in err.splitlines() if "compil" in line), "")
-    return wall, usage.ru_maxrss / 1024, child.returncode, said  # ru_maxrss: KiB on Linux
+    return Timed(wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, child.returncode, said)  # ru_maxrss: KiB on Linux
 
 
 def how_it_ran(said: str) -> str:
@@ -67,20 +95,19 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
     rows = []
     for name in names:
         with tempfile.TemporaryDirectory(prefix="floatsim-startup-") as cache:
+            profile = os.path.join(cache, "profile.json")
             cold = timed_run(name, t_end, cache)
-            compiled = timed_compile(name, cache)
+            compiled = timed_compile(name, cache, profile)
             warm = timed_run(name, t_end, cache)
-        rows.append(
-            (name, f"{cold[0]:.1f}", f"{compiled[0]:.1f}", f"{compiled[1]:.0f}", f"{warm[0]:.1f}", str(cold[2] or compiled[2] or warm[2]))
-        )
-        print(
-            f"  {name}: cold {cold[0]:.1f} s{how_it_ran(cold[3])}, compile {compiled[0]:.1f} s, warm {warm[0]:.1f} s",
-            file=sys.stderr,
-            flush=True,
-        )
+            most = top(profile) if os.path.exists(profile) else ""
+        rows.append((name, f"{cold.wall:.1f}", f"{compiled.wall:.1f}", f"{compiled.cpu:.1f}", f"{compiled.peak:.0f}", f"{warm.wall:.1f}",
+                     most, str(cold.status or compiled.status or warm.status)))  # fmt: skip
+        print(f"  {name}: cold {cold.wall:.1f} s{how_it_ran(cold.said)}, compile {compiled.wall:.1f} s ({compiled.cpu:.1f} s CPU), "
+              f"warm {warm.wall:.1f} s", file=sys.stderr, flush=True)  # fmt: skip
 
     print(f"machine: {machine()}")
     print(f"`python -m sim run --scene NAME --t-end {t_end:g}` in a fresh process. cold: an empty kernel cache; compile: the kernels "
-          "the preset needs, into that cache, in a fresh process (what the viewer and a longer run wait for); warm: the run again")  # fmt: skip
-    table(("preset", "cold run s", "compile s", "compile peak MiB", "warm run s", "exit"), rows)
+          "the preset needs, into that cache, in a fresh process (what the viewer and a longer run wait for), wall and CPU; warm: "
+          "the run again; most CPU: the kernels whose own compile took the most (their callees' apart)")  # fmt: skip
+    table(("preset", "cold run s", "compile s", "compile CPU s", "compile peak MiB", "warm run s", "most CPU", "exit"), rows)
     return 0

@@ -286,4 +286,5 @@ def test_a_recording_shows_the_joint_axis():
     doc = msgspec.msgpack.decode(inner[8 : 8 + int.from_bytes(inner[:8], "little")])
     assert [m for _, m in doc["messages"] if m.get("name") == "/world/joint" and m["type"] == "LineSegmentsMessage"]
     point, direction = sim.frame().joint_axis
-    np.testing.assert_allclose(point, [0.0, 0.0, 0.7]) and np.testing.assert_allclose(direction, [0.0, 1.0, 0.0])
+    np.testing.assert_allclose(point, [0.0, 0.0, 0.7])
+    np.testing.assert_allclose(direction, [0.0, 1.0, 0.0])

@@ -1,7 +1,7 @@
 """The compiled kernels without the wait: a child process fills their disk cache while the numpy reference runs.
 
 A scene's kernels (sim.kernels.specialised: its scheme, force model, terms and water) compile once per
-machine, in 20 s to a minute. A compiler thread in the running process would hold the GIL against the
+machine, in 20 s to a few minutes (compile_estimate.py says how long here). A compiler thread in the running process would hold the GIL against the
 simulation thread for most of that time, so `Compiler` runs `python -m sim.commands.compile` instead: a child
 that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps
 stepping on the numpy reference, polls `done`, then loads the kernels from the cache (a second or two) and switches
@@ -20,6 +20,7 @@ import tempfile
 import threading
 import time
 
+from sim.compile_estimate import compile_seconds
 from sim.system import compiled
 
 COMMAND_ENV = "FLOATSIM_COMPILER"
@@ -89,6 +90,8 @@ class Compiler:
         command = shlex.split(os.environ.get(COMMAND_ENV, "")) or [sys.executable, "-m", "sim.commands.compile", str(os.getpid())]
         command.append(spec_argument(spec))
         self.log = tempfile.TemporaryFile()  # its output, for the note when it fails
+        self.expected = compile_seconds([spec])
+        """The seconds it should take on this machine now (compile_estimate.py), from an empty cache."""
         self.started = time.monotonic()
         self.seconds: float | None = None
         """How long the compile took (None until it ends)."""

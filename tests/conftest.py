@@ -29,9 +29,10 @@ def _compile_covering(terminal=None) -> None:
     import sys
     import time
 
+    from sim.compile_estimate import compile_seconds, spec_cpu
     from sim.compiling import cached, parse_spec, spec_argument
     from sim.kernels import KERNEL_CACHE
-    from tests.covering import compiled_first, expected_seconds
+    from tests.covering import compiled_first
 
     say = terminal.write_line if terminal is not None else print
     specs = compiled_first()
@@ -42,10 +43,11 @@ def _compile_covering(terminal=None) -> None:
         if not todo:
             return
         started = time.monotonic()
+        cpu = compile_seconds([parse_spec(word) for word in todo])
         say(f"floatsim: compiling the numba kernels of {len(todo)} specialisations (the presets' and those the tests cover) in two processes, once per machine "
-            f"(cached in {KERNEL_CACHE}; about 15-60 s each); the tests start after")  # fmt: skip
+            f"(cached in {KERNEL_CACHE}; about {cpu:.0f} s of this machine's CPU, half that on two free cores); the tests start after")  # fmt: skip
         # each child takes the next spec as it finishes one, the longest first: two cores busy to the end
-        todo.sort(key=lambda word: -expected_seconds(parse_spec(word)))
+        todo.sort(key=lambda word: -spec_cpu(parse_spec(word)))
         queue = list(todo)
         children = [subprocess.Popen([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), "-"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, text=True) for _ in range(min(2, len(todo)))]  # fmt: skip

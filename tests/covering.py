@@ -1,6 +1,6 @@
 """The kernel specialisations the default test run compiles (issue 40), and how a test case outside them is marked.
 
-Each specialisation compiles for 15-60 s (two minutes for a sea or radiation on a busy machine), so the default run
+Each specialisation compiles for 20 s to two minutes of CPU (sim/compile_estimate.py: the measured table), so the default run
 compiles a covering set, once, before the tests start (conftest.py), and no test compiles another:
 - each preset's own (what a user runs first), the system step and the loads of rm3's bodies among them;
 - every term with each scheme (points, still water) and with each force model (implicit, still water); each scheme
@@ -50,15 +50,6 @@ def compiled_first() -> list[Spec]:
     specs += [still("implicit", model) for model in ("panels", "cells")]
     specs += [still("implicit", "cells", LINEAR), waves("implicit", "panels", LINEAR)]
     return list(dict.fromkeys(specs))
-
-
-def expected_seconds(spec: Spec) -> float:
-    """About how long `spec` compiles on a cold cache here (the longest are handed out first)."""
-    if spec.scheme == "system-step" or spec.held:
-        return 65.0
-    if spec.scheme != "implicit" or spec.system:
-        return 12.0
-    return 20.0 + 10.0 * (spec.model != "points") + 8.0 * ("drag" in spec.terms) + 8.0 * spec.radiating
 
 
 def covered(spec: Spec, forces_only: bool = False) -> bool:

@@ -328,8 +328,8 @@ class SimLoop(Mailbox):
                 if self._compiler is not None:
                     self._compiler.stop()  # compiling kernels the scene no longer needs
                 self._compiler = Compiler(spec)
-                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine; "
-                      "until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
+                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine "
+                      f"(about {self._compiler.expected:.0f} s here); until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
         self._backend = default_backend() if all(spec in self._loaded for spec in specs) else "numpy"
         if self.sim.backend != self._backend:
             self.sim.use_backend(self._backend)
@@ -367,7 +367,8 @@ class SimLoop(Mailbox):
         if self.sim.compiled:
             return ""
         if self._compiler is not None and self._compiler.spec in self.sim.specs:
-            return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - self._compiler.started:.0f} s so far)"
+            c = self._compiler
+            return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - c.started:.0f} s of about {c.expected:.0f} s)"
         if self._loader is not None and self._loader.spec in self.sim.specs:
             return "numpy reference (loading the fast kernels)"
         return "numpy reference"

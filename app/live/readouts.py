@@ -239,7 +239,7 @@ def describe(snap: Snapshot) -> str:
         lines.append(f"**⚠ {snap.advice}**")
     if snap.behind and snap.engine.startswith("numpy reference ("):  # compiling or loading: the cause passes by itself
         lines.append(f"**⚠ Slower than {s.speed:g}× real time until the fast kernels are ready**: the numpy reference steps meanwhile "
-                     "(a scene's first run on a machine compiles them once: 15-60 s, longer on a busy machine); "
+                     "(a scene's first run on a machine compiles them once, in the time said above); "
                      "nothing to change, the run speeds up by itself.")  # fmt: skip
     elif snap.behind:
         lines.append(

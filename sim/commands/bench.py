@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.commands.startup import startup
+from sim.compile_estimate import compile_seconds
 from sim.compiling import cached, warm_up
 from sim.ensemble import Ensemble
 from sim.errors import ConfigError
@@ -80,7 +81,11 @@ def announce(args: BenchArgs, base, cells) -> None:
         with_overrides(base, fluid__forces=f, step__integrator=i, body__points_per_edge=n or base.body.points_per_edge) for f, n, i in cells
     ]
     missing = {spec for spec in (Simulation(scene, backend="numpy").spec for scene in scenes) if not cached(spec)}
-    extra = f"; first {len(missing)} of its kernels compile (15-40 s each, once for this machine)" if missing else ""
+    extra = (
+        f"; first {len(missing)} of its kernels compile (about {compile_seconds(missing):.0f} s here, once for this machine)"
+        if missing
+        else ""
+    )
     said = (f"the first table at N = 10 only (--quick): about {QUICK_SECONDS} s" if args.quick else
             f"every table, about {FULL_MINUTES} min on a free 2-core machine (longer on a busy one)" if args.ensemble and args.radiation and args.waves and args.moorings
             and args.systems and args.sweep_cases else f"the tables asked (every table: about {FULL_MINUTES} min on a free 2-core machine)")  # fmt: skip

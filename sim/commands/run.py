@@ -12,6 +12,7 @@ from typing import Annotated
 import numpy as np
 import tyro
 
+from sim.compile_estimate import compile_seconds
 from sim.compiling import cached, default_backend, warm_up
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
@@ -75,10 +76,6 @@ def scene_from_args(args: RunArgs) -> SceneConfig:
                           initial__velocity=args.u0, initial__omega=args.omega0)  # fmt: skip
 
 
-SHORT_RUN_SECONDS = 60.0
-"""A run on an empty kernel cache that the numpy reference finishes within this runs there: a compile takes minutes."""
-
-
 def numpy_seconds(sim: Simulation, n_steps: int) -> float:
     """The numpy reference's wall time for n_steps of this scene, from a few steps of a copy."""
     probe = Simulation(sim.scene, backend="numpy")
@@ -96,18 +93,21 @@ def numpy_seconds(sim: Simulation, n_steps: int) -> float:
 
 def announce_compile(sim: Simulation, n_steps: int) -> None:
     """The compiled kernels build once per machine (then load from the disk cache): say so before the wait.
-    `sim` is built on the numpy reference: where its kernels are not built yet (kernels_ready), a short run
-    stays there, saying so; a longer one moves to the kernels, which compile first."""
+    `sim` is built on the numpy reference: where its kernels are not built yet (kernels_ready), a run the numpy reference
+    finishes before they would compile stays there, saying so; a longer one moves to the kernels, which compile first.
+    Both times are measured on this machine now (sim/compile_estimate.py), so the choice does not follow its load."""
 
     if sim.has_twin and not sim.compiled and default_backend() == "numba":
-        if not sim.kernels_ready and (estimate := numpy_seconds(sim, n_steps)) < SHORT_RUN_SECONDS:
-            print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (under a minute, once); this short run takes about "
-                  f"{max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or `python -m sim.commands.compile`, compiles them)",
-                  file=sys.stderr)  # fmt: skip
+        todo = [spec for spec in sim.specs if not cached(spec)]
+        wait = compile_seconds(todo)
+        if todo and (estimate := numpy_seconds(sim, n_steps)) < wait:
+            print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (about {wait:.0f} s here, once); "
+                  f"this run takes about {max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or "
+                  "`python -m sim.commands.compile`, compiles them)", file=sys.stderr)  # fmt: skip
         else:
-            if todo := [spec for spec in sim.specs if not cached(spec)]:  # say so before the wait, not after it
+            if todo:  # say so before the wait, not after it
                 print(f"floatsim: compiling the fast kernels for this scene ({'; '.join(spec.describe() for spec in todo)}), once for this "
-                      "machine (under a minute each; cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
+                      f"machine (about {wait:.0f} s here; cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
             seconds = sum(warm_up(spec) for spec in sim.specs)
             sim.use_backend(default_backend())
             if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes

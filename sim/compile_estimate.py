@@ -1,0 +1,69 @@
+"""How long the compiled kernels take to compile on this machine now: one measured table for the CLI, the viewer and
+the README.
+
+`floatsim bench --startup` measures each preset's compile in CPU seconds from an empty kernel cache (docs/performance.md);
+COMPILE_CPU is that table as a sum of parts, one a feature of a kernels.Spec, fitted to it. This machine's speed now
+(its load included) comes from timing a fixed piece of pure Python, the kind of work numba's compiler does, against the
+same piece on the machine that measured the table: a machine twice as slow, or one core shared with another job, reads
+as twice the estimate. A run compares it with its own time on the numpy reference, measured on the same machine at the
+same moment, so the choice of one or the other does not follow the machine's load.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+COMPILE_CPU = {
+    "points": 18.0,
+    "panels": 20.0,
+    "cells": 22.0,
+    "rk4": 4.0,
+    "drag": 6.0,
+    "current": 3.0,
+    "waves": 30.0,
+    "radiating": 12.0,
+    "held": 4.0,
+    "body of several": 8.0,
+    "system step": 40.0,
+}
+"""CPU seconds on the reference machine from an empty cache: a spec's force model, then what each feature adds."""
+
+REFERENCE_PROBE = 0.030
+"""Seconds `_probe` took on the reference machine (quiet; Intel Xeon, 2 cores, Python 3.11)."""
+
+
+def spec_cpu(spec) -> float:
+    """The reference machine's CPU seconds to compile `spec`'s kernels from an empty cache (COMPILE_CPU's parts)."""
+    if spec.scheme == "system-step":
+        return COMPILE_CPU["system step"]
+    parts = [spec.model, *(("rk4",) if spec.scheme == "rk4" else ()), *(("drag",) if "drag" in spec.terms else ())]
+    parts += [name for name, on in (("waves", spec.waves), ("current", spec.current), ("radiating", spec.radiating), ("held", spec.held),
+                                    ("body of several", spec.system)) if on]  # fmt: skip
+    return sum(COMPILE_CPU[p] for p in parts)
+
+
+def _probe() -> float:
+    """Seconds of a fixed piece of pure Python (dicts, strings, small objects: what a compiler's passes do), the median
+    of 5 (not the best: on a machine shared with other work the compile gets the share of it a median slice gets)."""
+    times = []
+    for _ in range(5):
+        started = time.perf_counter()
+        table: dict = {}
+        for i in range(20_000):
+            key = f"v{i % 997}.{i}"
+            table[key] = (i, key.upper(), [i, i + 1])
+            table.pop(f"v{(i - 5) % 997}.{i - 5}", None)
+        times.append(time.perf_counter() - started)
+    return statistics.median(times)
+
+
+def slowness() -> float:
+    """How many times slower this machine is now than the one COMPILE_CPU was measured on (at least 1/4)."""
+    return max(_probe() / REFERENCE_PROBE, 0.25)
+
+
+def compile_seconds(specs, factor: float | None = None) -> float:
+    """The wall seconds compiling `specs` takes on this machine now from an empty cache (`factor`: slowness(), measured
+    when not given)."""
+    return sum(spec_cpu(s) for s in specs) * (slowness() if factor is None else factor)

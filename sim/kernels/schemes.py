@@ -184,7 +184,7 @@ def rk4_step(y, t, dt, carry, model, s, sea, rad):
     return yn, carry  # rk4 uses no carry
 
 
-@njit(inline="always", **JIT)
+@njit(inline="always", **JIT)  # into advance's loop or step_held: a spec compiles one of the two (warm_up)
 def step(y, t, dt, carry, model, s, sea, rad):
     """One step of this copy's scheme (the others are dropped before compiling)."""
     if SCHEME == EULER:
@@ -220,8 +220,8 @@ def advance(y0, t0, n_steps, dt, model, sea, rad):
     return y, n_steps
 
 
-@njit(inline="always", **JIT)
-def _fairleads(y, R, inertia, levers, pos, vel):
+@njit(**JIT)
+def fairleads(y, R, inertia, levers, pos, vel):
     """The fairleads' positions and velocities, flat (3 k,), at the state y with rotation R: x + R r and u + omega x (R r)."""
     w = angular_velocity(R, y[10:13], inertia)
     for i in range(levers.shape[0]):
@@ -230,13 +230,13 @@ def _fairleads(y, R, inertia, levers, pos, vel):
         vel[3 * i : 3 * i + 3] = y[7:10] + np.cross(w, lever)
 
 
-@njit(**JIT)
 def held_start(y, t, dt, model, sea, rad, levers, pos, vel):
     """What step_held keeps from step to step, at y's pose: the scratch and the carry (its wet flag as a (1,) array, its
-    mass frames apart), and the fairleads' kinematics for the first step into pos and vel."""
+    mass frames apart), and the fairleads' kinematics for the first step into pos and vel. (Python around the compiled
+    `start` and `fairleads`: compiled, it held a third copy of the loads' machine code, 4 s of a moored compile.)"""
     s = scratch(model.geom)
     R, F, T, D, wet, K, lam, V, WS = start(y, t, dt, model, s, sea, rad)
-    _fairleads(y, R, model.inertia, levers, pos, vel)
+    fairleads(y, R, model.inertia, levers, pos, vel)
     return s, (R, F, T, D, np.array([wet]), K, lam, V, WS[0], WS[1])
 
 
@@ -266,7 +266,7 @@ def step_held(y, t, dt, model, sea, rad, s, keep, now, ahead, levers, pos, vel):
     Rn, Fn, Tn, Dn, wetn, Kn, lamn, Vn, WSn = carry
     R[:], F[:], T[:], D[:], K[:], lam[:], V[:], W[:], S[:] = Rn, Fn, Tn, Dn, Kn, lamn, Vn, WSn[0], WSn[1]
     flag[0] = wetn
-    _fairleads(yn, Rn, model.inertia, levers, pos, vel)
+    fairleads(yn, Rn, model.inertia, levers, pos, vel)
     return yn, True
 
 
@@ -298,8 +298,9 @@ def warm_up() -> None:
     if SPEC.system:  # one of several bodies: the system's kick asks its loads only
         linearised_loads(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea)
         return
-    advance(y, 0.0, 1, 0.01, model, sea, rad)
-    if HOLDING:  # a moored body's step (system/single.py, Single._moored)
+    if not HOLDING:  # (a moored body steps by step_held alone: system/single.py, Single._moored)
+        advance(y, 0.0, 1, 0.01, model, sea, rad)
+    else:
         levers, pos, vel = np.zeros((1, 3)), np.zeros(3), np.zeros(3)
         s, keep = held_start(y, 0.0, 0.01, model, sea, rad, levers, pos, vel)
         step_held(y, 0.0, 0.01, model, sea, rad, s, keep, np.zeros((1, 3)), np.zeros((1, 3)), levers, pos, vel)

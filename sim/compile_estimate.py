@@ -16,18 +16,22 @@ import time
 
 COMPILE_CPU = {
     "points": 18.0,
-    "panels": 20.0,
-    "cells": 22.0,
+    "panels": 21.0,
+    "cells": 23.0,
     "rk4": 4.0,
-    "drag": 6.0,
+    "drag": 7.0,
     "current": 3.0,
-    "waves": 30.0,
-    "radiating": 12.0,
-    "held": 4.0,
-    "body of several": 8.0,
-    "system step": 40.0,
+    "waves": 27.0,
+    "radiating": 10.0,
+    "held": 8.0,
+    "system step": 48.0,
 }
-"""CPU seconds on the reference machine from an empty cache: a spec's force model, then what each feature adds."""
+"""CPU seconds on the reference machine from an empty cache: a spec's force model, then what each feature adds
+(fitted to `floatsim bench --startup`, docs/performance.md; the water's shared kernels are counted in every spec that
+uses them, as a first compile on a machine pays them)."""
+
+BODY_OF_SEVERAL = 0.65
+"""The share of a body's spec that one of several bodies compiles: its loads, without a step or a frame of its own."""
 
 REFERENCE_PROBE = 0.030
 """Seconds `_probe` took on the reference machine (quiet; Intel Xeon, 2 cores, Python 3.11)."""
@@ -38,9 +42,10 @@ def spec_cpu(spec) -> float:
     if spec.scheme == "system-step":
         return COMPILE_CPU["system step"]
     parts = [spec.model, *(("rk4",) if spec.scheme == "rk4" else ()), *(("drag",) if "drag" in spec.terms else ())]
-    parts += [name for name, on in (("waves", spec.waves), ("current", spec.current), ("radiating", spec.radiating), ("held", spec.held),
-                                    ("body of several", spec.system)) if on]  # fmt: skip
-    return sum(COMPILE_CPU[p] for p in parts)
+    parts += [
+        name for name, on in (("waves", spec.waves), ("current", spec.current), ("radiating", spec.radiating), ("held", spec.held)) if on
+    ]
+    return sum(COMPILE_CPU[p] for p in parts) * (BODY_OF_SEVERAL if spec.system else 1.0)
 
 
 def _probe() -> float:

@@ -262,6 +262,33 @@ def test_a_python_callable_drives_the_take_off():
     assert sim.controller.name == "passive"
 
 
+def test_a_limited_damper_is_coulomb_friction():
+    """Past pto_max_force F a damper is Coulomb friction: amplitude falls 2F/k a half swing, P_pto = -F_pto z' (guards Law.at's sign)."""
+    from sim import Simulation
+    from sim.scene.config import load_scene, with_overrides
+
+    m, k, limit, z0, dt = 500.0, 1000.0 * 9.81 * 1.0, 100.0, 0.1, 0.01  # the wall-sided cube: m z'' = -k z - F sign z' (Den Hartog)
+    scene = with_overrides(load_scene("drop"), body__density=500.0, fluid__forces="panels", fluid__damping=0.0, step__dt=dt,
+                           initial__position=(0.0, 0.0, z0), constraint__joint="prismatic", constraint__pto_damping=1e5,
+                           constraint__pto_max_force=limit)  # fmt: skip
+    sim = Simulation(scene, backend="numpy")
+    t, z = [0.0], [z0]
+    while sim.state.t < 2.5 - 1e-9:
+        sim.step(1)
+        f = sim.frame()
+        t.append(f.t)
+        z.append(f.x_world[2])
+        assert f.P_pto == pytest.approx(-f.F_pto * sim.state.u_world[2], rel=1e-9, abs=1e-9)
+    t, z = np.array(t), np.array(z)
+    i = np.flatnonzero((np.abs(z[1:-1]) >= np.abs(z[:-2])) & (np.abs(z[1:-1]) > np.abs(z[2:]))) + 1  # the turning points
+    a, b, c = z[i - 1], z[i], z[i + 1]
+    d = 0.5 * (a - c) / (a - 2 * b + c)  # a parabola through each and its neighbours
+    peaks, n = b - 0.25 * (a - c) * d, np.arange(1, len(i) + 1)
+    assert len(i) == 3
+    np.testing.assert_allclose(peaks, (-1.0) ** n * (z0 - 2.0 * n * limit / k), atol=0.01 * limit / k)  # 1 % of the offset F / k
+    np.testing.assert_allclose(t[i] + d * dt, n * math.pi * math.sqrt(m / k), atol=dt)  # the undamped half period
+
+
 @pytest.mark.parametrize(
     "flags, message",
     [

@@ -5,10 +5,11 @@ import pytest
 from scenes import box_scene
 
 from sim import INTEGRATORS, Simulation, SimulationDiverged, load_scene, with_overrides
+from tests.covering import LINEAR, cases, waves
 
 
-def final_state(scene, T=1.0):
-    sim = Simulation(scene)
+def final_state(scene, T=1.0, backend=None):
+    sim = Simulation(scene, backend=backend)
     sim.step(round(T / sim.dt))
     s = sim.state
     return np.concatenate([s.x_world, s.u_world, s.L_world, s.q_world_body * np.sign(s.q_world_body[0])])
@@ -33,6 +34,16 @@ def test_observed_order_matches_declared_order(name, case):
     errors = [np.abs(final_state(box_scene(name, dt, **kw)) - reference).max() for dt in dts]
     slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
     assert slope == pytest.approx(INTEGRATORS[name].order, abs=0.15), errors
+
+
+@pytest.mark.parametrize("backend", ["numpy", *cases([("numba",)], lambda backend: waves("rk4", "points", LINEAR))])
+def test_rk4_is_fourth_order_under_a_time_dependent_load(backend):
+    """RK4's observed order is 4 on the submerged box in regular waves, a load depending on t (guards the stages' times)."""
+    waves_4s = dict(waves__kind="regular", waves__height=1.0, waves__period=4.0)
+    ends = [final_state(with_overrides(box_scene("rk4", dt), **waves_4s), backend=backend) for dt in (0.2, 0.1, 0.05, 0.025)]
+    gaps = [np.abs(a - b).max() for a, b in zip(ends, ends[1:])]  # the order is log2 of their ratio (no reference needed)
+    orders = np.log2(np.array(gaps[:-1]) / gaps[1:])  # k3 at t + dt instead of t + dt / 2: 0.3 and 0.9
+    assert orders == pytest.approx([4.0, 4.0], abs=0.3), gaps
 
 
 @pytest.mark.parametrize("name", [n for n, c in INTEGRATORS.items() if c.adaptive])

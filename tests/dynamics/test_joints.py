@@ -60,6 +60,19 @@ def test_a_sliding_wall_sided_body_heaves_as_the_damped_oscillator_at_second_ord
     ), errors
 
 
+def test_the_waters_damping_acts_along_the_slide():
+    """The water's heave damping alone on the slide: m z'' = -rho g A z - B33 z' in closed form (guards J^T D J in joints._affine)."""
+    B = 800.0
+    sim = Simulation(heave_scene(0.01, damping=0.0, fluid__heave_damping=B), backend="numpy")
+    t, z = [], []
+    while sim.state.t < 3.0 - 1e-9:
+        sim.step(1)
+        t.append(sim.state.t)
+        z.append(sim.state.x_world[2])
+    error = np.abs(np.array(z) - damped_heave(np.array(t), 0.1, 500.0, RHO * G * 1.0, B)).max()
+    assert error < 1e-4, error
+
+
 def test_the_take_off_absorbs_what_the_body_loses():
     """Without other damping, E_total + the take-off spring's energy + E_pto stays the starting energy to the
     scheme's order (4x closer per halved step), and E_pto is the integral of P_pto."""

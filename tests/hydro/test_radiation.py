@@ -186,3 +186,22 @@ def test_radiation_switches_on_and_off_and_a_sinking_body_is_refused():
     with pytest.raises(ConfigError, match="no floating equilibrium"):
         sim.update(fluid__radiation="bem", body__density=1500.0)
     assert sim.scene.fluid.radiation == "none" and sim.scene.body.density == 900.0  # refused: nothing changed
+
+
+@pytest.mark.parametrize("omega", [2.0, 4.0])
+def test_a_forced_heave_radiates_half_b_v_squared(cube, omega):
+    """The cube heaved at V cos(omega t), memory stepped at dt = 0.05 s, radiates B(omega) V^2 / 2 (guards held_step's exact Gamma)."""
+    rad = Simulation(with_overrides(load_scene("rest"), fluid__forces="panels", fluid__radiation="bem"), backend="numpy").model.radiation
+    n = round(2 * np.pi / omega / 0.05)  # steps per period
+    dt, x, E, Es = 2 * np.pi / omega / n, np.zeros(rad.states), 0.0, []
+    heave = lambda t: np.array([0.0, 0.0, np.cos(omega * t), 0.0, 0.0, 0.0])  # noqa: E731 (V = 1 m/s)
+    for k in range(12 * n):  # 12 periods (the memory forgets its start in about 4), stepped as the schemes' drifts do
+        nu0, nu1 = heave(k * dt), heave((k + 1) * dt)
+        new = rad.advance(x, 0.5 * (nu0 + nu1), dt)
+        E -= 0.5 * dt * (nu0 @ rad.force(np.eye(3), x) + nu1 @ rad.force(np.eye(3), new))
+        x = new
+        if (k + 1) % n == 0:
+            Es.append(E)
+    power = np.diff(Es[-5:]).mean() / (n * dt)
+    assert power == pytest.approx(0.5 * rad.memory.response(np.array([omega]))[0, 2, 2].real, rel=0.01)  # the fit's B (dt G: 5-10 % off)
+    assert power == pytest.approx(0.5 * np.interp(omega, cube.omega, cube.damping[:, 2, 2]), rel=0.02)  # the BEM's

@@ -11,6 +11,7 @@ from sim.hydro.forces import Model
 from sim.scene.config import load_scene
 from sim.simulation import Simulation
 from sim.system.tree import Member, System, body_frames, build
+from tests.dynamics.test_joints import damped_heave
 
 
 def scene_file(tmp_path, text: str, name: str = "system.toml"):
@@ -83,6 +84,42 @@ PAIR = """
     position = [0.2, 0.9, 0.05]
     orientation = [0.9659258262890683, 0.0, 0.0, 0.25881904510252074]
 """
+
+
+def test_the_waters_damping_acts_along_each_bodys_slide(tmp_path):
+    """Two cubes on slides, the water's heave damping alone: each m z'' = -rho g A z - B33 z' in closed form (guards tree's J^T D J)."""
+    B, starts = 800.0, (0.1, -0.06)
+    text = f"""
+        [fluid]
+        forces = "panels"
+        damping = 0.0
+        heave_damping = {B}
+        [waves]
+        kind = "still"
+        [step]
+        dt = 0.01
+        """
+    for k, start in enumerate(starts):
+        text += f"""
+        [[bodies]]
+        name = "cube{k}"
+        shape = "cube"
+        density = 500.0
+        position = [{4.0 * k}, 0.0, 0.0]
+        joint = "prismatic"
+        axis = [0.0, 0.0, 1.0]
+        start = {start}
+        """
+    system, s = build(scene_file(tmp_path, text))
+    t, z = [], []
+    for _ in range(300):
+        s = system.step(s, 0.01)
+        t.append(s.t)
+        z.append(s.theta.copy())
+    for k, start in enumerate(starts):
+        expected = damped_heave(np.array(t), start, 500.0, 1000.0 * 9.81, B)
+        error = np.abs(np.array(z)[:, k] - expected).max()
+        assert error < 1e-3 * abs(start), (k, error)
 
 
 def merged(members: list[Member], water, fluid) -> Member:

@@ -68,17 +68,27 @@ def test_every_preset_reads_its_fit_from_the_shipped_ones(monkeypatch, tmp_path)
 
 
 def test_a_stored_fit_is_the_fit_it_stands_for(tmp_path):
-    """The sphere's shipped fit read back is what fitting its solve now gives (the same K(i omega) to round-off), and a
+    """The sphere's shipped fit read back is a fit of its solve by what a fit must satisfy, on any CPU (a fit is not
+    reproduced bit for bit on another: 3.4e-4 of the peak apart on an AMD EPYC): passive and stable, its damping and added
+    mass within 2 % of the solve's at every solved frequency, as many states as a fresh fit and within 1 % of it; and a
     damaged cache file is fitted again, not trusted."""
     from sim.hydro import memory_fit
 
     c = Coefficients.load(shipped_solve("sphere"))
     stored = memory_fit._read(memory_fit.STORED / f"{memory_fit.fit_key(c, 0.02, 10, 1.0)}.npz")
     fresh = memory_fit._fit(c, 0.02, 10, 1.0)
+    low, where = lowest_damping(stored, c.omega.max())
+    assert low >= -1e-12 * np.abs(c.damping).max(), (low, where)
+    assert np.linalg.eigvals(stored.F).real.max() < 0
+    K = stored.response(c.omega)
+    for i in range(3):  # surge, sway, heave: the sphere's rotations radiate nothing about its centre
+        B, A = c.damping[:, i, i], c.added_mass[:, i, i]
+        assert np.abs(K[:, i, i].real - B).max() <= 0.02 * np.abs(B).max()
+        assert np.abs(stored.added_mass_inf[i, i] + K[:, i, i].imag / c.omega - A).max() <= 0.02 * np.abs(A).max()
     w = np.geomspace(0.01, 100.0, 500)
-    np.testing.assert_allclose(stored.response(w), fresh.response(w), rtol=0, atol=1e-12 * np.abs(fresh.response(w)).max())
-    np.testing.assert_array_equal(stored.added_mass_inf, fresh.added_mass_inf)
-    assert stored.error == fresh.error and stored.states == fresh.states
+    assert np.abs(stored.response(w) - fresh.response(w)).max() <= 0.01 * np.abs(fresh.response(w)).max()
+    np.testing.assert_allclose(stored.added_mass_inf, fresh.added_mass_inf, rtol=1e-9, atol=1e-9 * np.abs(fresh.added_mass_inf).max())
+    assert stored.states == fresh.states
     (tmp_path / "bad.npz").write_bytes(b"not a fit")
     assert memory_fit._read(tmp_path / "bad.npz") is None and memory_fit._read(tmp_path / "absent.npz") is None
 

@@ -33,7 +33,7 @@ uses them, as a first compile on a machine pays them)."""
 BODY_OF_SEVERAL = 0.65
 """The share of a body's spec that one of several bodies compiles: its loads, without a step or a frame of its own."""
 
-REFERENCE_PROBE = 0.030
+REFERENCE_PROBE = 0.0116
 """Seconds `_probe` took on the reference machine (quiet; Intel Xeon, 2 cores, Python 3.11)."""
 
 

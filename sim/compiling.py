@@ -76,7 +76,10 @@ def spec_argument(spec) -> str:
 def parse_spec(word: str):
     from sim.kernels import Spec  # numba's import (0.6 s): only where compiled kernels run
 
-    scheme, model, terms, waves, radiating, current, held, system = word.split(",")
+    parts = word.split(",")
+    if len(parts) != 8:
+        raise ValueError(f"{word!r} is not a kernels spec: scheme,model,terms,waves,radiating,current,held,system (spec_argument)")
+    scheme, model, terms, waves, radiating, current, held, system = parts
     return Spec(
         scheme, model, tuple(t for t in terms.split("+") if t), waves == "1", radiating == "1", current == "1", held == "1", system == "1"
     )

@@ -92,5 +92,26 @@ def _main(parent: int, specs: list[str]) -> int:
     return 0
 
 
+USAGE = """usage: python -m sim.commands.compile [PID [SPEC ...]]
+
+Compile the numba kernels into the disk cache, once for this machine: with no argument, every preset's (as a first
+run of each would); with PID, the kernels of each SPEC given (a word of sim.compiling.spec_argument), or of each read
+from stdin with '-', stopping when the process PID stops."""
+
+
+def main(argv: list[str]) -> int:
+    if argv and argv[0] in ("-h", "--help"):
+        print(USAGE)
+        return 0
+    if argv and (not argv[0].isdigit() or int(argv[0]) != os.getppid()):  # it stops with PID: only its parent's makes sense
+        print(f"floatsim: {argv[0]!r} is not this command's parent's process id ({os.getppid()})\n{USAGE}", file=sys.stderr)
+        return 2
+    try:
+        return _main(int(argv[0]) if argv else os.getppid(), argv[1:])
+    except ValueError as e:  # a spec word that is not one
+        print(f"floatsim: {e}", file=sys.stderr)
+        return 2
+
+
 if __name__ == "__main__":
-    raise SystemExit(_main(int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid(), sys.argv[2:]))
+    raise SystemExit(main(sys.argv[1:]))

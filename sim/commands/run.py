@@ -72,8 +72,11 @@ def scene_from_args(args: RunArgs) -> SceneConfig:
     position = scene.initial.position
     if args.z0 is not None:
         position = (position[0], position[1], args.z0)
-    return with_overrides(scene, **overrides(args, PARAMS.values()), initial__position=position, initial__orientation=args.q0,
-                          initial__velocity=args.u0, initial__omega=args.omega0)  # fmt: skip
+    given = overrides(args, PARAMS.values())
+    if given.get("body__mesh"):  # a path typed here is the shell's, not the scene file's folder's
+        given["body__mesh"] = str(Path(given["body__mesh"]).expanduser().absolute())
+    return with_overrides(scene, **given, initial__position=position, initial__orientation=args.q0, initial__velocity=args.u0,
+                          initial__omega=args.omega0)  # fmt: skip
 
 
 def numpy_seconds(sim: Simulation, n_steps: int) -> float:

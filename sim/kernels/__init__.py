@@ -69,10 +69,10 @@ class Spec(NamedTuple):
 
     def describe(self) -> str:
         if self == SYSTEM_STEP:
-            return "the step of several bodies on joints (kinematics, kicks, radiation memory)"
+            return "step of several bodies on joints (kinematics, kicks, radiation memory)"
         terms = " + ".join(self.terms) or "no forces"
         water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
-        return f"{'the loads of one of several bodies' if self.system else self.scheme + ' scheme'}, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
+        return f"{'loads of one of several bodies' if self.system else self.scheme + ' scheme'}, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
 
 
 SYSTEM_STEP = Spec("system-step", "any", (), False, False, False, False, True)

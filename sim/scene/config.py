@@ -182,9 +182,9 @@ CONSTRAINT = (
           "each stop) or pi (on the rate: Kp = pto_damping, Ki = pto_stiffness)", kind="choice", choices=CONTROLLERS, label="Control",
           gui=()),
     Param("constraint", "latch_time", 0.0, "Latching control: how long the joint is held at each stop (regular waves: about (T - T_n) / 2)",
-          "s", lo=0.0, hi=1e4, live=(0.0, 30.0), name="latch time", label="Latch time (s)", gui=(0.0, 10.0, 0.01)),
+          "s", lo=0.0, hi=1e4, live=(0.0, 30.0), name="latch time", label="Latch time", gui=(0.0, 10.0, 0.01)),
     Param("constraint", "declutch_time", 0.0, "Declutching control: how long the take-off is off after each stop", "s", lo=0.0, hi=1e4,
-          live=(0.0, 30.0), name="declutch time", label="Declutch time (s)", gui=(0.0, 10.0, 0.01)),
+          live=(0.0, 30.0), name="declutch time", label="Declutch time", gui=(0.0, 10.0, 0.01)),
     Param("constraint", "pto_max_force", None, "The largest force (N) or moment (N m) the take-off gives: its controller's law limited "
           "to it", lo=0.0, hi=1e12, lo_open=True, kind="optional", name="PTO force limit"),
 )

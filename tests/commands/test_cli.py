@@ -155,6 +155,17 @@ def test_missing_mesh_file_gets_one_clear_line(tmp_path, capsys):
     assert err.count("\n") == 1 and "mesh file not found" in err
 
 
+def test_a_mesh_flag_is_read_where_it_was_typed(tmp_path, monkeypatch, capsys):
+    """`run --mesh FILE` reads FILE from the shell's folder, and names that path when it is missing (not the scene folder's)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "--mesh", "nothere.stl", "--t-end", "0.01"]) == 2
+    assert f"mesh file not found: {tmp_path / 'nothere.stl'}" in capsys.readouterr().err
+    (tmp_path / "here.stl").write_bytes((Path(__file__).resolve().parents[2] / "assets" / "meshes" / "log.stl").read_bytes())
+    out = tmp_path / "run.csv"
+    assert main(["run", "--mesh", "here.stl", "--t-end", "0.01", "--out", str(out)]) == 0
+    assert len(out.read_text().splitlines()) > 1
+
+
 def test_unknown_key_in_a_scene_file_is_named(tmp_path, capsys):
     scene = tmp_path / "typo.toml"
     scene.write_text("[fluid]\ndamp = 3\n")

@@ -44,3 +44,14 @@ def test_the_estimate_is_within_a_factor_two_of_a_real_compile(tmp_path):
     assert os.waitstatus_to_exitcode(status) == 0, out
     cpu, table = usage.ru_utime + usage.ru_stime, spec_cpu(parse_spec(DROP))
     assert table / 2 < cpu < 2 * table, (cpu, table)
+
+
+@pytest.mark.parametrize(("args", "said"), [(["--help"], "usage: python -m sim.commands.compile"), (["nope"], "not this command's parent's"),
+                                            (["PARENT", "a,b"], "'a,b' is not a kernels spec")])  # fmt: skip
+def test_the_compile_command_says_its_usage_and_its_mistakes_in_a_line(args, said):
+    """`python -m sim.commands.compile`, which a run's note names: --help prints its usage; a wrong process id or spec is
+    one line and exit 2, not a traceback."""
+    argv = [str(os.getpid()) if a == "PARENT" else a for a in args]
+    done = subprocess.run([sys.executable, "-m", "sim.commands.compile", *argv], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert said in done.stdout + done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert done.returncode == (0 if args == ["--help"] else 2)

@@ -1,8 +1,8 @@
 """The compiled kernels without the wait: a child process fills their disk cache while the numpy reference runs.
 
 A scene's kernels (sim.kernels.specialised: its scheme, force model, terms and water) compile once per
-machine, in 20 s to a few minutes (compile_estimate.py says how long here). A compiler thread in the running process would hold the GIL against the
-simulation thread for most of that time, so `Compiler` runs `python -m sim.commands.compile` instead: a child
+machine, in 20 s to a few minutes (compile_estimate.py says how long here). A compiler thread in the running
+process would hold the GIL against the simulation thread for most of that time, so `Compiler` runs `python -m sim.commands.compile` instead: a child
 that compiles the kernels of one scene into the disk cache (sim/kernels/__init__.py) and exits. The caller keeps
 stepping on the numpy reference, polls `done`, then loads the kernels from the cache (a second or two) and switches
 between two steps: the state is the same vector either way.

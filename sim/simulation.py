@@ -45,7 +45,7 @@ from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
 from sim.system.compiled import CompiledStep
-from sim.system.frame import AssemblyFrame, Frame, assembly_frame, joint_reading, lines_reading, observe
+from sim.system.frame import AssemblyFrame, Frame, assembly_frame, joint_reading, line_shapes, lines_reading, observe
 from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
@@ -653,7 +653,7 @@ class Simulation:
             return self._bodies_frame()
         frame = self._checked()
         if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
-            frame = dataclasses.replace(frame, **lines_reading(self.moorings))
+            frame = dataclasses.replace(frame, **line_shapes(self.moorings))
             self._frame = (self._frame[0], frame)
         return frame
 

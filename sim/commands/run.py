@@ -102,7 +102,7 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
 
     if sim.has_twin and not sim.compiled and default_backend() == "numba":
         todo = [spec for spec in sim.specs if not cached(spec)]
-        wait = compile_seconds(todo)
+        wait = compile_seconds(todo) if todo else 0.0  # (its probe takes 60 ms: only when something is to compile)
         if todo and (estimate := numpy_seconds(sim, n_steps)) < wait:
             print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (about {wait:.0f} s here, once); "
                   f"this run takes about {max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or "

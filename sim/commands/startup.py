@@ -5,7 +5,7 @@ with an empty kernel cache of its own (a first run on a machine: a short run sta
 then the kernels that preset needs are compiled into that cache in a fresh process, as the viewer's
 background compiler and a longer run do (`python -m sim.commands.compile`), then the run again (every later run:
 the kernels load from the cache). Wall and CPU time and the peak memory of each process are reported, and the kernels
-whose own compile took the most CPU (numba's compile events and LLVM timers: sim/commands/compile_profile.py).
+whose own compile took the most CPU (numba's compile events and LLVM timers: sim/commands/compile.py's Profile).
 """
 
 from __future__ import annotations

@@ -34,7 +34,7 @@ def joint_reading(name: str, law, theta: float, rate: float, absorbed: float) ->
 
 def lines_reading(moorings, shapes: bool = True) -> dict:
     """The Readings of the mooring lines (lines/moorings.Moorings, or None): their pull on the bodies, each fairlead's
-    tension, their energy, and (if `shapes`: asked of MoorDyn node by node) each line's nodes and tensions."""
+    tension, their energy, and (if `shapes`) line_shapes."""
     if moorings is None:
         return {}
     each = moorings.fairlead_tensions()
@@ -42,9 +42,13 @@ def lines_reading(moorings, shapes: bool = True) -> dict:
     out = dict(
         mooring=(*(float(f) for f in total), float(each.max(initial=0.0)), *(float(t) for t in each)), line_energy=moorings.energy_now()
     )
-    if shapes:
-        out.update(lines=tuple(moorings.lines()), line_tensions=tuple(moorings.line_tensions()))
-    return out
+    return {**out, **line_shapes(moorings)} if shapes else out
+
+
+def line_shapes(moorings) -> dict:
+    """Each line's nodes and their tensions (Readings.lines and line_tensions): asked of MoorDyn node by node, so only
+    for a frame that is shown."""
+    return dict(lines=tuple(moorings.lines()), line_tensions=tuple(moorings.line_tensions()))
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)

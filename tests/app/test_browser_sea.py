@@ -44,6 +44,25 @@ def water_spread(render: np.ndarray) -> tuple[float, float]:
     return float(high - low), float(water.mean())
 
 
+def water_pixels(render: np.ndarray) -> int:
+    """How many pixels of the frame's lower 60 % are water's blue."""
+    rgb = render.astype(float)
+    water = rgb[..., 2] > rgb[..., 0] + 25
+    return int(water[int(0.4 * render.shape[0]) :].sum())
+
+
+def render_with_sea(client, height: int, width: int) -> np.ndarray:
+    """The page's frame once it shows the sea: a loaded machine may not have drawn a new scene's water yet (a frame
+    of sky only, 0.5 % water seen once in CI), so look again, up to 30 s more."""
+    render = client.get_render(height, width, timeout=60.0)
+    for _ in range(10):
+        if water_pixels(render) > 0.2 * height * width:
+            break
+        time.sleep(3.0)
+        render = client.get_render(height, width, timeout=60.0)
+    return render
+
+
 @pytest.mark.slow
 def test_a_storm_is_shaded_where_still_water_is_one_calm_sheet(browser_page, tmp_path):
     """The grey levels over the water of a storm (at full height from the start) spread several times as widely as
@@ -54,8 +73,7 @@ def test_a_storm_is_shaded_where_still_water_is_one_calm_sheet(browser_page, tmp
         try:
             client = open_page(app, browser_page)
             time.sleep(4.0)  # the environment map fades in; a few wave surfaces go out
-            render = client.get_render(240, 320, timeout=60.0)
-            spreads[scene] = water_spread(render)
+            spreads[scene] = water_spread(render_with_sea(client, 240, 320))
         finally:
             app.stop()
     (still, still_share), (storm, storm_share) = spreads["damped"], spreads["storm"]
@@ -148,13 +166,6 @@ def test_follow_keeps_the_body_in_the_middle_half_of_the_frame_through_a_storm_a
         app.stop()
 
 
-def water_pixels(render: np.ndarray) -> int:
-    """How many pixels of the frame's lower 60 % are water's blue."""
-    rgb = render.astype(float)
-    water = rgb[..., 2] > rgb[..., 0] + 25
-    return int(water[int(0.4 * render.shape[0]) :].sum())
-
-
 def steps(render: np.ndarray) -> float:
     """The share of neighbouring water pixels (across and down) whose grey levels differ by 2 or more, over the near
     water: the frame's lower 60 % (not the fogged horizon), the body's box in the middle left out. A sea of flat
@@ -181,12 +192,7 @@ def test_the_storm_sea_is_smooth_shaded_with_no_steps_between_neighbouring_pixel
     try:
         client = open_page(app, browser_page)
         time.sleep(6.0)  # the environment map fades in; a few wave surfaces go out
-        render = client.get_render(360, 480, timeout=60.0)
-        for _ in range(10):  # a loaded machine may not have drawn the sea yet (a frame of sky only): look again
-            if water_pixels(render) > 0.2 * render.shape[0] * render.shape[1]:
-                break
-            time.sleep(3.0)
-            render = client.get_render(360, 480, timeout=60.0)
+        render = render_with_sea(client, 360, 480)
         Image.fromarray(render).save("/tmp/floatsim-sea.png")  # (to look at when this fails)
         assert steps(render) < 0.01
     finally:

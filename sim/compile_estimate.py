@@ -11,6 +11,7 @@ same moment, so the choice of one or the other does not follow the machine's loa
 
 from __future__ import annotations
 
+import os
 import statistics
 import time
 
@@ -72,3 +73,18 @@ def compile_seconds(specs, factor: float | None = None) -> float:
     """The wall seconds compiling `specs` takes on this machine now from an empty cache (`factor`: slowness(), measured
     when not given)."""
     return sum(spec_cpu(s) for s in specs) * (slowness() if factor is None else factor)
+
+
+def shares_of(specs) -> list[tuple]:
+    """`specs` in one share per core (at most one per spec) of about equal compile time: the longest first, each to the
+    share with the least so far (compiling.Compiler compiles the shares side by side)."""
+    shares: list[list] = [[] for _ in range(min(len(specs), os.cpu_count() or 1))]
+    for spec in sorted(specs, key=spec_cpu, reverse=True):
+        min(shares, key=lambda share: sum(map(spec_cpu, share))).append(spec)
+    return [tuple(share) for share in shares]
+
+
+def compile_wall(specs, factor: float | None = None) -> float:
+    """The wall seconds compiling `specs` takes on this machine now from an empty cache, their shares side by side."""
+    factor = slowness() if factor is None else factor
+    return max((compile_seconds(share, factor) for share in shares_of(specs)), default=0.0)

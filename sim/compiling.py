@@ -20,7 +20,7 @@ import tempfile
 import threading
 import time
 
-from sim.compile_estimate import compile_seconds
+from sim.compile_estimate import compile_wall, shares_of
 from sim.system import compiled
 
 COMMAND_ENV = "FLOATSIM_COMPILER"
@@ -86,23 +86,29 @@ def parse_spec(word: str):
 
 
 class Compiler:
-    """A child process that compiles the kernels of `spec` into the disk cache; it dies with this process."""
+    """Child processes that compile the kernels of `specs` into the disk cache, side by side on this machine's cores (a
+    scene of several bodies: its bodies' loads and the system step at once); they die with this process."""
 
-    def __init__(self, spec):
-        self.spec = spec
+    def __init__(self, specs):
+        self.specs = tuple(specs)
         command = shlex.split(os.environ.get(COMMAND_ENV, "")) or [sys.executable, "-m", "sim.commands.compile", str(os.getpid())]
-        command.append(spec_argument(spec))
-        self.log = tempfile.TemporaryFile()  # its output, for the note when it fails
-        self.expected = compile_seconds([spec])
+        shares = shares_of(self.specs)
+        self.log = tempfile.TemporaryFile()  # their output, for the note when one fails
+        self.expected = compile_wall(self.specs)
         """The seconds it should take on this machine now (compile_estimate.py), from an empty cache."""
         self.started = time.monotonic()
         self.seconds: float | None = None
         """How long the compile took (None until it ends)."""
-        self._child = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT)
+        self._children = [
+            subprocess.Popen(
+                command + [spec_argument(s) for s in share], stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT
+            )
+            for share in shares
+        ]
 
     @property
     def done(self) -> bool:
-        if self._child.poll() is None:
+        if any(child.poll() is None for child in self._children):
             return False
         if self.seconds is None:
             self.seconds = time.monotonic() - self.started
@@ -111,18 +117,25 @@ class Compiler:
     @property
     def ok(self) -> bool:
         """Done, and the kernels are in the disk cache."""
-        return self.done and self._child.returncode == 0
+        return self.done and all(child.returncode == 0 for child in self._children)
+
+    def wait(self) -> bool:
+        """Wait until every child has ended; whether all compiled."""
+        for child in self._children:
+            child.wait()
+        return self.ok
 
     def failure(self) -> str:
-        """The last line the child wrote (why it failed)."""
+        """The last line a child wrote (why it failed)."""
         self.log.seek(0)
         lines = self.log.read().decode(errors="replace").strip().splitlines()
-        return lines[-1][:200] if lines else f"exit status {self._child.returncode}"
+        return lines[-1][:200] if lines else f"exit status {[child.returncode for child in self._children]}"
 
     def stop(self) -> None:
-        if self._child.poll() is None:
-            self._child.kill()
-            self._child.wait()
+        for child in self._children:
+            if child.poll() is None:
+                child.kill()
+                child.wait()
 
 
 class Loader:
@@ -155,6 +168,18 @@ class Loader:
 
     def failure(self) -> str:
         return f"{type(self.error).__name__}: {self.error}"[:200]
+
+
+def compile_all(specs) -> float:
+    """Compile the kernels of `specs` (those not cached yet) and load them into this process; the seconds taken. Several:
+    in child processes side by side first (Compiler), then loaded from the disk cache."""
+    started = time.monotonic()
+    todo = [spec for spec in specs if not cached(spec)]
+    if len(todo) > 1 and not Compiler(todo).wait():
+        raise RuntimeError("the kernels did not compile")
+    for spec in specs:
+        warm_up(spec)
+    return time.monotonic() - started
 
 
 def load(spec) -> float:

@@ -222,6 +222,7 @@ class SimLoop(Mailbox):
         """The kernels loading from the disk cache on a thread."""
         self._loaded: set = set()  # the kernels.Spec this process has loaded
         self._failed: set = set()  # and those that did not compile: not tried again
+        self._compiled_in: float | None = None  # seconds the last compile took, for the notice once its kernels are loaded
         self._backend = "numpy" if self._background or not kernels else None  # None: the default (compiled where there is a twin)
         self.sim = self._simulation(scene)
         self._scene_name, self._speed, self._paused = scene_name, 1.0, False
@@ -315,21 +316,23 @@ class SimLoop(Mailbox):
         Nothing here waits for numba: the simulation thread must answer Pause, Reset and the tests' sync at once."""
         if not self._background or not self.sim.has_twin:
             return
-        specs = self.sim.specs  # one; a scene of several bodies: one per kind of body, compiled one after the other
+        specs = self.sim.specs  # one; a scene of several bodies: one per kind of body and the system step's
         self._collect_kernels(specs)
-        busy = {job.spec for job in (self._compiler, self._loader) if job is not None}
+        busy = set(self._compiler.specs if self._compiler is not None else ()) | (
+            {self._loader.spec} if self._loader is not None else set()
+        )
         todo = [spec for spec in specs if spec not in self._loaded and spec not in self._failed]
         if todo and todo[0] not in busy:
-            spec = todo[0]
-            if kernels_ready(spec):
-                if self._loader is None:  # one load at a time; the next check starts this one
-                    self._loader = Loader(spec)
-            elif self._compiler is None or self._compiler.spec not in specs:
+            if kernels_ready(todo[0]):
+                if self._loader is None:  # one load at a time; the next check starts the next one
+                    self._loader = Loader(todo[0], compiled_in=self._compiled_in)
+            elif self._compiler is None or not set(self._compiler.specs) <= set(specs):
                 if self._compiler is not None:
                     self._compiler.stop()  # compiling kernels the scene no longer needs
-                self._compiler = Compiler(spec)
-                print(f"floatsim: compiling the fast kernels for this scene ({spec.describe()}) in the background, once for this machine "
-                      f"(about {self._compiler.expected:.0f} s here); until then it runs on the numpy reference", file=sys.stderr, flush=True)  # fmt: skip
+                self._compiler = Compiler([spec for spec in todo if not kernels_ready(spec)])
+                print(f"floatsim: compiling the fast kernels for this scene ({'; '.join(s.describe() for s in self._compiler.specs)}) in the "
+                      f"background, once for this machine (about {self._compiler.expected:.0f} s here); until then it runs on the numpy reference",
+                      file=sys.stderr, flush=True)  # fmt: skip
         self._backend = default_backend() if all(spec in self._loaded for spec in specs) else "numpy"
         if self.sim.backend != self._backend:
             self.sim.use_backend(self._backend)
@@ -339,15 +342,12 @@ class SimLoop(Mailbox):
     def _collect_kernels(self, specs: list) -> None:
         """Take the result of a compile or a load that ended: a compile is followed by a load of its kernels."""
         compiler = self._compiler
-        if compiler is not None and compiler.done:
+        if compiler is not None and compiler.done:  # its kernels then load from the disk cache, one after the other
             self._compiler = None
             if not compiler.ok:
-                self._failed.add(compiler.spec)
+                self._failed.update(compiler.specs)
                 self._raise_notice(f"The fast kernels did not compile ({compiler.failure()}); the run stays on the numpy reference.")
-            elif self._loader is None:
-                self._loader = Loader(compiler.spec, compiled_in=compiler.seconds)
-            else:
-                self._compiler = compiler  # collected again once the load under way ends
+            self._compiled_in = compiler.seconds
         loader = self._loader
         if loader is not None and loader.done:
             self._loader = None
@@ -358,6 +358,7 @@ class SimLoop(Mailbox):
                 return
             self._loaded.add(loader.spec)
             if loader.compiled_in is not None and loader.spec in specs and all(s in self._loaded for s in specs):
+                self._compiled_in = None
                 self._raise_notice(
                     f"The fast kernels are ready (compiled in {loader.compiled_in:.0f} s in the background): the run goes on with them."
                 )
@@ -366,7 +367,7 @@ class SimLoop(Mailbox):
         """What steps the run, for the readouts: '' on the compiled kernels."""
         if self.sim.compiled:
             return ""
-        if self._compiler is not None and self._compiler.spec in self.sim.specs:
+        if self._compiler is not None and set(self._compiler.specs) & set(self.sim.specs):
             c = self._compiler
             return f"numpy reference (the fast kernels are compiling in the background: {time.monotonic() - c.started:.0f} s of about {c.expected:.0f} s)"
         if self._loader is not None and self._loader.spec in self.sim.specs:

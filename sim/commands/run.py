@@ -12,8 +12,8 @@ from typing import Annotated
 import numpy as np
 import tyro
 
-from sim.compile_estimate import compile_seconds
-from sim.compiling import cached, default_backend, warm_up
+from sim.compile_estimate import compile_wall
+from sim.compiling import cached, compile_all, default_backend
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
 from sim.hydro.radiation import misfit_note
@@ -102,7 +102,7 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
 
     if sim.has_twin and not sim.compiled and default_backend() == "numba":
         todo = [spec for spec in sim.specs if not cached(spec)]
-        wait = compile_seconds(todo) if todo else 0.0  # (its probe takes 60 ms: only when something is to compile)
+        wait = compile_wall(todo) if todo else 0.0  # (its probe takes 60 ms: only when something is to compile)
         if todo and (estimate := numpy_seconds(sim, n_steps)) < wait:
             print(f"floatsim: note: the fast kernels for this scene are not compiled on this machine yet (about {wait:.0f} s here, once); "
                   f"this run takes about {max(estimate, 1):.0f} s on the numpy reference, so it runs there (a longer run, or "
@@ -111,7 +111,7 @@ def announce_compile(sim: Simulation, n_steps: int) -> None:
             if todo:  # say so before the wait, not after it
                 print(f"floatsim: compiling the fast kernels for this scene ({'; '.join(spec.describe() for spec in todo)}), once for this "
                       f"machine (about {wait:.0f} s here; cached on disk afterwards)...", file=sys.stderr, flush=True)  # fmt: skip
-            seconds = sum(warm_up(spec) for spec in sim.specs)
+            seconds = compile_all(sim.specs)
             sim.use_backend(default_backend())
             if seconds > 5.0:  # loading from the cache takes under a second; compiling, minutes
                 print(f"floatsim: compiled the fast kernels in {seconds:.1f} s (cached on disk for next runs)", file=sys.stderr)

@@ -39,3 +39,30 @@ def test_the_compile_command_says_its_usage_and_its_mistakes_in_a_line(args, sai
     done = subprocess.run([sys.executable, "-m", "sim.commands.compile", *argv], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert said in done.stdout + done.stderr and "Traceback" not in done.stderr, done.stderr
     assert done.returncode == (0 if args == ["--help"] else 2)
+
+
+def test_a_scenes_kernels_compile_side_by_side_one_child_per_core(tmp_path, monkeypatch):
+    """rm3's kernels (its bodies' loads, the system step) compile in two children at once on two cores: each child,
+    given its share of the specs, waits until the other has started (it would wait in vain were they one after the
+    other), and the shares hold every spec once, the longest alone."""
+    import shlex
+
+    import sim
+    from sim import compiling
+    from sim.compile_estimate import shares_of
+
+    specs = sim.Simulation(sim.load_scene("rm3"), backend="numpy").specs
+    assert len(specs) >= 2
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    child = (f"import sys, time, pathlib; d = pathlib.Path({str(tmp_path)!r}); (d / str(len(list(d.iterdir())))).write_text(' '.join(sys.argv[1:]))\n"
+             "deadline = time.monotonic() + 60\nwhile len(list(d.iterdir())) < 2 and time.monotonic() < deadline: time.sleep(0.05)\n"
+             "sys.exit(0 if len(list(d.iterdir())) == 2 else 3)")  # fmt: skip
+    monkeypatch.setenv(compiling.COMMAND_ENV, shlex.join([sys.executable, "-c", child]))
+    compiler = compiling.Compiler(specs)
+    assert compiler.wait(), compiler.failure()
+    given = sorted(p.read_text().split() for p in tmp_path.iterdir())
+    assert sorted(word for share in given for word in share) == sorted(compiling.spec_argument(s) for s in specs)
+    longest = max(specs, key=spec_cpu)
+    assert [compiling.spec_argument(longest)] in given  # the system step alone; the loads in the other child
+    assert shares_of(specs) == [(longest,), tuple(s for s in specs if s != longest)]
+    assert compiler.expected > 0

@@ -16,33 +16,38 @@ import statistics
 import time
 
 COMPILE_CPU = {
-    "points": 18.0,
-    "panels": 21.0,
-    "cells": 23.0,
-    "rk4": 4.0,
-    "drag": 7.0,
+    "points": 22.0,
+    "panels": 24.5,
+    "cells": 24.5,
+    "euler": -9.0,
+    "splitting": -7.0,
+    "rk4": -10.0,
+    "drag": 1.0,
     "current": 3.0,
-    "waves": 27.0,
-    "radiating": 10.0,
-    "held": 8.0,
-    "system step": 48.0,
+    "waves": 15.0,
+    "radiating": 7.5,
+    "held": 21.0,
+    "system step": 45.0,
 }
-"""CPU seconds on the reference machine from an empty cache: a spec's force model, then what each feature adds
-(fitted to `floatsim bench --startup`, docs/performance.md; the water's shared kernels are counted in every spec that
-uses them, as a first compile on a machine pays them)."""
+"""CPU seconds on the reference machine from an empty cache: a spec's force model under the implicit scheme, what
+another scheme saves (no exact modes), then what each feature adds. Fitted on 2026-11-29 to fresh compiles (drop 22.2,
+moored-buoy 68.0, storm 37.6, rm3 58.8 s) and to the covering set's compiles one after the other (docs/performance.md),
+another job on the second core; the water's shared kernels are counted in every spec that uses them, as a first
+compile on a machine pays them."""
 
-BODY_OF_SEVERAL = 0.65
+BODY_OF_SEVERAL = 0.7
 """The share of a body's spec that one of several bodies compiles: its loads, without a step or a frame of its own."""
 
-REFERENCE_PROBE = 0.0116
-"""Seconds `_probe` took on the reference machine (quiet; Intel Xeon, 2 cores, Python 3.11)."""
+REFERENCE_PROBE = 0.0111
+"""Seconds `_probe` took on the reference machine (Intel Xeon, 2 cores, Python 3.11; another job on the second core, as
+when the table was measured)."""
 
 
 def spec_cpu(spec) -> float:
     """The reference machine's CPU seconds to compile `spec`'s kernels from an empty cache (COMPILE_CPU's parts)."""
     if spec.scheme == "system-step":
         return COMPILE_CPU["system step"]
-    parts = [spec.model, *(("rk4",) if spec.scheme == "rk4" else ()), *(("drag",) if "drag" in spec.terms else ())]
+    parts = [spec.model, *((spec.scheme,) if spec.scheme in COMPILE_CPU else ()), *(("drag",) if "drag" in spec.terms else ())]
     parts += [
         name for name, on in (("waves", spec.waves), ("current", spec.current), ("radiating", spec.radiating), ("held", spec.held)) if on
     ]

@@ -16,31 +16,31 @@ import statistics
 import time
 
 COMPILE_CPU = {
-    "points": 22.0,
-    "panels": 24.5,
-    "cells": 24.5,
-    "euler": -9.0,
+    "points": 18.0,
+    "panels": 19.5,
+    "cells": 19.5,
+    "euler": -8.0,
     "splitting": -7.0,
-    "rk4": -10.0,
+    "rk4": -9.0,
     "drag": 1.0,
     "current": 3.0,
     "waves": 15.0,
-    "radiating": 7.5,
-    "held": 21.0,
-    "system step": 45.0,
+    "radiating": 12.0,
+    "held": 8.0,
+    "system step": 38.0,
 }
 """CPU seconds on the reference machine from an empty cache: a spec's force model under the implicit scheme, what
-another scheme saves (no exact modes), then what each feature adds. Fitted on 2026-11-29 to fresh compiles (drop 22.2,
-moored-buoy 68.0, storm 37.6, rm3 58.8 s) and to the covering set's compiles one after the other (docs/performance.md),
-another job on the second core; the water's shared kernels are counted in every spec that uses them, as a first
-compile on a machine pays them."""
+another scheme saves (no exact modes), then what each feature adds. Fitted on 2026-11-29 to `floatsim bench --startup`
+on a quiet machine (docs/performance.md: drop 17.4, storm 32.6, sphere 31.6, moored-buoy 54.3, the system step alone
+38.6, rm3 52.5 s) and to the covering set's compiles one after the other (the schemes, drag); the water's shared kernels
+are counted in every spec that uses them, as a first compile on a machine pays them."""
 
-BODY_OF_SEVERAL = 0.7
+BODY_OF_SEVERAL = 0.5
 """The share of a body's spec that one of several bodies compiles: its loads, without a step or a frame of its own."""
 
-REFERENCE_PROBE = 0.0111
-"""Seconds `_probe` took on the reference machine (Intel Xeon, 2 cores, Python 3.11; another job on the second core, as
-when the table was measured)."""
+REFERENCE_PROBE = 0.0118
+"""Seconds `_probe` took on the reference machine (Intel Xeon, 2 cores, Python 3.11; quiet, as when the table was
+measured)."""
 
 
 def spec_cpu(spec) -> float:

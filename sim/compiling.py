@@ -175,8 +175,8 @@ def compile_all(specs) -> float:
     in child processes side by side first (Compiler), then loaded from the disk cache."""
     started = time.monotonic()
     todo = [spec for spec in specs if not cached(spec)]
-    if len(todo) > 1 and not Compiler(todo).wait():
-        raise RuntimeError("the kernels did not compile")
+    if len(todo) > 1 and not (compiler := Compiler(todo)).wait():
+        raise RuntimeError(f"the kernels did not compile: {compiler.failure()}")
     for spec in specs:
         warm_up(spec)
     return time.monotonic() - started

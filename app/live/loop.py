@@ -318,9 +318,9 @@ class SimLoop(Mailbox):
             return
         specs = self.sim.specs  # one; a scene of several bodies: one per kind of body and the system step's
         self._collect_kernels(specs)
-        busy = set(self._compiler.specs if self._compiler is not None else ()) | (
-            {self._loader.spec} if self._loader is not None else set()
-        )
+        busy = set(self._compiler.specs) if self._compiler is not None else set()
+        if self._loader is not None:
+            busy.add(self._loader.spec)
         todo = [spec for spec in specs if spec not in self._loaded and spec not in self._failed]
         if todo and todo[0] not in busy:
             if kernels_ready(todo[0]):

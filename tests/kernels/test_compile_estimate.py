@@ -2,13 +2,16 @@
 outlast on the numpy reference (both measured on this machine at the same moment: the choice does not follow its load)."""
 
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from sim.compile_estimate import spec_cpu
+import sim
+from sim import compiling
+from sim.compile_estimate import shares_of, spec_cpu
 from sim.compiling import parse_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -45,16 +48,10 @@ def test_a_scenes_kernels_compile_side_by_side_one_child_per_core(tmp_path, monk
     """rm3's kernels (its bodies' loads, the system step) compile in two children at once on two cores: each child,
     given its share of the specs, waits until the other has started (it would wait in vain were they one after the
     other), and the shares hold every spec once, the longest alone."""
-    import shlex
-
-    import sim
-    from sim import compiling
-    from sim.compile_estimate import shares_of
-
     specs = sim.Simulation(sim.load_scene("rm3"), backend="numpy").specs
     assert len(specs) >= 2
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
-    child = (f"import sys, time, pathlib; d = pathlib.Path({str(tmp_path)!r}); (d / str(len(list(d.iterdir())))).write_text(' '.join(sys.argv[1:]))\n"
+    child = (f"import os, sys, time, pathlib; d = pathlib.Path({str(tmp_path)!r}); (d / str(os.getpid())).write_text(' '.join(sys.argv[1:]))\n"
              "deadline = time.monotonic() + 60\nwhile len(list(d.iterdir())) < 2 and time.monotonic() < deadline: time.sleep(0.05)\n"
              "sys.exit(0 if len(list(d.iterdir())) == 2 else 3)")  # fmt: skip
     monkeypatch.setenv(compiling.COMMAND_ENV, shlex.join([sys.executable, "-c", child]))

@@ -24,8 +24,8 @@ from sim.scene.config import (
     with_overrides,
 )
 from sim.simulation import Simulation
-from sim.system.frame import CSV_COLUMNS, Frame, observe
+from sim.system.frame import CSV_COLUMNS, BodyFrame, Frame, observe
 from sim.water.seas import StillWater
 
 __all__ = ["Body", "make_body", "ConfigError", "SceneConfig", "BodyConfig", "FluidConfig", "InitialConfig", "StepConfig", "WavesConfig", "PARAMS", "Param", "load_scene", "with_overrides", "Model",
-           "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip
+           "TERMS", "StillWater", "INTEGRATORS", "make_integrator", "CSV_COLUMNS", "BodyFrame", "Frame", "Simulation", "SimulationDiverged", "observe", "State"]  # fmt: skip

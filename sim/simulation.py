@@ -8,9 +8,8 @@ controllers (control/laws.py) and the mooring lines (MoorDyn, lines/moorings.py)
   joint to the world, or its compiled twin many steps a call; the lines coupled each step;
 - bodies on joints step by the tree's Stormer-Verlet (system/tree.py), its compiled twin (system/compiled.py), or exactly
   where the system is linear (system/linear.py); the lines coupled each step.
-Every scene's frame has the same Readings (system/frame.py: each joint's take-off, the lines, the radiated energy); a
-body alone's is its Frame besides (its loads, wet surface and energies, the CSV's columns since the start), several
-bodies' an AssemblyFrame (each body's pose and twist, the energies of all).
+Every scene's frame is a Frame (system/frame.py): each joint's take-off, the lines, the radiated energy, each body's
+pose and twist (a body alone's observed besides: its loads, wet surface and energies) and the energies of all.
 
 `update` names a body's parameters 'BODY__key' (float__pto_damping=1e6, spar__density=900; a body alone's: 'body__key'
 or 'fluid__key'; config.with_overrides). A take-off's damping or stiffness changes in place; any other change rebuilds
@@ -45,11 +44,11 @@ from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
 from sim.system.compiled import CompiledStep
-from sim.system.frame import AssemblyFrame, Frame, assembly_frame, joint_reading, line_shapes, lines_reading, observe
+from sim.system.frame import Frame, body_frames, joint_reading, line_shapes, lines_reading, observe, of_body, system_frame
 from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
-from sim.system.tree import SystemState, body_frames, build, lines_scene, moored_body
+from sim.system.tree import SystemState, build, lines_scene, moored_body
 from sim.water.records import describe
 from sim.water.seas import make_water
 
@@ -646,11 +645,14 @@ class Simulation:
 
     # what a run shows
 
-    def frame(self):
-        """What the run shows now (computed once per state): a body alone's Frame, with its lines' nodes; several bodies'
-        AssemblyFrame. Both have the Readings of every scene (system/frame.py): its joints, its lines, its radiated energy."""
+    def frame(self) -> Frame:
+        """What the run shows now (computed once per state; system/frame.Frame): its Readings (its joints, its lines and
+        their nodes, its radiated energy), each body's BodyFrame (a body alone's observed: its loads, wet surface and
+        energies) and the energies of all."""
         if self.single is None:
-            return self._bodies_frame()
+            if self._frame[0] is not self.state:
+                self._frame = (self.state, system_frame(self.system, self.state, self.moorings))
+            return self._frame[1]
         frame = self._checked()
         if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
             frame = dataclasses.replace(frame, **line_shapes(self.moorings))
@@ -662,31 +664,26 @@ class Simulation:
         s = self.body_state
         key = (s, self.model)
         if self._frame[0] != key:
-            frame = observe(self.model, s, self.kernels() if self.compiled else None, self.expand_waves)
+            body = observe(self.model, s, self.kernels() if self.compiled else None, self.expand_waves, self.system.members[0].name)
             readings = lines_reading(self.moorings, shapes=False)
             j = self.joint
             if j is not None and j.kind != "fixed":
                 reading = joint_reading(self.system.joints[0].name, self._law, self.joint_theta, j.rate(self.body, s), self.pto_energy)
                 readings.update(joints=(reading,), joint_axes=(((j.pivot if j.kind == "revolute" else j.x0), j.axis),))
-            self._frame = (key, dataclasses.replace(frame, **readings) if readings else frame)
-        return self._frame[1]
-
-    def _bodies_frame(self) -> AssemblyFrame:
-        if self._frame[0] is not self.state:
-            self._frame = (self.state, assembly_frame(self.system, self.state, self.moorings))
+            self._frame = (key, of_body(body, s.t, E_rad=s.E_rad, **readings))
         return self._frame[1]
 
     def parts(self) -> list[Frame]:
-        """Each body's Frame: what a viewer draws of each (a body alone: the run's own; one of several: its pose and twist,
-        its wet surface, the water's force and gravity on it about its centre of mass, its energies, on the numpy reference;
-        not the joints' reactions, the lines' pull or the radiation of the bodies together). Computed once per state."""
+        """Each body's frame by itself (a frame of one body): what a viewer draws of each. A body alone: the run's own. One
+        of several: its pose and twist, its wet surface, the water's force and gravity on it about its centre of mass, its
+        energies, on the numpy reference; not the joints' reactions, the lines' pull or the radiation of the bodies
+        together. Computed once per state."""
         if self.single is not None:
             return [self.frame()]
         if self._parts[0] is not self.state:
-            s, frames = self.state, []
-            for m, b, R in zip(self.system.members, body_frames(self.system, s), self.system.pose(s).R):
-                L = R @ (m.body.inertia * (R.T @ b["omega"]))
-                frames.append(observe(m.model, State(s.t, b["x"].copy(), b["q"], b["u"].copy(), L)))
+            s = self.state
+            frames = [of_body(observe(m.model, State(s.t, b.x_world.copy(), b.q_world_body, b.u_world.copy(), b.L_world), name=b.name), s.t)
+                      for m, b in zip(self.system.members, body_frames(self.system, s))]  # fmt: skip
             self._parts = (self.state, frames)
         return self._parts[1]
 

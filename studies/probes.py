@@ -14,14 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim import INTEGRATORS, Frame, Simulation, State, load_scene
+from sim import INTEGRATORS, Simulation, State, load_scene
 from sim.bodies.body import Body, make_box
 from sim.bodies.rotation import quat_multiply, quat_to_matrix, rotation_quat
 from sim.commands import dispatch  # noqa: F401 -- re-exported: `python -m studies` uses the same dispatcher
 from sim.commands.progress import progress_bar  # noqa: F401 -- re-exported for studies.common
 from sim.hydro.forces import Model
 from sim.scene.config import FluidConfig
-from sim.system.frame import observe
+from sim.system.frame import BodyFrame, observe
 from sim.water.seas import StillWater
 
 # ---- reading a body or a simulation -------------------------------------------------------------------
@@ -83,7 +83,7 @@ def stability_limits(method: str) -> tuple[float, float]:
 # ---- loads at a pose ------------------------------------------------------------------------------------
 
 
-def frame_at(sim: Simulation, state: State) -> Frame:
+def frame_at(sim: Simulation, state: State) -> BodyFrame:
     """The diagnostics (forces, torques, wet area ...) of `sim`'s body and force model at `state`; numpy path."""
     return observe(sim.model, state)
 
@@ -94,7 +94,7 @@ def damping_matrix(sim: Simulation, state: State) -> np.ndarray:
     return model.damping_matrix(model.wetted(state.x_world, state.R_world_body))
 
 
-def still_water_frame(of: Body, rho: float, g: float, state: State) -> Frame:
+def still_water_frame(of: Body, rho: float, g: float, state: State) -> BodyFrame:
     """Diagnostics of a bare body (from `cube_body`/`body_from_samples`) at `state` in still water, sampled model, no damping."""
     return observe(Model(of, StillWater(rho, g), FluidConfig(rho=rho, g=g, damping=0.0)), state)
 

@@ -46,10 +46,10 @@ CONTROLLED = {p.key: p for p in PARAMS.values() if p.gui is not None}
 """Scene parameters with a live control, by key (the command that changes each is its key)."""
 _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
 DERIVED = {PARAMS[q].key for q in IN_EFFECT} & CONTROLLED.keys()
+"""Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 SHOWN = {"speed": "speed", "pause": "paused"}
 """The viewer's own commands whose control shows the value the run uses after each batch, as the scene parameters' do
 (command -> the setting's field): a clamp written back at once could land after the page's next valid value."""
-"""Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 
 
 @dataclass(frozen=True)
@@ -134,7 +134,7 @@ class Snapshot(Posed):
     parts: tuple = ()
     """Every body (Part), in the scene's order (one body: itself)."""
     run_frame: object = None
-    """The run's own frame where it is not `frame`: a scene of several bodies' (sim.system.frame.AssemblyFrame)."""
+    """The run's own frame where it is not `frame`: a scene of several bodies' (its Frame of them all)."""
 
     @property
     def run(self):

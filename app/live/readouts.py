@@ -213,7 +213,7 @@ def _readings(snap: Snapshot) -> list[str]:
 def _system(snap: Snapshot) -> list[str]:
     """A scene of several bodies: where each body is and the energies of all."""
     run = snap.run
-    return [" · ".join(f"{b['name']}: z = {b['x'][2]:+.3f} m, |u| = {np.linalg.norm(b['u']):.3f} m/s" for b in run.bodies),
+    return [" · ".join(f"{b.name}: z = {b.x_world[2]:+.3f} m, |u| = {np.linalg.norm(b.u_world):.3f} m/s" for b in run.bodies),
             f"All bodies: E total = **{run.E_total:.6g} J**, with the take-offs' {quantity(run.E_pto, 'J')} and the radiated "
             f"{quantity(run.E_rad, 'J')} · the numbers above are {snap.settings.focus}'s (choose the body under Body)"]  # fmt: skip
 

@@ -48,13 +48,14 @@ def shot_of(simulation: sim.Simulation) -> Shot:
 
 
 def _packed(frame, body, pack: bool):
-    """The frame with its wet set as a bit mask (pack) or back as indices (not pack)."""
+    """The frame of one body with its wet set as a bit mask (pack) or back as indices (not pack)."""
     if pack:
         mask = np.zeros(body.n_samples, bool)
         mask[frame.wet_index] = True
-        return dataclasses.replace(frame, wet_index=np.packbits(mask))
-    mask = np.unpackbits(frame.wet_index, count=body.n_samples).astype(bool)
-    return dataclasses.replace(frame, wet_index=np.flatnonzero(mask))
+        wet = np.packbits(mask)
+    else:
+        wet = np.flatnonzero(np.unpackbits(frame.wet_index, count=body.n_samples).astype(bool))
+    return dataclasses.replace(frame, bodies=(dataclasses.replace(frame.bodies[0], wet_index=wet),))
 
 
 def _shot(shot, pack: bool) -> Shot:

@@ -276,7 +276,7 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
     if system.radiation is not None and (note := misfit_note(system.radiation.memory)):
         print(note)
     for b in last.bodies:
-        print(f"t = {last.t:.6g} s: {b['name']} at z = {b['x'][2]:.6f} m, |u| = {np.linalg.norm(b['u']):.3g} m/s")
+        print(f"t = {last.t:.6g} s: {b.name} at z = {b.x_world[2]:.6f} m, |u| = {np.linalg.norm(b.u_world):.3g} m/s")
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)
     print(f"E_total = {last.E_total:.6g} J, with the take-offs' {last.E_pto:.6g} J: change {drift:+.3g} J")
     summarise_readings(first, last, drift)

@@ -41,7 +41,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from sim.bodies.body import Body, make_body
-from sim.bodies.rotation import matrix_to_quat, normalized, quat_to_matrix, rotate_world, skew
+from sim.bodies.rotation import quat_to_matrix, rotate_world, skew
 from sim.bodies.state import State, initial_state
 from sim.bodies.surface import wet_panels
 from sim.control.laws import Law
@@ -134,14 +134,14 @@ class SystemState:
         return bool(all(np.isfinite(a).all() for a in (self.x_free, self.q_free, self.theta, self.v)))
 
     # A body alone is a system of one (system/single.py): its state is also the body's, exact (bodies/state.State), as
-    # its step reached it. A state made by hand or by dataclasses.replace has none: its body is body_frames'.
+    # its step reached it. A state made by hand or by dataclasses.replace has none: its body is frame.body_frames'.
 
     @property
     def body(self) -> State:
         """A system of one's body state (x_world, q_world_body, u_world, L_world); AttributeError for several bodies."""
         own = self.__dict__.get("_body")
         if own is None:
-            raise AttributeError("a system's state: each body's pose and twist is body_frames(system, state)")
+            raise AttributeError("a system's state: each body's pose and twist is system/frame.body_frames(system, state)")
         return own
 
     def with_body(self, body: State) -> SystemState:
@@ -694,13 +694,3 @@ def _projected(system: System, s: SystemState, starts) -> np.ndarray:
         omega = R @ ((R.T @ st.L_world) / m.body.inertia)
         rhs += J.T @ _body_mass(m.body, R) @ np.concatenate([st.u_world, omega])
     return np.linalg.solve(system.mass_matrix(pose), rhs)
-
-
-def body_frames(system: System, s: SystemState) -> list[dict]:
-    """Each body's pose and twist: x, q (w, x, y, z), u, omega, world frame."""
-    pose = system.pose(s)
-    out = []
-    for m, x, R, J in zip(system.members, pose.x, pose.R, pose.J):
-        nu = J @ s.v
-        out.append({"name": m.name, "x": x, "q": normalized(matrix_to_quat(R)), "u": nu[:3], "omega": nu[3:]})
-    return out

@@ -49,10 +49,10 @@ def test_every_body_is_drawn_where_the_run_has_it_and_the_controls_drive_it():
         assert snap.settings.paused and snap.frame.t > 0
         frame = snap.run
         for body in frame.bodies:  # each body's frame node is where the run has it (viser sends float32)
-            node = page.nodes[f"/world/bodies/{body['name']}"]
-            np.testing.assert_allclose(node["position"], body["x"], atol=1e-4)
-            np.testing.assert_allclose(node.get("wxyz", (1.0, 0.0, 0.0, 0.0)), body["q"], atol=1e-6)  # (unsent while unturned)
-        spar, floater = (b["x"] for b in frame.bodies)
+            node = page.nodes[f"/world/bodies/{body.name}"]
+            np.testing.assert_allclose(node["position"], body.x_world, atol=1e-4)
+            np.testing.assert_allclose(node.get("wxyz", (1.0, 0.0, 0.0, 0.0)), body.q_world_body, atol=1e-6)  # (unsent while unturned)
+        spar, floater = (b.x_world for b in frame.bodies)
         assert abs(floater[2] - spar[2] - 17.9743 - frame.joints[1][1]) < 1e-9  # the float slides on the spar: its stroke
         assert "/world/bodies/spar/mesh" in page.nodes and "/world/bodies/float/mesh" in page.nodes and "/world/joint" in page.nodes
         assert len(page.nodes["/world/joint"]["points"]) == 2  # both slides
@@ -163,12 +163,12 @@ def test_a_recording_of_several_bodies_replays_every_pose_and_writes_the_run_csv
         assert header == app.loop.sim.columns()
         data = np.loadtxt(files["csv"], delimiter=",", skiprows=1)
         assert len(data) == len(take) > 10 and np.all(np.diff(data[:, 0]) > 0)
-        np.testing.assert_allclose(data[:, header.index("float_z")], [shot.run.bodies[1]["x"][2] for shot in take.shots], atol=1e-9)
+        np.testing.assert_allclose(data[:, header.index("float_z")], [shot.run.bodies[1].x_world[2] for shot in take.shots], atol=1e-9)
         moves = [
             m[1] for m in embedded_messages(files["html"].read_text()) if m[1].get("name") == "/world/bodies/float" and "position" in m[1]
         ]
         assert len(moves) >= len(take)  # every pose, none skipped as too close to the last
-        np.testing.assert_allclose(moves[-1]["position"], take[len(take) - 1].run.bodies[1]["x"], atol=1e-4)
+        np.testing.assert_allclose(moves[-1]["position"], take[len(take) - 1].run.bodies[1].x_world, atol=1e-4)
 
 
 def test_the_chosen_body_s_controls_change_that_body_alone_from_the_page():

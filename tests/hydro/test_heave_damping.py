@@ -73,7 +73,7 @@ def test_each_body_of_several_feels_its_own_heave_damping(tmp_path):
         run.step(10)
         bodies = run.frame().bodies
         times.append(run.state.t)
-        damped.append(bodies[0]["x"][2])
-        free.append(bodies[1]["x"][2])
+        damped.append(bodies[0].x_world[2])
+        free.append(bodies[1].x_world[2])
     assert np.abs(np.array(damped) - closed_form(np.array(times))).max() < 1e-3 * Z0
     assert np.max(free[len(free) // 2 :]) - REST > 0.99 * Z0

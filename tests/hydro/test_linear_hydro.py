@@ -175,7 +175,7 @@ def test_energy_closes_to_fourth_order_when_stepped_exactly():
         start = run.frame()
         run.step(round(30.0 / dt))
         end = run.frame()
-        kinetic = start.energies["E_kin"]
+        kinetic = start.E_kin
         assert end.E_pto > 0.1 * kinetic and run.state.E_rad > 0.01 * kinetic
         errors.append(abs(end.E_total + end.E_pto + run.state.E_rad - start.E_total))
     assert 12.0 < errors[0] / errors[1] < 20.0 and errors[1] < 1e-6 * kinetic  # fourth order: 2.0 J and 0.12 J of 1.9e5

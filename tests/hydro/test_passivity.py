@@ -168,7 +168,7 @@ def test_rm3_without_a_damper_never_gains_energy_nonlinear(stiffness):
 
 
 def test_the_several_body_csv_closes_the_energy_with_the_radiated_waves():
-    """The rows a several-body run writes (Simulation.columns and AssemblyFrame.row, as `python -m sim run` and the viewer's
+    """The rows a several-body run writes (Simulation.columns and Frame.row, as `python -m sim run` and the viewer's
     Record do) carry E_rad: rm3 kicked in still water, E_total + the take-off's E_pto + E_rad from the rows stays the
     start's to 1e-3 of the kick over 20 s, and E_rad has taken a share of it."""
     from sim.simulation import Simulation

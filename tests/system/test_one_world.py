@@ -13,7 +13,7 @@ from tests.system.test_system import PAIR, SLIDE, scene_file
 
 def poses(run) -> np.ndarray:
     """Every body's position, orientation, velocity and angular velocity, one row each."""
-    return np.array([np.concatenate([b["x"], b["q"], b["u"], b["omega"]]) for b in run.frame().bodies])
+    return np.array([np.concatenate([b.x_world, b.q_world_body, b.u_world, b.omega_world]) for b in run.frame().bodies])
 
 
 def test_simulation_runs_a_scene_of_several_bodies():

@@ -8,8 +8,8 @@ import pytest
 
 from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
+from sim.system.frame import body_frames
 from sim.system.single import Motion, from_system, to_system
-from sim.system.tree import body_frames
 
 
 def system_run(scene, backend: str):
@@ -75,8 +75,8 @@ def test_a_system_of_one_sees_the_body_where_it_is(name):
     sim.step(30)
     s, frame = sim.state, sim.frame()
     (b,) = body_frames(system, s)
-    q = b["q"] * np.sign(b["q"][0] * frame.q_world_body[0])
-    for got, want in ((b["x"], frame.x_world), (q, frame.q_world_body), (b["u"], frame.u_world), (b["omega"], frame.omega_world)):
+    q = b.q_world_body * np.sign(b.q_world_body[0] * frame.q_world_body[0])
+    for got, want in ((b.x_world, frame.x_world), (q, frame.q_world_body), (b.u_world, frame.u_world), (b.omega_world, frame.omega_world)):
         assert np.allclose(got, want, rtol=1e-12, atol=1e-12)
     energies = system.energies(s)
     assert energies["E_kin"] == pytest.approx(frame.E_kin, rel=1e-12, abs=1e-9)

@@ -10,7 +10,8 @@ from sim.bodies.body import Body
 from sim.hydro.forces import Model
 from sim.scene.config import load_scene
 from sim.simulation import Simulation
-from sim.system.tree import Member, System, body_frames, build
+from sim.system.frame import body_frames
+from sim.system.tree import Member, System, build
 from tests.dynamics.test_joints import damped_heave
 
 
@@ -163,7 +164,7 @@ def test_a_welded_pair_moves_as_one_body_of_their_combined_mass_and_inertia(tmp_
         s, r = system.step(s, 0.01), single.step(r, 0.01)
     assert np.abs(s.x_free - r.x_free).max() < 1e-9
     assert np.abs(s.q_free - r.q_free).max() < 1e-9
-    moved = body_frames(system, s)[1]["x"] - np.array([0.2, 0.9, 0.05])
+    moved = body_frames(system, s)[1].x_world - np.array([0.2, 0.9, 0.05])
     turned = 2 * np.arccos(min(1.0, abs(s.q_free[0, 0])))
     assert np.linalg.norm(moved) > 0.1 and turned > 0.1  # it moved and turned: the check is not of a body at rest
 
@@ -251,13 +252,13 @@ def test_joints_hold_to_round_off(tmp_path):
     )
     worst = 0.0
     for barge, flap, buoy in frames:
-        Rb, Rf = quat_to_matrix(barge["q"]), quat_to_matrix(flap["q"])  # both start unturned
-        on_barge, on_flap = barge["x"] + Rb @ (pivot0 - barge0), flap["x"] + Rf @ (pivot0 - flap0)
+        Rb, Rf = quat_to_matrix(barge.q_world_body), quat_to_matrix(flap.q_world_body)  # both start unturned
+        on_barge, on_flap = barge.x_world + Rb @ (pivot0 - barge0), flap.x_world + Rf @ (pivot0 - flap0)
         worst = max(worst, np.abs(on_barge - on_flap).max(), np.abs(Rb[:, 1] - Rf[:, 1]).max())
-        slide = Rb.T @ (buoy["x"] - barge["x"]) - (buoy0 - barge0)  # along the barge's z only
-        worst = max(worst, abs(slide[0]), abs(slide[1]), np.abs(Rb - quat_to_matrix(buoy["q"])).max())
+        slide = Rb.T @ (buoy.x_world - barge.x_world) - (buoy0 - barge0)  # along the barge's z only
+        worst = max(worst, abs(slide[0]), abs(slide[1]), np.abs(Rb - quat_to_matrix(buoy.q_world_body)).max())
     assert worst < 1e-12
-    assert abs(frames[-1][1]["omega"] - frames[-1][0]["omega"]).max() > 0.01  # the hinge did turn
+    assert abs(frames[-1][1].omega_world - frames[-1][0].omega_world).max() > 0.01  # the hinge did turn
 
 
 def test_a_planar_joint_moves_as_a_free_body_kept_in_its_plane_by_symmetry(tmp_path):
@@ -268,17 +269,17 @@ def test_a_planar_joint_moves_as_a_free_body_kept_in_its_plane_by_symmetry(tmp_p
     free = scene_file(tmp_path, PLANAR_CHAIN.replace('    joint = "planar"\n    axis = [0.0, 1.0, 0.0]\n', ""), "free.toml")
     _, a, _, frames_free = run_chain(free, 0.01, 2.0)
     system, b, _, frames_planar = run_chain(scene_file(tmp_path, PLANAR_CHAIN), 0.01, 2.0)
-    assert system.n_dofs == 5 and max(abs(f[0]["x"][1]) for f in frames_free) < 1e-12  # in the plane: symmetry holds
+    assert system.n_dofs == 5 and max(abs(f[0].x_world[1]) for f in frames_free) < 1e-12  # in the plane: symmetry holds
     for f, p in zip(frames_free, frames_planar):
         for body_free, body_planar in zip(f, p):
-            assert np.abs(body_free["x"] - body_planar["x"]).max() < 1e-10
-            assert np.abs(body_free["q"] - body_planar["q"]).max() < 1e-10
+            assert np.abs(body_free.x_world - body_planar.x_world).max() < 1e-10
+            assert np.abs(body_free.q_world_body - body_planar.q_world_body).max() < 1e-10
     np.testing.assert_allclose(a.theta, b.theta[3:], atol=1e-10)
     barge = frames_planar[-1][0]
-    pitch = 2 * np.arctan2(barge["q"][2], barge["q"][0])
-    np.testing.assert_allclose(b.theta[:3], [barge["x"][0], barge["x"][2] - 0.05, pitch], atol=1e-12)
-    pitches = [abs(2 * np.arctan2(f[0]["q"][2], f[0]["q"][0])) for f in frames_planar]
-    assert max(pitches) > 0.03 and max(abs(f[0]["x"][0]) for f in frames_planar) > 0.05  # it pitched (2.5 degrees) and surged
+    pitch = 2 * np.arctan2(barge.q_world_body[2], barge.q_world_body[0])
+    np.testing.assert_allclose(b.theta[:3], [barge.x_world[0], barge.x_world[2] - 0.05, pitch], atol=1e-12)
+    pitches = [abs(2 * np.arctan2(f[0].q_world_body[2], f[0].q_world_body[0])) for f in frames_planar]
+    assert max(pitches) > 0.03 and max(abs(f[0].x_world[0]) for f in frames_planar) > 0.05  # it pitched (2.5 degrees) and surged
 
 
 def sim_cli(*args: str, backend: str = "numpy"):

@@ -124,7 +124,7 @@ def body_port(sim) -> Port:
 
 
 def system_port(asm, body: str) -> Port:
-    """The port of the joint of `body` (an Assembly's) in its scene's regular waves, every other joint's take-off kept."""
+    """The port of the joint of `body` (a run of several bodies') in its scene's regular waves, every other joint's take-off kept."""
 
     omega, beta, c = _sea(asm.scene, asm.system.radiation)
     system = asm.system

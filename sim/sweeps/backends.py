@@ -35,7 +35,7 @@ def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
         return
 
     base = sweep.base()
-    if base.bodies:  # several bodies: each case's Assembly loads its own kernels
+    if base.bodies:  # several bodies: each case's run loads its own kernels
         return
     ensemble = Ensemble([case_scene(base, sweep.case(i)) for i in indices])
     if ensemble.sims[0].compiled:

@@ -1,4 +1,4 @@
-"""The compiled system step (kernels/system.py, kinematics.py, expm.py) for an Assembly on the numba backend: the same
+"""The compiled system step (kernels/system.py, kinematics.py, expm.py) for a run of several bodies on the numba backend: the same
 SystemState in and out as System.step, so a run can switch between the two between steps.
 
 With linear loads (`[fluid] hydro = "linear"`) n steps are one compiled call. Otherwise each body's loads (its compiled

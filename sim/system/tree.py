@@ -30,7 +30,7 @@ The velocity-product term J_dot v is a central difference of J v along the motio
 relative); it is left out where every Jacobian is constant (slides on slides to the world).
 Each body's loads come from the numpy reference or its compiled twin (system/body_loads.py), or with `[fluid] hydro =
 "linear"` from the linear hydrostatics and Froude-Krylov force about the rest pose (hydro/linear_hydro.py); the kinematics and the
-kicks here are the numpy reference, whose compiled twin (system/compiled.py, kernels/system.py) an Assembly runs on the numba backend. Mooring lines (MoorDyn, lines/moorings.py) hold one of the bodies ([moorings] body): the Assembly
+kicks here are the numpy reference, whose compiled twin (system/compiled.py, kernels/system.py) a run of several bodies steps on the numba backend. Mooring lines (MoorDyn, lines/moorings.py) hold one of the bodies ([moorings] body): the runner
 advances them over each step and holds their mean pull on that body over it, as for one body.
 """
 

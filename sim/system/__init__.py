@@ -1,2 +1,2 @@
 """Bodies on joints as one system: the tree and its step (numpy and compiled), its frequency and linear forms, a body's
-loads near a twist, what a run shows of a body (its Frame), the step's stability numbers."""
+loads near a twist, what a run shows (its Frame, each body's BodyFrame), the step's stability numbers."""

@@ -44,17 +44,17 @@ def kernels_ready(spec) -> bool:
 
 
 def cached(spec) -> bool:
-    """Whether this machine compiled the kernels of `spec` before (kernels.SYSTEM_STEP: the system step's)."""
+    """Whether this machine compiled the kernels of `spec` before (kernels.SYSTEM_STEP or SYSTEM_LINEAR: a system step's)."""
     from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
-    return compiled.ready() if spec == kernels.SYSTEM_STEP else kernels.cached(spec)
+    return compiled.ready(spec) if spec.scheme in compiled.KERNELS else kernels.cached(spec)
 
 
 def warm_up(spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; the seconds taken."""
     from sim import kernels  # numba's import (0.6 s): only where compiled kernels run
 
-    return compiled.warm() if spec == kernels.SYSTEM_STEP else kernels.warm_up(spec)
+    return compiled.warm(spec) if spec.scheme in compiled.KERNELS else kernels.warm_up(spec)
 
 
 def spec_argument(spec) -> str:

@@ -43,7 +43,7 @@ from sim.lines.moorings import Moorings, line_file, moored
 from sim.scene.config import SceneConfig, diffracting, validate, with_overrides
 from sim.system import stability
 from sim.system.carry import carried, only_take_offs, tree_shape, with_take_off
-from sim.system.compiled import CompiledStep
+from sim.system.compiled import CompiledStep, step_spec
 from sim.system.frame import Frame, body_frames, joint_reading, line_shapes, lines_reading, observe, of_body, system_frame
 from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
@@ -511,12 +511,10 @@ class Simulation:
     @property
     def specs(self) -> list:
         """The kernels.Spec the scene's compiled kernels specialise on: a body alone's, or each kind of body's loads once and
-        the system step's (kernels.SYSTEM_STEP) where it runs (not for a linear system stepped exactly)."""
+        the system step's it runs (system/compiled.step_spec; none for a linear system stepped exactly)."""
         if self.single is not None:
             return [self.spec]
-        from sim.kernels import SYSTEM_STEP  # numba's import (0.6 s): only where compiled kernels run
-
-        return self.system.specs + ([] if self.exact is not None else [SYSTEM_STEP])
+        return self.system.specs + ([] if self.exact is not None else [step_spec(self.system)])
 
     @property
     def kernels_ready(self) -> bool:

@@ -70,14 +70,19 @@ class Spec(NamedTuple):
     def describe(self) -> str:
         if self == SYSTEM_STEP:
             return "step of several bodies on joints (kinematics, kicks, radiation memory)"
+        if self == SYSTEM_LINEAR:
+            return "step of several bodies on joints with linear loads (kinematics, n steps a call, radiation memory)"
         terms = " + ".join(self.terms) or "no forces"
         water = {"waves": "waves", "current": "still water in a current", "still": "still water"}[self._water]
         return f"{'loads of one of several bodies' if self.system else self.scheme + ' scheme'}, {self.model} model, {terms}, {water}{', radiation' if self.radiating else ''}{', a held load' if self.held else ''}"
 
 
 SYSTEM_STEP = Spec("system-step", "any", (), False, False, False, False, True)
-"""The kernels of the step of several bodies (system/compiled.py): one set for every scene, compiled and loaded as a
-Spec is (in a child while the numpy reference runs, then from the disk cache)."""
+"""The kernels of the step of several bodies (system/compiled.py) whose loads Python asks at each kick: one set for every
+such scene, compiled and loaded as a Spec is (in a child while the numpy reference runs, then from the disk cache)."""
+SYSTEM_LINEAR = Spec("system-linear", "any", (), False, False, False, False, True)
+"""The kernels of the step of several bodies with linear loads (`[fluid] hydro = "linear"`): n steps in one call. Apart
+from SYSTEM_STEP, so that a scene compiles only the loop it runs."""
 
 
 def spec_of(model, scheme: str) -> Spec:
@@ -170,7 +175,7 @@ _import_shared()
 
 def cached(spec: Spec) -> bool:
     """Whether the kernels for `spec` were compiled on this machine before (their disk cache has the step and the frame).
-    Not for SYSTEM_STEP, whose kernels the system package drives (compiling.cached asks it)."""
+    Not for SYSTEM_STEP or SYSTEM_LINEAR, whose kernels the system package drives (compiling.cached asks it)."""
     found = compiled_here(_spec_cache(spec))
     if spec.system:
         return "simulation.linearised_loads" in found
@@ -194,7 +199,7 @@ def entry_point(kernel, args: tuple):
 
 def warm_up(spec: Spec) -> float:
     """Compile (first run ever) or load from the disk cache the kernels of `spec`; returns the seconds taken. Not for
-    SYSTEM_STEP (compiling.warm_up)."""
+    SYSTEM_STEP or SYSTEM_LINEAR (compiling.warm_up)."""
     import time
 
     start = time.perf_counter()
@@ -206,5 +211,5 @@ def warm_up(spec: Spec) -> float:
     return seconds
 
 
-__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_STEP", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
+__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_LINEAR", "SYSTEM_STEP", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
            "sea_pack", "spec_of", "specialised", "warm_up"]  # fmt: skip

@@ -4,8 +4,8 @@ exponential (expm.py) with Van Loan's integral for the take-offs' absorbed energ
 
 A configuration's kinematics (`configure`: poses, Jacobians, the mass matrix with the added mass, the velocity-product
 term's rates) is computed once and serves the kick at a step's end and the next step's first. The bodies' loads
-come from the linear pack (`advance`: n steps in one call) or from outside, one call a kick (`first_half` and
-`kick`: the bodies' own compiled or numpy loads, called from Python between them). Arrays follow system_layout.py.
+come from the linear pack (`advance`: n steps in one call) or from outside, one call a kick (`half_step`, with and
+without its drift: the bodies' own compiled or numpy loads, called from Python between them). Arrays follow system_layout.py.
 `advance` works in place on buffers made once a call (Work); the other entry points keep their signatures and make
 theirs a call.
 """
@@ -297,18 +297,6 @@ def wave_drift_into(mem, J, x, t, Q):
 
 
 @njit(**JIT)
-def kick(tree, mem, config, t, theta, v, absorbed, memory, f, D_b, held, h):
-    """(v, absorbed) after h under M v_dot = Q0 - D v (linearised at v), solved exactly (System.kick); f, D_b: each body's
-    loads near its twist J_b v, held: the load another model holds on each body (k, 6)."""
-    w = scratch(tree, mem, memory, 0)
-    if mem.on:
-        sparse_into(mem.H, memory, w.Hm, False)
-    v, absorbed = v.copy(), absorbed.copy()
-    kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w)
-    return v, absorbed
-
-
-@njit(**JIT)
 def kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, h, w):
     """kick's, v and absorbed updated in place; the memory's output in w.Hm."""
     x, R, J, M, G, along = config
@@ -413,10 +401,19 @@ def memory_into(mem, G0, G1, v, memory, E_rad, h, Hm, nu, after):
 
 
 @njit(**JIT)
-def first_half(tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D_b, held, h):
-    """A step up to its last kick: half kick with the loads f, D_b, drift, the memory with it; the new configuration's
-    kinematics (its bodies' loads are asked next, then `kick`)."""
-    v, absorbed = kick(tree, mem, config, t, theta, v, absorbed, memory, f, D_b, held, 0.5 * h)
+def half_step(tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D_b, held, h, drift):
+    """Half a step of h: a half kick (h/2) under M v_dot = Q0 - D v (linearised at v), solved exactly (System.kick), with
+    f, D_b each body's loads near its twist J_b v and held the load another model holds on each body (k, 6); then, with
+    `drift`, the drift over h, the memory with it and the new configuration's kinematics (its bodies' loads are asked
+    next, then the closing half kick: half_step without drift). One entry point for both halves: each entry point
+    optimises the code it links, so a kick of its own would compile the kick twice."""
+    w = scratch(tree, mem, memory, 0)
+    if mem.on:
+        sparse_into(mem.H, memory, w.Hm, False)
+    v, absorbed = v.copy(), absorbed.copy()
+    kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, 0.5 * h, w)
+    if not drift:
+        return config, x_free, q_free, theta, v, absorbed, memory, E_rad
     x_free, q_free, theta = x_free.copy(), q_free.copy(), theta.copy()
     drift_into(tree, x_free, q_free, theta, v, h)
     moved = configure(tree, mem, x_free, q_free, theta)

@@ -13,39 +13,56 @@ import os
 
 import numpy as np
 
+from sim.hydro.linear_hydro import LinearLoads
 from sim.scene.config import load_scene, with_overrides
 from sim.system.tree import System, SystemState, build
 
-KERNELS = ("system.advance", "system.first_half", "system.kick", "system.configure")
-"""The compiled functions a run uses (their disk cache tells whether they are ready)."""
+KERNELS = {
+    "system-step": ("system.half_step", "system.configure"),
+    "system-linear": ("system.advance", "system.configure"),
+}
+"""The compiled functions each system step uses (their disk cache tells whether they are ready), by its Spec's scheme:
+the kick loop whose loads Python asks at each kick, and the linear loads' n steps a call."""
 
 
-def ready() -> bool:
-    """Whether this machine compiled the system step before (its disk cache has every kernel a run uses)."""
+def step_spec(system: System):
+    """The kernels.Spec of the step `system` runs: SYSTEM_LINEAR where every body's loads are linear, else SYSTEM_STEP."""
+    from sim.kernels import SYSTEM_LINEAR, SYSTEM_STEP  # numba's import (0.6 s): only where compiled kernels run
+
+    return SYSTEM_LINEAR if all(isinstance(lo, LinearLoads) for lo in system.loads) else SYSTEM_STEP
+
+
+def ready(spec) -> bool:
+    """Whether this machine compiled the system step of `spec` before (its disk cache has every kernel it uses)."""
     from sim.kernels import KERNEL_CACHE, compiled_here  # numba's import (0.6 s): only where compiled kernels run
 
-    found = compiled_here(os.path.join(KERNEL_CACHE, "shared"))
-    return set(KERNELS) <= found
+    return set(KERNELS[spec.scheme]) <= compiled_here(os.path.join(KERNEL_CACHE, "shared"))
 
 
-def warm() -> float:
-    """Compile (first run ever) or load the system step's kernels, on the scenes that call every one of them with each
-    signature a run passes: rm3 as shipped (nonlinear loads, radiation, diffraction; the kick loop), its spar on a planar
-    joint with linear loads (n steps in one call), and rm3 without radiation in still water; seconds taken."""
+def warm(spec) -> float:
+    """Compile (first run ever) or load the kernels of the system step of `spec`, on scenes that call every one of them
+    with each signature a run passes; seconds taken. The kick loop: rm3 as shipped (nonlinear loads, radiation,
+    diffraction) and without radiation in still water. Linear loads: rm3's spar on a planar joint (n steps in one call;
+    the configuration a controller's inertia and the lines ask)."""
     import dataclasses
     import time
 
     started = time.perf_counter()
     rm3 = load_scene("rm3")
-    spar = rm3.bodies[0]
-    planar = dataclasses.replace(spar, constraint=dataclasses.replace(spar.constraint, joint="planar", axis=(0.0, 1.0, 0.0)))
-    linear = with_overrides(dataclasses.replace(rm3, bodies=(planar, *rm3.bodies[1:])), fluid__hydro="linear")
-    plain = dataclasses.replace(
-        rm3, fluid=dataclasses.replace(rm3.fluid, radiation="none"), waves=dataclasses.replace(rm3.waves, kind="still")
-    )
-    for scene in (rm3, linear, plain):
+    if spec.scheme == "system-linear":
+        spar = rm3.bodies[0]
+        planar = dataclasses.replace(spar, constraint=dataclasses.replace(spar.constraint, joint="planar", axis=(0.0, 1.0, 0.0)))
+        scenes = [with_overrides(dataclasses.replace(rm3, bodies=(planar, *rm3.bodies[1:])), fluid__hydro="linear")]
+    else:
+        plain = dataclasses.replace(
+            rm3, fluid=dataclasses.replace(rm3.fluid, radiation="none"), waves=dataclasses.replace(rm3.waves, kind="still")
+        )
+        scenes = [rm3, plain]
+    for scene in scenes:
         system, state = build(scene)
-        CompiledStep(system).step(state, float(scene.step.dt), 2)
+        step = CompiledStep(system)
+        step.step(state, float(scene.step.dt), 2)
+        step.configuration(state, float(scene.step.dt))
     return time.perf_counter() - started
 
 
@@ -103,12 +120,14 @@ class CompiledStep:
             if before is not None:
                 before(t, theta, v, absorbed, lambda: config[3])  # noqa: B023 (called at once)
             f, D = self._loads(config, t, v)
-            config, x_free, q_free, theta, v, absorbed, memory, E_rad = kernels.first_half(
-                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt
+            config, x_free, q_free, theta, v, absorbed, memory, E_rad = kernels.half_step(
+                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, True
             )
             t = t + dt
             f, D = self._loads(config, t, v)
-            v, absorbed = kernels.kick(self.tree, mem, config, t, theta, v, absorbed, memory, f, D, held, 0.5 * dt)
+            v, absorbed = kernels.half_step(
+                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, False
+            )[4:6]
             if not (np.isfinite(v).all() and np.isfinite(theta).all() and np.isfinite(x_free).all() and np.isfinite(q_free).all()):
                 break
         out = self._state(t, x_free, q_free, theta, v, absorbed, memory, E_rad)

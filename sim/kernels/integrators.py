@@ -85,7 +85,7 @@ def general_twist_flow(x, R, u, L, h, model, D, s, rad):
     return kick(rad, R, u, L, F, T, h, mass, inertia)
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def linear_flow(K, lam, V, R, u, L, F, T, h, mass, inertia, wet, rad, WS):
     """(u, L) after h under the linearised loads f - D (u, omega) at a frozen pose, exactly, as in
     integrators.linear_flow: y(h) = exp(-hK) y0 + h phi(hK) W f (W: the generalised mass's when radiating)."""
@@ -227,7 +227,7 @@ def derivative(y, t, model, s, sea, rad):
     return out
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def with_memory(rad, R, F, T, x, t, p):
     """The loads plus the radiation memory's force and the diffraction force at t, the centre of mass at p (integrators.with_memory)."""
     if rad is None:

@@ -10,7 +10,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from sim.bodies.rotation import matrix_to_quat, normalized
-from sim.bodies.state import State, angular_velocity
+from sim.bodies.state import State, angular_momentum, angular_velocity
 from sim.bodies.surface import wet_panels
 from sim.hydro.forces import Model, hydrostatic_energy
 from sim.system.tree import System, SystemState
@@ -220,17 +220,8 @@ class Frame(Readings):
             out += [*b.x_world, *b.q_world_body, *b.u_world, *b.omega_world]
         for _, *values in self.joints:
             out += values
-        return out + [
-            *self.mooring,
-            self.E_kin,
-            self.E_grav,
-            self.E_hyd,
-            self.E_spring,
-            self.E_pto,
-            self.E_total,
-            self.E_rad,
-            *self.line_energy,
-        ]
+        energies = [self.E_kin, self.E_grav, self.E_hyd, self.E_spring, self.E_pto, self.E_total, self.E_rad]
+        return out + [*self.mooring, *energies, *self.line_energy]
 
 
 def of_body(body: BodyFrame, t: float, **readings) -> Frame:
@@ -300,10 +291,8 @@ def body_frames(system: System, s: SystemState) -> list[BodyFrame]:
     out = []
     for m, x, R, J in zip(system.members, pose.x, pose.R, pose.J):
         nu = J @ s.v
-        L = R @ (m.body.inertia * (R.T @ nu[3:]))
-        out.append(
-            BodyFrame(name=m.name, x_world=x, q_world_body=normalized(matrix_to_quat(R)), u_world=nu[:3], omega_world=nu[3:], L_world=L)
-        )
+        out.append(BodyFrame(name=m.name, x_world=x, q_world_body=normalized(matrix_to_quat(R)), u_world=nu[:3], omega_world=nu[3:],
+                             L_world=angular_momentum(m.body, R, nu[3:])))  # fmt: skip
     return out
 
 

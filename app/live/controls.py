@@ -41,11 +41,18 @@ class Bound:
     def _bind(self, field: str, command: str) -> None:
         handle = getattr(self, field)
 
-        def posted(_event) -> None:
-            if not getattr(self._quiet, "on", False):
+        def assigned(event) -> None:  # from Python: viser calls it in the assigning thread, at once and in order
+            if event.client_id is None and not getattr(self._quiet, "on", False):
                 self._post(command, handle.value)
 
-        handle.on_update(posted)
+        async def from_page(event) -> None:
+            # On viser's event loop, just after it set the page's value: a callback in its thread pool read the value
+            # later, and a clamp the loop wrote back meanwhile was posted for the page's next value, which never ran.
+            if event.client_id is not None:
+                self._post(command, handle.value)
+
+        handle.on_update(assigned)
+        handle.on_update(from_page)
 
     def show_setting(self, field: str, value: Any) -> None:
         """Show a value the loop chose (a clamp, a scene's preset, a pause on divergence) without posting it again."""

@@ -218,6 +218,32 @@ def _system(snap: Snapshot) -> list[str]:
             f"{quantity(run.E_rad, 'J')} · the numbers above are {snap.settings.focus}'s (choose the body under Body)"]  # fmt: skip
 
 
+def _held_by(snap: Snapshot) -> str:
+    """What holds the chosen body besides the water ('' for a body alone and free): its joints, its lines."""
+    s, run = snap.settings, snap.run
+    held = []
+    if snap.system:
+        held.append("the bodies it is joined to")
+    elif s.joint not in (None, "", "free"):
+        held.append(f"its {s.joint} joint")
+    if run.mooring:
+        held.append("its mooring lines")
+    return " and ".join(held)
+
+
+def _stability(snap: Snapshot, h) -> str:
+    """The body's metacentric height: its own, as a free body; where joints or lines hold it, said to be the free body's."""
+    held = _held_by(snap)
+    if not held:
+        verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
+    elif h.gm[0] > 0:
+        verdict = f"as a free body it rights itself; {held} add to that"
+    else:
+        verdict = f"as a free body it would roll over; here {held} hold it upright, and the motion shows the whole system's stability"
+    return (f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "
+            f"displaced {h.volume:.4g} m³")  # fmt: skip
+
+
 def describe(snap: Snapshot) -> str:
     """The readout text of a snapshot (of several bodies: the chosen one's, then the system's)."""
     f, s = snap.frame, snap.settings
@@ -232,9 +258,7 @@ def describe(snap: Snapshot) -> str:
     ]
     lines += _readings(snap) + (_system(snap) if snap.system else [])
     if (h := snap.hydrostatics) is not None:
-        verdict = "rights itself" if h.gm[0] > 0 else "rolls over: a heel grows"
-        lines.append(f"GM = **{h.gm[0]:+.3f} m** ({verdict}; the least of {h.gm[0]:+.3f}, {h.gm[1]:+.3f} m about the waterplane's axes) · "
-                     f"displaced {h.volume:.4g} m³")  # fmt: skip
+        lines.append(_stability(snap, h))
     if snap.advice:
         lines.append(f"**⚠ {snap.advice}**")
     if snap.behind and snap.engine.startswith("numpy reference ("):  # compiling or loading: the cause passes by itself

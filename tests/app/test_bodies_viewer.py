@@ -225,3 +225,21 @@ def test_a_mesh_loaded_for_the_chosen_body_takes_its_place_on_its_joint():
         assert snap.settings.config.bodies[1].constraint.joint == "prismatic" and snap.settings.focus == "float"
         later = wait_for(app, lambda s: s.frame.t > snap.frame.t + 0.5, what="the run going on")
         assert np.isfinite(later.run.E_total) and not later.settings.paused
+
+
+def test_the_stability_readout_of_a_joined_body_says_it_is_the_free_bodys():
+    """rm3's spar alone would roll over (GM < 0 as a free body); joined to the float through the slide it floats upright.
+    The page says which GM it shows, and what holds the body, rather than an alarm for a stable system."""
+    with viewer() as app:
+
+        async def watch():
+            async with Page.open(app.port) as page:
+                await page.read(3.0, until=lambda p: p.text("GM ="))
+                return page
+
+        page = asyncio.run(watch())
+        snap = app.sync()
+        text = page.text("GM =")
+        gm = snap.hydrostatics.gm[0]
+        assert f"GM = **{gm:+.3f} m**" in text and "the bodies it is joined to" in text, text
+        assert ("would roll over" in text) == (gm < 0) and "rolls over: a heel grows" not in text, text

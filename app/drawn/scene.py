@@ -202,7 +202,7 @@ class SceneView:
             sent = self.water.show(snap.water, frame.t, frame.x_world, self.layers.water.value, now)
             for nodes, part in zip(self.bodies, parts):
                 nodes.show(part, snap.water, snap.params, now, sent)
-            self._show_lines(run.lines, run.line_tensions, frame.t, now)
+            self._show_lines(run.lines, run.line_tensions, frame.t, now, frame.x_world)
             self._show_joint(run.joint_axes)
             if self.follower is not None:
                 self.follower.step(self.root, frame.x_world, now)
@@ -224,10 +224,12 @@ class SceneView:
         )
         self.joint = self.server.scene.add_line_segments(f"{ROOT}/joint", segments, JOINT_COLOUR, thickness=0.04)
 
-    def _show_lines(self, lines: tuple, tensions: tuple, t: float, now: float) -> None:
+    def _show_lines(self, lines: tuple, tensions: tuple, t: float, now: float, centre: np.ndarray) -> None:
         """The mooring lines as segments between their nodes, coloured by the tension there, at most LINES_HZ times a
-        second (none: hidden, with their legend)."""
+        second (none: hidden, with their legend); the seabed under them, around `centre`."""
         self.water.opacity = LINED_OPACITY if lines else WAVE_OPACITY
+        if not lines or not self.layers.water.value:
+            self.water.show_seabed(None, np.zeros(2))
         if not lines:
             if self.lines is not None and self.lines.visible:
                 self.lines.visible = False
@@ -238,6 +240,8 @@ class SceneView:
             return
         self.tension.take(tensions, t)
         segments = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in lines]).astype(np.float32)
+        if self.layers.water.value:  # the anchors lie on the seabed: the lines' lowest node
+            self.water.show_seabed(float(segments[..., 2].min()) - 0.05, centre)
         colours = segment_colours(tensions, self.tension.low, self.tension.high)
         if self.lines is None or len(self.lines.points) != len(segments):
             self.lines = self.server.scene.add_line_segments(

@@ -12,8 +12,9 @@ import math
 import numpy as np
 import viser
 
-STOPS = np.array([[255, 236, 110], [245, 140, 30], [190, 20, 40]], float)
-"""Slack to taut: pale yellow, orange, deep red (all apart from the sea's blues and the sky)."""
+STOPS = np.array([[255, 215, 0], [255, 110, 0], [210, 0, 30]], float)
+"""Slack to taut: yellow, orange, red, saturated, so that each still reads through the sea over it (pale yellow read as
+grey under the sea's blue)."""
 MEMORY = 20.0
 """Simulated seconds over which the scale forgets a tension the lines no longer hold."""
 THICKNESS = 4.0

@@ -30,14 +30,20 @@ FAR = 16.0
 WATER_COLOUR, WATER_OPACITY = (25, 95, 175), 0.6
 """Calm sheet: deep enough a blue to read as water, translucent enough that the submerged part shows under it."""
 WAVE_OPACITY = 0.85
-LINED_OPACITY = 0.55
-"""A sea over mooring lines: see-through enough for their tension colours (at 0.85 they showed 15 % of them)."""
+LINED_OPACITY = 0.3
+"""A sea over mooring lines: see-through enough for their tension colours (at 0.85 they showed 15 % of them, at 0.55
+they read grey), over the SEABED's dark floor, which keeps it reading as deep water rather than as the pale sky."""
+SEABED_COLOUR = (14, 42, 70)
+"""The floor drawn under a sea over mooring lines, at their lowest node (their anchors lie on it)."""
 TROUGH, CREST = np.array([4, 30, 80]), np.array([125, 185, 230])
 """The sea's darkest and lightest shades (deep troughs facing away from the light, crests facing it)."""
 SKY = (222, 232, 242)
 """The background and the fog the far water fades into."""
 LIGHT = np.array([0.45, -0.55, 0.70]) / np.linalg.norm([0.45, -0.55, 0.70])
 """Where the shading's light comes from: behind the default camera, above."""
+HEIGHT_SCALE = 2.0
+"""m: the height that lightens a crest by 0.35 of the way from trough to crest, in every scene (it was twice each sea's
+own standard deviation, which drew 10 cm waves with a storm's range of shades)."""
 SLOPE_GAIN = 4.0
 """Shade per unit of slope facing the light (a slope of 0.1 toward it: 0.4 of the way from trough to crest)."""
 WAVE_PATCH = 3.0
@@ -132,10 +138,11 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-30)
 
 
-def shade(vertices: np.ndarray, faces: np.ndarray, scale: float) -> np.ndarray:
-    """(v,) each vertex's shade, 0 (TROUGH) .. 1 (CREST): lighter the higher it lies (height over `scale`, about
-    twice the sea's standard deviation) and the more squarely the surface there faces LIGHT. Continuous: the page
-    interpolates it across each triangle."""
+def shade(vertices: np.ndarray, faces: np.ndarray, scale: float = HEIGHT_SCALE) -> np.ndarray:
+    """(v,) each vertex's shade, 0 (TROUGH) .. 1 (CREST): lighter the more squarely the surface there faces LIGHT (its
+    true slope) and the higher it lies (height over `scale`, the same in every scene). A sea's contrast is its own:
+    10 cm waves 2.2 s long (slopes of 0.04) read as ripples, a storm's 3 m sea (slopes of 0.2) as a storm. Continuous:
+    the page interpolates it across each triangle."""
     n = vertex_normals(vertices, faces)
     height = vertices[:, 2] / scale
     return np.clip(0.5 + 0.35 * np.clip(height, -1.0, 1.0) + SLOPE_GAIN * (n @ LIGHT - LIGHT[2]), 0.0, 1.0)
@@ -203,19 +210,13 @@ def sea_glb(vertices: np.ndarray, colours: np.ndarray, faces: np.ndarray, opacit
     return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
 
 
-def sea_scale(water) -> float:
-    """Twice the surface's standard deviation (regular waves: sqrt(2) a; irregular: the spectrum's), m."""
-    amplitude = np.asarray(getattr(water, "amplitude", np.zeros(0)), float)
-    return max(2.0 * float(np.sqrt(0.5 * np.sum(amplitude**2))), 1e-3)
-
-
 class WaterView:
     """Scene nodes for the water; `show` runs on the simulation thread only."""
 
     def __init__(self, server: viser.ViserServer, size: float, lighter: bool = False, root: str = ""):
         """lighter=True: a coarser surface sent less often (recordings: the file stays small); `root`: the frame
         the nodes hang from."""
-        self.server = server
+        self.server, self.root = server, root
         self.size = WAVE_PATCH * size
         self.cells, self.hz = (REPLAY_CELLS, REPLAY_HZ) if lighter else (CELLS, WAVE_HZ)
         half = 0.5 * self.size
@@ -226,6 +227,9 @@ class WaterView:
             side="double", cast_shadow=False, receive_shadow=False,
         )  # fmt: skip
         self.lighter = lighter
+        self.reach = reach
+        self.seabed = None
+        """The floor under a sea over mooring lines (`show_seabed`), made when first asked."""
         self.grid = SeaGrid(half, self.cells)
         self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
         """The sea's node: its children are the surfaces (hidden with it)."""
@@ -259,6 +263,25 @@ class WaterView:
         self.updates = 0
         """How many wave surfaces were sent (tests check the throttle and the still-water silence)."""
 
+    def show_seabed(self, depth: float | None, centre: np.ndarray) -> None:
+        """The seabed at z = depth (< 0) under the sea around `centre`, opaque; None: none (a scene without lines)."""
+        if depth is None:
+            if self.seabed is not None and self.seabed.visible:
+                self.seabed.visible = False
+            return
+        if self.seabed is None:
+            r = self.reach
+            floor = np.array([[-r, -r, 0.0], [r, -r, 0.0], [r, r, 0.0], [-r, r, 0.0]], dtype=np.float32)
+            self.seabed = self.server.scene.add_mesh_simple(
+                f"{self.root}/seabed", floor, np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32), color=SEABED_COLOUR,
+                side="double", cast_shadow=False, receive_shadow=False,
+            )  # fmt: skip
+        where = (float(centre[0]), float(centre[1]), float(depth))
+        if not np.allclose(self.seabed.position, where, atol=0.5):
+            self.seabed.position = where
+        if not self.seabed.visible:
+            self.seabed.visible = True
+
     def show(self, water, t: float, centre: np.ndarray, visible: bool, now: float | None = None) -> bool:
         """The flat sheet for still water; otherwise the surface around `centre` (x, y) at time t, throttled.
         Whether a surface went out."""
@@ -285,7 +308,7 @@ class WaterView:
             if not node.visible:
                 node.visible = True
         else:
-            self.colours = shade_colours(shade(vertices, self.grid.faces, sea_scale(water)))
+            self.colours = shade_colours(shade(vertices, self.grid.faces))
             self.seas[self._front ^ 1].glb_data = sea_glb(vertices, linear(self.colours), self.grid.faces, self.opacity)
             self._pending = True
         self._sent, self.sent_time = now, t

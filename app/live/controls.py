@@ -1,12 +1,13 @@
 """The GUI inputs, one per declared parameter with a control (sim.scene.config.PARAMS with `gui`), plus the
 viewer's own. Callbacks only post commands; `show_setting` puts back the value the loop actually used.
 
-viser runs `def` callbacks on a thread pool, concurrently with the simulation thread and possibly
-out of order, so a callback never touches the simulation: it reads its handle and posts.
+A callback never touches the simulation: it reads its handle and posts (a page's update on viser's event loop as it
+arrives; viser would run a `def` callback on a thread pool, concurrently with the simulation thread and late).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -67,7 +68,9 @@ class Bound:
                 handle._queue_update("value", value)  # echoes an update to the other pages only, so that page still shows our write
                 self._written[field] = value
             return
-        if hasattr(handle, "max") and isinstance(value, (int, float)):  # sliders: widen the range rather than refuse the value
+        if field in BOXED and isinstance(value, (int, float)):  # another scene's or body's take-off: steps of its size
+            handle.step = scaled_step(value, CONTROLLED[field].gui[2])
+        elif hasattr(handle, "max") and isinstance(value, (int, float)):  # sliders: widen the range rather than refuse the value
             handle.max = max(handle.max, value)
             handle.min = min(handle.min, value)
         self._quiet.on = True
@@ -188,8 +191,22 @@ def _control(gui, p: Param, value):
         return add(p.title, value, step=VECTOR_STEP, hint=p.help)
     lo, hi, step = p.gui
     kind = int if p.kind == "int" else float
+    if p.key in BOXED:
+        lo, hi = p.live or (p.lo, p.hi)
+        return gui.add_number(p.title, kind(value), min=kind(lo), max=kind(hi), step=scaled_step(value, step), hint=p.help)
     lo, hi = min(lo, value), max(hi, value)
     return gui.add_slider(p.title, min=kind(lo), max=kind(hi), step=kind(step), initial_value=kind(value), hint=p.help)
+
+
+BOXED = {"pto_damping"}
+"""Controls whose values span decades from one scene to another (a 1 m cube's take-off 2 kN s/m, rm3's 1.2 MN s/m): a
+number box, which shows the value whole (a slider's box is 3 rem wide: 1200000 read as 120000) and steps by about a
+hundredth of the value the scene gives (scaled_step), not a slider ranged for one size of body."""
+
+
+def scaled_step(value: float, least: float) -> float:
+    """A round step about a hundredth of `value` (a power of ten), at least `least`."""
+    return max(float(least), 10.0 ** (math.floor(math.log10(abs(value))) - 2) if value else 0.0)
 
 
 class Layers:

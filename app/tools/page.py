@@ -26,7 +26,8 @@ def decode(frame: bytes) -> list[dict]:
 
 
 class Page:
-    """One websocket connection; `controls[label]` is {'uuid', 'value', 'options'} as the page would show it."""
+    """One websocket connection; `controls[label]` is {'uuid', 'value', 'options', 'kind' (viser's message: the control's
+    kind), 'step'} as the page would show it."""
 
     def __init__(self, ws):
         self.ws = ws
@@ -97,13 +98,14 @@ class Page:
         elif kind == "GuiUpdateMessage" and m.get("uuid") in self.texts and "_markdown" in m.get("updates", {}):
             self.texts[m["uuid"]] = m["updates"]["_markdown"]
         if kind.startswith("Gui") and kind != "GuiUpdateMessage" and isinstance(m.get("props"), dict) and "value" in m and "uuid" in m:
-            c = {"uuid": m["uuid"], "value": m["value"], "options": m["props"].get("options")}
+            c = {"uuid": m["uuid"], "value": m["value"], "options": m["props"].get("options"), "kind": kind, "step": m["props"].get("step")}
             self._by_uuid[m["uuid"]] = c
             self.controls[m["props"].get("label", "")] = c
         elif kind == "GuiUpdateMessage" and m.get("uuid") in self._by_uuid:
             c = self._by_uuid[m["uuid"]]
             c["value"] = m["updates"].get("value", c["value"])
             c["options"] = m["updates"].get("options", c["options"])
+            c["step"] = m["updates"].get("step", c["step"])
 
     def text(self, containing: str) -> str:
         """The markdown block that contains `containing` ('' when none does)."""

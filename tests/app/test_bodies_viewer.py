@@ -243,3 +243,26 @@ def test_the_stability_readout_of_a_joined_body_says_it_is_the_free_bodys():
         gm = snap.hydrostatics.gm[0]
         assert f"GM = **{gm:+.3f} m**" in text and "the bodies it is joined to" in text, text
         assert ("would roll over" in text) == (gm < 0) and "rolls over: a heel grows" not in text, text
+
+
+def test_the_take_off_damping_is_a_number_box_stepped_to_the_bodys_scale():
+    """rm3's float takes off 1.2 MN s/m: a slider 3 rem wide showed it as 120000, pinned at a range made for a 1 m cube.
+    The page gets a number box holding the value whole, stepping by a hundredth of its size; choosing the spar (no
+    damper) steps it as the smallest."""
+    with viewer() as app:
+
+        async def drive():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "PTO damping" in p.controls)
+                await page.camera()
+                await page.read(0.5)
+                await page.update("Body", "float")
+                await page.read(5.0, until=lambda p: p.value("PTO damping") == 1.2e6)
+                float_ = dict(page.control("PTO damping"))
+                await page.update("Body", "spar")
+                await page.read(5.0, until=lambda p: p.value("PTO damping") == 0.0)
+                return float_, dict(page.control("PTO damping"))
+
+        float_, spar = asyncio.run(drive())
+    assert float_["kind"] == "GuiNumberMessage" and float_["value"] == 1.2e6 and float_["step"] == 1e4, float_
+    assert spar["value"] == 0.0 and spar["step"] == 10.0, spar

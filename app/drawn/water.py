@@ -46,6 +46,8 @@ HEIGHT_SCALE = 2.0
 own standard deviation, which drew 10 cm waves with a storm's range of shades)."""
 SLOPE_GAIN = 4.0
 """Shade per unit of slope facing the light (a slope of 0.1 toward it: 0.4 of the way from trough to crest)."""
+INNER = 0.4
+"""The share of the fine patch's half-width that shows the whole surface (beyond it, a blend to what the ring shows)."""
 WAVE_PATCH = 3.0
 """The fine patch spans this many times the scene's base size."""
 
@@ -108,6 +110,13 @@ class SeaGrid:
             for b in range(RING_CELLS + 1):
                 same[ring(m + a, m + b)] = fine(a * per, b * per)
         self.faces = _upward(same[faces].astype(np.uint32), self.xy(np.zeros(2)))
+        self.seam = np.full(len(self.fine), self.fine[per] - self.fine[0])
+        """The ring's cells beside the patch, for each patch coordinate: what the patch's edge shows, as the ring does."""
+        s = np.clip((1.0 - np.hypot.outer(self.fine, self.fine) / half) / (1.0 - INNER), 0.0, 1.0)
+        self.inner = s * s * (3.0 - 2.0 * s)
+        """(n, n) the weight of the whole surface in the patch: 1 within INNER of its half-width from its centre, falling
+        smoothly (a circle: no corner for the eye) to 0 at its half-width and beyond, where the patch shows what the ring shows (a wave too short for the ring, drawn to the patch's edge,
+        met the ring's flat water in facets that the shading lit as sharp-edged wedges)."""
 
     def xy(self, origin: np.ndarray) -> np.ndarray:
         """(v, 2) the vertices' horizontal positions, the grid centred on `origin`."""
@@ -115,8 +124,12 @@ class SeaGrid:
         return np.concatenate([np.column_stack([gx.ravel(), gy.ravel()]) for gx, gy in grids])
 
     def heights(self, water, t: float, origin: np.ndarray) -> np.ndarray:
-        """(v,) the surface's heights at the vertices (Waves.elevation_on_grid: the ring leaves out what it cannot show)."""
-        fine = water.elevation_on_grid(self.fine + origin[0], self.fine + origin[1], t).ravel()
+        """(v,) the surface's heights at the vertices (Waves.elevation_on_grid: the ring leaves out what it cannot show, and
+        the patch fades from the whole surface to that towards its edge)."""
+        xs, ys = self.fine + origin[0], self.fine + origin[1]
+        whole = water.elevation_on_grid(xs, ys, t)
+        seam = water.elevation_on_grid(xs, ys, t, self.seam, self.seam)
+        fine = (seam + self.inner * (whole - seam)).ravel()
         ring = water.elevation_on_grid(self.ring + origin[0], self.ring + origin[1], t, self.ring_side, self.ring_side).ravel()
         return np.concatenate([fine, ring])
 

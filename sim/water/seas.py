@@ -126,8 +126,8 @@ class Waves:
     def elevation_on_grid(self, xs: np.ndarray, ys: np.ndarray, t: float, spacing_x=None, spacing_y=None) -> np.ndarray:
         """(nx, ny) eta at every (xs[i], ys[j]): the components factor over x and y, so a grid costs one small
         matrix product, not a cosine per point and component. Given each coordinate's grid spacing (m),
-        components shorter than six spacings are left out and faded in up to twelve, so that a coarse grid
-        neither aliases them into noise nor draws them as facets (which a shading by slope shows as wedges)."""
+        components shorter than four spacings are left out and faded in up to eight, so that a coarse grid
+        does not alias them into noise."""
         kx, ky = self.k * np.cos(self.direction), self.k * np.sin(self.direction)
         start = self.ramped(t) * self.amplitude * np.exp(1j * (self.phase - self.omega_met * t))
         X = np.exp(1j * np.multiply.outer(np.asarray(xs, float), kx)) * start
@@ -140,7 +140,7 @@ class Waves:
 
     def _resolved(self, spacing) -> np.ndarray:
         """(m, n) weights of the components a grid of these spacings shows (elevation_on_grid)."""
-        return np.clip(2 * np.pi / (self.k * 6.0 * np.asarray(spacing, float)[:, None]) - 1.0, 0.0, 1.0)
+        return np.clip(2 * np.pi / (self.k * 4.0 * np.asarray(spacing, float)[:, None]) - 1.0, 0.0, 1.0)
 
     def _stretched(self, points: np.ndarray, t: float):
         """(psi, z*) with Wheeler's stretching of the depth coordinate."""

@@ -798,8 +798,8 @@ def test_latching_from_the_viewer_holds_the_joint_for_the_time_set(make_app):
 def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has_no_gap():
     """A wave's vertices are lighter the higher they lie (or the more the surface there faces the light), in a
     continuous shade (no bands), and the GLB the page gets holds that very mesh; the fine
-    patch has the surface's own heights (the grid's factored sum equals the sum per point), the ring leaves out
-    only what its cells cannot show; the mesh covers its square once with no T-junction (a crack the sky shows
+    patch has the surface's own heights about the body (the grid's factored sum equals the sum per point) and the ring's
+    at its edge, the ring leaves out only what its cells cannot show; the mesh covers its square once with no T-junction (a crack the sky shows
     through): every edge inside it is shared by exactly two triangles, all facing up."""
     from app.drawn.water import LIGHT, SeaGrid, linear, sea_glb, shade, shade_colours, vertex_normals
     from sim.water.seas import Waves
@@ -812,11 +812,15 @@ def test_the_sea_is_shaded_lighter_on_crests_and_slopes_facing_the_light_and_has
         origin = np.array([3.5, -1.0])
         xy, z = grid.xy(origin), grid.heights(water, 2.0, origin)
         fine = len(grid.fine) ** 2
-        np.testing.assert_allclose(z[:fine], water.elevation(xy[:fine], 2.0), atol=1e-12)
+        long_only = Waves(1000.0, 9.81, water.amplitude[:1], omega[:1], water.k[:1], water.direction[:1], water.phase[:1])
+        reach = np.abs(xy[:fine] - origin).max(axis=1)
+        inner = np.flatnonzero(np.hypot(*(xy[:fine] - origin).T) <= 0.4 * 12.0 + 1e-9)
+        np.testing.assert_allclose(z[inner], water.elevation(xy[inner], 2.0), atol=1e-12)  # the whole surface about the body
+        edge = np.flatnonzero(reach >= 12.0 - 1e-9)
+        np.testing.assert_allclose(z[edge], long_only.elevation(xy[edge], 2.0), atol=1e-12)  # the patch's edge: what the ring shows
         side = np.maximum.outer(grid.ring_side, grid.ring_side).ravel()
         near_ring = np.flatnonzero((side <= 9.4) & (np.abs(xy[fine:] - origin).max(axis=1) > 12.0 + 1e-9)) + fine
         assert len(near_ring) > 20  # the ring's first cells: 6 to 9.4 m
-        long_only = Waves(1000.0, 9.81, water.amplitude[:1], omega[:1], water.k[:1], water.direction[:1], water.phase[:1])
         np.testing.assert_allclose(z[near_ring], long_only.elevation(xy[near_ring], 2.0), atol=1e-12)  # 126 m kept, 9.9 m left out
         a, b, c = (xy[grid.faces[:, k]] for k in range(3))
         area = 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))

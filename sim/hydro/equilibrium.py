@@ -17,6 +17,8 @@ def rest_height(body, fluid, R: np.ndarray, pull: float = 0.0) -> float:
     what holds that up too, m. ConfigError when it cannot float."""
     from scipy.optimize import brentq
 
+    if fluid.g <= 0.0:  # no weight, no buoyancy: every height is a rest (g = 0: a torque-free body, say)
+        raise ConfigError("without gravity (g = 0) a body has no floating rest: it stays where it is put")
     water = StillWater(fluid.rho, fluid.g)
 
     def excess(z: float) -> float:

@@ -118,6 +118,8 @@ def describe_rest(body, fluid, R: np.ndarray | None = None) -> str:
     """One line on how a body floats: volume, mass, draft at rest and GM (with what its sign means)."""
 
     head = f"volume {body.volume:.4g} m^3, mass {body.mass:.4g} kg"
+    if fluid.g <= 0.0:
+        return f"{head}: without gravity (g = 0) it neither floats nor sinks"
     try:
         z, draft, h = at_rest(body, fluid, R)
     except ConfigError:

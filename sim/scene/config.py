@@ -471,6 +471,8 @@ def validate(scene: SceneConfig) -> SceneConfig:
     if checked["farm"].rows * checked["farm"].columns > 1:  # laid out as [[bodies]] once (the table goes back to one device)
         return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked), BodyEntry), farm=FarmConfig()))
     _check_body(checked["body"], checked["initial"], checked["constraint"])
+    if checked["fluid"].g == 0.0 and (checked["waves"].kind != "still" or checked["fluid"].radiation != "none" or moored(scene)):
+        raise ConfigError("waves, radiation and mooring lines need gravity: g = 0 (a torque-free body, say) is for still water alone")
     _check_steepness(checked["waves"], checked["fluid"].g, scene.base_dir)
     if checked["waves"].kind == "record" and any(checked["water"].current):
         raise ConfigError("a measured record with a current is not modelled (the record's frequencies would be met, not intrinsic): "

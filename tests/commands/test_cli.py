@@ -97,6 +97,7 @@ def test_flags_override_the_scene(tmp_path):
         (["--dt", "0"], "dt must be >= 1e-07"),
         (["--dt", "-0.1"], "dt must be >= 1e-07"),
         (["--dt", "inf"], "dt must be finite"),
+        (["--scene", "waves", "--g", "0"], "need gravity"),  # (dispersion divides by g)
         (["--t-end", "nan"], "t_end must be finite"),
         (["--points-per-edge", "0"], "points per edge must be >= 1"),
         (["--q0", "1", "1", "0", "0"], "unit quaternion"),
@@ -115,6 +116,14 @@ def test_user_mistakes_get_one_clear_line(flags, message, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
+
+
+def test_no_gravity_is_a_torque_free_run_not_a_traceback(capsys):
+    """g = 0 in still water: no weight and no buoyancy, so the body stays where it is put and its rest line says so
+    (the rest height divided by g: a ZeroDivisionError traceback before)."""
+    assert main(["run", "--scene", "drop", "--g", "0", "--t-end", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "without gravity (g = 0) it neither floats nor sinks" in out and "|u| = 0 m/s" in out
 
 
 def test_a_hand_typed_quaternion_is_normalised_with_a_note(capsys):

@@ -239,6 +239,11 @@ def summarise(sim: Simulation, first, last) -> None:
     if sim.joint is not None:
         j = sim.joint
         print(f"joint: {j.kind} to the seabed, take-off k {j.stiffness:g}, c {j.damping:g}")
+    if sim.model.radiation is not None and (drifting := sim.model.radiation.drift) is not None:
+        Fx, Fy, Mz = drifting.mean
+        held = " on the held body, what a model test measures" if sim.joint is not None and sim.joint.dofs == 0 else ""
+        print(f"wave drift: mean Fx = {Fx:.6g} N, Fy = {Fy:.6g} N, Mz = {Mz:.6g} N m{held} (the sea at full height, Newman: "
+              "sum a_i^2 D_i; in the CSV's Fx, Fy and Tz)")  # fmt: skip
     summarise_readings(first, last, last.E_total + last.E_pto - first.E_total - first.E_pto)
 
 

@@ -228,7 +228,7 @@ def linear_response(body, scene, c, rest: np.ndarray, R0: np.ndarray, joint=None
     stiffness = still.C.copy()
     J = None
     if joint is not None:
-        J = joint.jacobian(rest).reshape(6, joint.dofs)
+        J = np.zeros((6, 0)) if joint.dofs == 0 else joint.jacobian(rest).reshape(6, joint.dofs)  # held: no motion
         stiffness += joint.stiffness * (J @ J.T)
         damping = damping + joint.damping * (J @ J.T)
     return body_rao(c, mass, stiffness, damping, J)

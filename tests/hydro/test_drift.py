@@ -231,3 +231,32 @@ def test_the_moored_buoy_carries_the_drift_force_on_its_lines(tmp_path):
     K = pull_stiffness(sim.scene, rest, np.eye(3))
     offset = np.array([on[c][late].mean() - off[c][late].mean() for c in ("x", "y")])
     np.testing.assert_allclose(offset, np.linalg.solve(K, F[:2]), atol=0.1 * np.linalg.norm(np.linalg.solve(K, F[:2])))
+
+
+@pytest.mark.slow
+def test_a_held_body_reports_its_mean_drift_force(tmp_path):
+    """The sphere held fixed (no motion) in regular waves 5 cm high, 1.5 s, with --wave-drift: the run sets up (a fixed
+    joint has no coordinate: its linear response is none, and the drift is the held body's, from its diffraction alone),
+    says the mean drift force, which is a² D of the held body (mean_drift without motion), and the CSV's Fx averaged over
+    whole periods after the ramp is that force (within 1 %; the first-order force averages out)."""
+    import os
+    import re
+    import subprocess
+    import sys
+
+    from sim.hydro.drift import Drift
+
+    sim, drift, c = _drift_of("sphere", **{**SPHERE_SEA, "constraint__joint": "fixed"})
+    held = Drift(c, sim.water).mean  # mean_drift with no motion
+    assert drift.mean[0] == pytest.approx(held[0], rel=1e-9) and held[0] > 0
+    out = tmp_path / "held.csv"
+    flags = ["--scene", "sphere", "--joint", "fixed", "--waves", "regular", "--wave-height", "0.05", "--wave-period", "1.5", "--z0", "0",
+             "--dt", "0.01", "--t-end", "15", "--wave-drift", "True", "--out", str(out)]  # fmt: skip
+    done = subprocess.run([sys.executable, "-m", "sim", "run", *flags], capture_output=True, text=True, timeout=600,
+                          env=dict(os.environ, FLOATSIM_BACKEND="numpy"))  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    said = float(re.search(r"wave drift: mean Fx = (\S+) N, .* on the held body", done.stdout).group(1))
+    assert said == pytest.approx(held[0], rel=1e-5)
+    d = np.genfromtxt(out, delimiter=",", names=True)
+    last = d["t"] > d["t"][-1] - 4 * 1.5 - 1e-9
+    assert d["Fx"][last][:-1].mean() == pytest.approx(held[0], rel=0.01)

@@ -26,17 +26,35 @@ def reason(e: OSError) -> str:
     return os.strerror(e.errno) if e.errno else (e.strerror or str(e).splitlines()[0])
 
 
+def _stamp(path: Path) -> tuple | None:
+    """What tells one version of a file from another (its inode, time and size), or None where there is none."""
+    try:
+        s = path.stat()
+    except OSError:
+        return None
+    return s.st_ino, s.st_mtime_ns, s.st_size
+
+
 class LineFile:
     """A text file written in whole lines: they collect in memory and reach the disk in blocks of BLOCK bytes
     through os.write, whose count of bytes written is exact (a buffered file's is not); when a write fails, the
-    file is cut back to its last whole line and WriteFailed raised. `lines` counts the whole lines on the disk."""
+    file is cut back to its last whole line and WriteFailed raised. `lines` counts the whole lines on the disk.
+
+    The lines go to a temporary beside `path` (named as TEMPORARY matches) renamed over `path` when the file is closed,
+    after a failure or Ctrl-C too (the rows so far): a reader never sees half a file under the name, and of two runs
+    writing one name each leaves its whole file, the later one's under the name. `replaced` then says what was there."""
 
     BLOCK = io.DEFAULT_BUFFER_SIZE  # as often as a buffered file would: a killed run loses no more
 
     def __init__(self, path: str | Path):
         self.path = str(path)
+        target = Path(path)
+        self._before = _stamp(target)
+        self._tmp = str(target.parent / f"_{target.name}.{secrets.token_hex(4)}.partial")
+        self.replaced = ""
+        """After close: '' (a new file), 'the earlier file', or 'the file another run wrote there while this one ran'."""
         try:
-            self._fd: int | None = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+            self._fd: int | None = os.open(self._tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         except OSError as e:
             raise WriteFailed(self.path, reason(e)) from None
         self._pending: list[bytes] = []
@@ -86,7 +104,7 @@ class LineFile:
             self.abandon()
 
     def abandon(self) -> None:
-        """Closed without writing what is still in memory (after a failure: the disk is full)."""
+        """Closed without writing what is still in memory (after a failure: the disk is full), and put under its name."""
         if self._fd is not None:
             fd, self._fd = self._fd, None
             self._pending, self._size = [], 0
@@ -94,6 +112,17 @@ class LineFile:
                 os.close(fd)
             except OSError:
                 pass
+            self._publish()
+
+    def _publish(self) -> None:
+        now = _stamp(Path(self.path))
+        self.replaced = (
+            "" if now is None else "the earlier file" if now == self._before else "the file another run wrote there while this one ran"
+        )
+        try:
+            os.replace(self._tmp, self.path)
+        except OSError as e:
+            raise WriteFailed(self.path, f"{reason(e)} (its rows are in {self._tmp})") from None
 
 
 def write_whole(path: str | Path, write: Callable[[str], T], suffix: str = "") -> T:

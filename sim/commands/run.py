@@ -52,7 +52,10 @@ class _RunBase:
     every: int = 10
     """Write one CSV row every K steps."""
     out: Annotated[str | None, tyro.conf.arg(metavar="FILE", help_behavior_hint="(default: none, a summary only)")] = None
-    """CSV file to write."""
+    """CSV file to write (written aside and renamed when done: a reader never sees half of it). An earlier run's CSV
+    there is replaced, and the summary says so; another existing file only with --overwrite."""
+    overwrite: bool = False
+    """Replace an existing --out file that is not an earlier run's CSV."""
     progress: Annotated[
         bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")
     ] = None
@@ -141,10 +144,22 @@ INPUTS = (".toml", ".stl", ".obj", ".ply", ".py", ".md")
 """Suffixes of files a run reads or a user keeps: never overwritten by an output flag."""
 
 
-def check_output(path: str | None, flag: str = "out", suffix: str | None = None, inputs: tuple = ()) -> None:
+def written_by_run(path: Path) -> bool:
+    """Whether a file is empty or holds a run's CSV (its header: t first, E_total among the columns): what rerunning a
+    command over its own output replaces without asking."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(65536)
+    except OSError:
+        return False
+    first = head.split(b"\n", 1)[0].split(b",")
+    return not head or (first[0] == b"t" and any(c.endswith(b"E_total") for c in first))
+
+
+def check_output(path: str | None, flag: str = "out", suffix: str | None = None, inputs: tuple = (), overwrite: bool = True) -> None:
     """Refuse, before any work, an output file that cannot be written, or that is one of the run's
     `inputs` (its scene or mesh file) or an existing file of an input's kind: one line naming why.
-    Another existing file is overwritten (as the README says)."""
+    Without `overwrite`, an existing file a run did not write is refused too (written_by_run)."""
     if path is None:
         return
     p = Path(path)
@@ -158,6 +173,8 @@ def check_output(path: str | None, flag: str = "out", suffix: str | None = None,
         raise ConfigError(f"--{flag} {path}: is a folder, give a file name")
     if p.exists() and not p.is_file():
         raise ConfigError(f"--{flag} {path}: not a regular file")
+    if p.is_file() and not overwrite and not written_by_run(p):
+        raise ConfigError(f"--{flag} {path}: an existing file floatsim did not write; give --overwrite to replace it, or another name")
     if not p.parent.resolve().is_dir():
         raise ConfigError(f"--{flag} {path}: folder {str(p.parent)!r} does not exist")
     existed = p.exists()
@@ -179,7 +196,7 @@ def run(args: RunArgs, watch=None) -> int:
         raise ConfigError(f"--step-budget must be > 0 s, got {args.step_budget}")
     if args.max_steps < 1:
         raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
-    check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh))
+    check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh), overwrite=args.overwrite)
     scene = scene_from_args(args)
     sim = Simulation(scene, backend="numpy")  # nothing compiles before we know the run needs it
     try:
@@ -203,7 +220,7 @@ def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     first = sim.frame()
     started = time.perf_counter()
-    error, rows, stepping = stream(sim, sim.columns(), args, n_steps, watch)
+    error, rows, stepping, replaced = stream(sim, sim.columns(), args, n_steps, watch)
     if error in (WRITE_FAILED, INTERRUPTED):
         return 2 if error == WRITE_FAILED else EXIT
     for note in sim.validity_notes():
@@ -215,6 +232,7 @@ def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
     print(
         speeds(steps, last.t, wall, stepping, rows if args.out else None, checked=not scene.bodies)
         + (f" -> {args.out}" if args.out else "")
+        + (f" (replaced {replaced})" if replaced else "")
     )
     return 3 if error else 0
 
@@ -310,12 +328,13 @@ INTERRUPTED = "interrupted"
 WRITE_FAILED = "write failed"
 
 
-def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int, float]:
+def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, int, float, str]:
     """Step `sim` (a Simulation, or anything with step, frame and state.t) to n_steps, writing `columns` and a row
     every args.every steps to args.out (if given), with a progress bar. (error, rows, stepping): error is the divergence
     message, INTERRUPTED after Ctrl-C or WRITE_FAILED (said here, with the rows kept), or None. `rows` counts the
     whole rows in the file: a write that fails (a full disk) cuts it back to the last of them. `stepping`: wall seconds
-    spent stepping alone (in `sim.step`, less its energy check after each call), without the rows, the bar and the rest."""
+    spent stepping alone (in `sim.step`, less its energy check after each call), without the rows, the bar and the rest.
+    `replaced`: what the file replaced under its name (LineFile.replaced)."""
     out = LineFile(args.out) if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)
     clock = [0.0]
@@ -336,7 +355,7 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
             out.close()  # the last rows reach the disk here: this can fail too
     except WriteFailed as e:
         print(f"floatsim: {e} ({kept_rows(out)})", file=sys.stderr)
-        return WRITE_FAILED, data_rows(out), clock[0]
+        return WRITE_FAILED, data_rows(out), clock[0], out.replaced
     finally:
         bar.close()
         if out:
@@ -346,7 +365,7 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
         print(f"floatsim: interrupted (Ctrl-C) at t = {sim.state.t:.6g} s of {n_steps * sim.dt:g} s: {said}", file=sys.stderr)
     elif error:
         print(f"floatsim: {error}" + (f" (kept {data_rows(out)} rows)" if out else ""), file=sys.stderr)
-    return error, data_rows(out), clock[0]
+    return error, data_rows(out), clock[0], out.replaced if out else ""
 
 
 def data_rows(out: LineFile | None) -> int:

@@ -40,13 +40,14 @@ def interrupt(args: list[str], ready, timeout: float = 120.0) -> tuple[subproces
 def test_ctrl_c_during_a_run_keeps_whole_rows_and_says_where_it_stopped(tmp_path):
     csv = tmp_path / "x.csv"
     done, stopped_in = interrupt(["run", "--t-end", "1e6", "--max-steps", "1000000000", "--every", "1000", "--out", str(csv)],
-                                 lambda: csv.exists() and csv.stat().st_size > 20_000)  # fmt: skip
+                                 lambda: any(p.stat().st_size > 20_000 for p in tmp_path.glob("_x.csv.*.partial")))  # fmt: skip
+    # (the rows go to a temporary beside x.csv until the run ends: under its name the file is whole, Ctrl-C too)
     assert done.returncode == 130 and stopped_in < 5.0  # at once (0.1-0.3 s here; 1.08 s on a loaded machine): a run that
     # only stopped at its end would take hours
     assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C) at t = " in done.stderr and "rows in" in done.stderr
     rows = np.loadtxt(csv, delimiter=",", skiprows=1)
     assert rows.ndim == 2 and rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()  # whole lines, no NaN
-    assert f"kept {len(rows)} rows" in done.stderr
+    assert f"kept {len(rows)} rows" in done.stderr and not list(tmp_path.glob("_*.partial"))
 
 
 @pytest.mark.slow
@@ -74,3 +75,30 @@ def test_ctrl_c_in_a_study_command_is_one_line():
     assert (
         proc.returncode == 130 and err.strip().endswith("decay interrupted (Ctrl-C) before writing its results") and "Traceback" not in err
     )
+
+
+def test_an_output_is_never_half_written_and_another_file_is_not_replaced_unasked(tmp_path):
+    """`run --out` onto a file a run did not write is refused (one line, exit 2) and the file kept; --overwrite replaces
+    it. Rerunning over a run's own CSV replaces it and says so. Two runs writing one name at once both finish, each
+    file whole: the name holds one run's rows (not a mix), the other run's summary says it replaced that one's."""
+    import subprocess
+    import sys
+
+    notes = tmp_path / "notes.csv"
+    notes.write_text("my,own\n1,2\n")
+    flags = ["-m", "sim", "run", "--scene", "drop", "--t-end", "2", "--every", "1"]
+    done = subprocess.run([sys.executable, *flags, "--out", str(notes)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "did not write; give --overwrite" in done.stderr and notes.read_text() == "my,own\n1,2\n"
+    done = subprocess.run([sys.executable, *flags, "--out", str(notes), "--overwrite"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and notes.read_text().startswith("t,") and "(replaced the earlier file)" in done.stdout
+    done = subprocess.run([sys.executable, *flags, "--out", str(notes)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and "(replaced the earlier file)" in done.stdout  # a run's own CSV: replaced without asking
+    same = tmp_path / "same.csv"
+    runs = [subprocess.Popen([sys.executable, *flags, "--t-end", t_end, "--out", str(same)], stdout=subprocess.PIPE, text=True)
+            for t_end in ("20", "30")]  # fmt: skip
+    said = [run.communicate(timeout=300)[0] for run in runs]
+    assert [run.returncode for run in runs] == [0, 0]
+    rows = same.read_text().splitlines()
+    assert len(rows) - 1 in (20 * 200 + 1, 30 * 200 + 1)  # one run's rows, whole (drop: dt 5 ms)
+    assert sum("another run wrote there while this one ran" in s for s in said) == 1, said
+    assert not list(tmp_path.glob("_*.partial"))  # no temporary left behind

@@ -1,6 +1,20 @@
 """floatsim's physics: rigid bodies sampled on their surface, floating in water. No viewer, plotting or CLI imports."""
 
 import os
+import signal
+import sys
+
+
+def _interrupted_while_starting(signum, frame) -> None:
+    os.write(2, b"floatsim: interrupted (Ctrl-C) while starting: nothing written\n")
+    os._exit(130)
+
+
+if sys.argv[:1] == ["-m"] and signal.getsignal(signal.SIGINT) is not None:
+    # `python -m sim` or `python -m app` (sys.argv[0] is '-m' while Python finds the module): Ctrl-C while the modules
+    # load ends in one line and exit 130, not a traceback (or a KeyboardInterrupt some library's bare except swallows,
+    # the run then going on); the command takes Ctrl-C over once it starts (commands.dispatch, app.main)
+    signal.signal(signal.SIGINT, _interrupted_while_starting)
 
 # Our matrices are 3x3 and 6x6: BLAS threads only add overhead and fight the viewer for cores.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):

@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import os
-import signal
 import sys
 import threading
 import typing
@@ -15,7 +14,7 @@ from typing import Annotated
 
 import tyro
 
-from sim.commands.interrupt import EXIT, interrupted_by_ctrl_c
+from sim.commands.interrupt import EXIT, asked_before, interrupted_by_ctrl_c, listen
 from sim.errors import ConfigError
 from sim.parameters import Param
 
@@ -90,26 +89,26 @@ def _load(target: str):
 
 def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str = "floatsim") -> int:
     """Parse `argv` into one subcommand's dataclass and run it; user mistakes exit 2 with one line."""
-    loaded = {name: _load(target) for name, target in commands.items()}
+    loaded = {name: _load(target) for name, target in commands.items()}  # (Ctrl-C until here: sim/__init__'s one line)
     classes = {name: cls for name, (cls, _) in loaded.items()}
     args = parse(lambda: tyro.extras.subcommand_cli_from_dict(classes, args=argv, prog=prog), prog)
     handler = next(fn for cls, fn in loaded.values() if isinstance(args, cls))
     if threading.current_thread() is threading.main_thread():  # a shell starts background jobs with Ctrl-C ignored: take it back
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        listen()
     try:
         return handler(args)
     except ConfigError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 2
-    except (KeyboardInterrupt, SystemError) as e:
-        if not interrupted_by_ctrl_c(e):
+    except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, like any Unix tool
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except BaseException as e:  # noqa: BLE001 - after a Ctrl-C, what its KeyboardInterrupt left behind too
+        if not (interrupted_by_ctrl_c(e) or asked_before()) or isinstance(e, SystemExit):
             raise
         name = next((n for n, (cls, _) in loaded.items() if isinstance(args, cls)), "")
         print(f"{prog}: {name} interrupted (Ctrl-C) before writing its results", file=sys.stderr)
         return EXIT
-    except BrokenPipeError:  # the reader went away (`... | head`): stop quietly, like any Unix tool
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 141
 
 
 def main(argv: list[str] | None = None) -> int:

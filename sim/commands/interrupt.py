@@ -6,6 +6,7 @@ one: Python would report a SystemError)."""
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 
 from sim.errors import Interrupted
@@ -13,6 +14,38 @@ from sim.errors import Interrupted
 CHECK_SECONDS = 0.2
 """Longest stretch of work between two checks: Ctrl-C is answered well within a second."""
 EXIT = 130
+
+
+_asked_before = False  # a Ctrl-C outside any loop: its KeyboardInterrupt may have been swallowed
+
+
+def ctrl_c(signum, frame) -> None:
+    """A command's SIGINT handler outside its loops (commands.dispatch): KeyboardInterrupt, remembered, for a library that
+    swallows it (trimesh imports its optional modules under `except BaseException`): the next loop then stops at once."""
+    global _asked_before
+    _asked_before = True
+    raise KeyboardInterrupt
+
+
+def listen() -> None:
+    """A command's Ctrl-C from here on (the main thread): `ctrl_c`, quiet finalisers, no Ctrl-C seen yet."""
+    global _asked_before
+    _asked_before = False
+    signal.signal(signal.SIGINT, ctrl_c)
+    sys.unraisablehook = quiet_unraisable
+
+
+def asked_before() -> bool:
+    """Whether a Ctrl-C came outside any loop (its KeyboardInterrupt raised, perhaps swallowed, perhaps turned into
+    another error by the code it landed in: a module left half imported)."""
+    return _asked_before
+
+
+def quiet_unraisable(unraisable) -> None:
+    """sys.unraisablehook: a KeyboardInterrupt that lands in a finaliser (__del__, a weakref callback) is not printed
+    (Python would print it and go on: the one line the command says is enough); anything else as Python prints it."""
+    if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+        sys.__unraisablehook__(unraisable)
 
 
 class StopOnCtrlC:
@@ -28,6 +61,7 @@ class StopOnCtrlC:
         self.asked = True
 
     def __enter__(self) -> StopOnCtrlC:
+        self.asked = _asked_before
         if threading.current_thread() is threading.main_thread():
             self._old = signal.signal(signal.SIGINT, self._handler)
         return self

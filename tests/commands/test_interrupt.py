@@ -102,3 +102,21 @@ def test_an_output_is_never_half_written_and_another_file_is_not_replaced_unaske
     assert len(rows) - 1 in (20 * 200 + 1, 30 * 200 + 1)  # one run's rows, whole (drop: dt 5 ms)
     assert sum("another run wrote there while this one ran" in s for s in said) == 1, said
     assert not list(tmp_path.glob("_*.partial"))  # no temporary left behind
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("after", [0.1, 0.3, 0.5, 0.7, 0.9, 1.2, 2.0, 4.0])
+def test_ctrl_c_at_any_moment_of_a_run_is_one_line_and_exit_130(after, tmp_path):
+    """SIGINT at a spread of moments from the start (Python's imports, the command's set-up, the stepping): one line,
+    exit 130, within 3 s, and whatever CSV there is holds whole rows. Before: a KeyboardInterrupt traceback (exit -2)
+    while the modules loaded, and a Ctrl-C swallowed by a library's `except BaseException` (trimesh's optional imports),
+    the run going on for minutes."""
+    csv = tmp_path / "x.csv"
+    started = time.monotonic()
+    done, stopped_in = interrupt(["run", "--scene", "damped", "--t-end", "100000", "--every", "7", "--out", str(csv)],
+                                 lambda: time.monotonic() - started >= after)  # fmt: skip
+    assert done.returncode == 130 and stopped_in < 3.0, (done.stderr, stopped_in)
+    assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C)" in done.stderr and "Traceback" not in done.stderr, done.stderr
+    if csv.exists():
+        rows = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
+        assert rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()

@@ -56,6 +56,16 @@ GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", 
 """Body keys whose change rebuilds the body (the others only change its mass)."""
 
 
+def sea_reach(water, g: float) -> float:
+    """J/kg: the most energy per unit mass a sea can give a body that follows it, g times the most its surface can rise
+    and fall (twice the sum of its amplitudes) plus the square of the most its surface can move (the sum of a_i omega_i).
+    The energy is measured against still water, so a body lifted by a crest or down in a trough reads as energy gained:
+    without this a body riding a 20 m sea read as a blow-up (a real one passes any such bound within steps)."""
+    amplitude = np.abs(np.asarray(getattr(water, "amplitude", ()), float))
+    omega = np.asarray(getattr(water, "omega", np.zeros_like(amplitude)), float)
+    return g * 2.0 * float(amplitude.sum()) + float((amplitude * omega).sum()) ** 2
+
+
 class Simulation:
     """A running scene, of one body or several: steps, frames, resets and updates it. Not thread-safe: one thread drives it.
 
@@ -639,7 +649,9 @@ class Simulation:
         # The energy is the seabed's: a current feeds a body up to its speed, 1/2 M |u' + U|^2 <= M |u'|^2 + M |U|^2
         # (u' its motion in the water): without that term a small body carried by a strong current read as a blow-up.
         carried_in = body.mass * float(np.dot(self.scene.water.current, self.scene.water.current))
-        self._E_scale = (body.mass + p.rho * body.volume) * max(p.g, 1e-3) * 2 * body.radius + frame.E_kin + carried_in
+        self._E_scale = (
+            (body.mass + p.rho * body.volume) * (max(p.g, 1e-3) * 2 * body.radius + sea_reach(self.water, p.g)) + frame.E_kin + carried_in
+        )
 
     # what a run shows
 

@@ -53,6 +53,17 @@ def _numbers(field: str) -> list[float]:
     return [float(v) for v in field.split("|")]
 
 
+def check_input(text: str, name: str) -> None:
+    """A ConfigError unless `text` reads as MoorDyn input floatsim can couple: a LINES section with a line, and a Coupled
+    point (or a Coupled body's points) among its POINTS. Cheap (no MoorDyn), so made before any solve, fit or compile."""
+    found = sections(text)
+    if not table(found, "LINES", "LINE LIST", "LINE PROPERTIES"):
+        raise ConfigError(f"{name}: not a MoorDyn input file (no '---- LINES ----' section with a line)")
+    points = table(found, *POINT_SECTIONS) + table(found, *BODY_SECTIONS)
+    if not any(len(row) > 1 and row[1].lower().startswith(("coupled", "vessel", "cpld")) for row in points):
+        raise ConfigError(f"{name}: the mooring input must couple the body through 'Coupled' points (its fairleads); it has none")
+
+
 def coupled_bodies_as_points(text: str) -> str:
     """(coupled_points, with a one-line error for a number it cannot read.)"""
     try:

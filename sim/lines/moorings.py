@@ -38,7 +38,7 @@ from sim.bodies.rotation import quat_to_matrix, skew
 from sim.errors import ConfigError, SimulationDiverged
 from sim.lines.catenary import catenary
 from sim.lines.line_energy import LineEnergy, read_spec
-from sim.lines.moordyn_input import coupled_bodies_as_points
+from sim.lines.moordyn_input import check_input, coupled_bodies_as_points
 
 LINE_DRAG = (1.2, 1.0, 0.2, 0.0)
 """Cd, Ca normal, Cd, Ca axial of the spread's line type: MoorDyn's usual values for a chain-like line."""
@@ -374,7 +374,12 @@ def check_lines(scene, x0: np.ndarray, R0: np.ndarray) -> None:
     """The lines' own checks with the body at x0, R0 (input frame to world): a file that is there, anchors on the seabed
     that the lines reach. A ConfigError for the first that fails; cheap, so made before any solve that needs the lines."""
     if scene.moorings.line_file:
-        line_file(scene)
+        path = line_file(scene)
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as e:
+            raise ConfigError(f"mooring file {scene.moorings.line_file}: cannot be read ({e})") from None
+        check_input(text, f"mooring file {scene.moorings.line_file}")
     elif (spread := lines_of(scene.moorings)) is not None:
         spread.input_file(np.asarray(x0, float), R0, scene.fluid.rho, scene.fluid.g)
 

@@ -8,6 +8,7 @@ import math
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -502,3 +503,18 @@ def test_fairleads_on_a_coupled_moordyn_body_move_with_the_body(tmp_path):
     done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(tmp_path / "body.toml"), "--t-end", "0.1"], capture_output=True,
                           text=True, timeout=300)  # fmt: skip
     assert done.returncode == 2 and "Coupled with its own mass" in done.stderr and len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+def test_a_line_file_that_is_not_moordyn_input_is_refused_before_any_solve(tmp_path):
+    """moored-buoy with its lines from a file that is not MoorDyn input: without its spread the buoy rests elsewhere, its
+    shipped BEM solve no longer matches and a Capytaine solve would start (2 min 55 s here before the file was refused);
+    the file is read first and refused in one line, in seconds."""
+    text = (ROOT / "assets" / "scenes" / "moored-buoy.toml").read_text()
+    start, end = text.index("\n[moorings]\n"), text.index("\n[initial]\n")
+    (tmp_path / "notes.txt").write_text("my notes\nnot a mooring file\n")
+    (tmp_path / "buoy.toml").write_text(text[:start] + '\n[moorings]\nline_file = "notes.txt"\n' + text[end:])
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(tmp_path / "buoy.toml"), "--t-end", "1"], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert "notes.txt: not a MoorDyn input file" in done.stderr and time.monotonic() - started < 60.0

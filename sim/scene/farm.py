@@ -33,6 +33,7 @@ def expand(scene, entry):
         device, single = scene.bodies, False
     else:
         device, single = (entry("body", "world", scene.body, scene.initial, scene.constraint),), True
+    _check_apart(device, farm)
     entries = []
     for row in range(int(farm.rows)):
         for column in range(int(farm.columns)):
@@ -46,3 +47,22 @@ def expand(scene, entry):
     moorings = replace(scene.moorings, body="")
     return replace(scene, bodies=tuple(entries), initial=type(scene.initial)(), constraint=type(scene.constraint)(), moorings=moorings,
                    body=type(scene.body)())  # fmt: skip
+
+
+def _check_apart(device, farm) -> None:
+    """Refuse a spacing at which neighbouring devices would overlap at the start: a device's reach along x and y is its
+    bodies' (boxes and cubes: their half sides, or their half diagonal when turned; a mesh is not measured here)."""
+    x0, y0 = (float(v) for v in device[0].initial.position[:2])
+    reach = [0.0, 0.0]
+    for e in device:
+        if e.body.shape not in ("cube", "box"):
+            return
+        sides = [float(e.body.size)] * 3 if e.body.shape == "cube" else [float(v) for v in e.body.extents]
+        turned = tuple(float(q) for q in e.initial.orientation) != (1.0, 0.0, 0.0, 0.0)
+        half = [0.5 * (sum(s * s for s in sides) ** 0.5)] * 2 if turned else [0.5 * sides[0], 0.5 * sides[1]]
+        x, y = (float(v) for v in e.initial.position[:2])
+        reach = [max(reach[0], abs(x - x0) + half[0]), max(reach[1], abs(y - y0) + half[1])]
+    for count, axis, r in ((farm.columns, "x", reach[0]), (farm.rows, "y", reach[1])):
+        if int(count) > 1 and farm.spacing < 2.0 * r:
+            raise ConfigError(f"[farm] spacing {farm.spacing:g} m: neighbouring devices overlap along {axis} (each reaches {r:g} m from "
+                              f"its centre): give spacing >= {2.0 * r:g} m")  # fmt: skip

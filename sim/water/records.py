@@ -45,6 +45,10 @@ def record_path(name: str, base_dir: str = ".") -> Path:
     return path
 
 
+MAX_ELEVATION = 1e4
+"""m: no measured sea is higher (a damaged value, 1e308, overflowed every sum of the record before it was refused)."""
+
+
 def read_record(path: Path) -> tuple[float, np.ndarray]:
     """(dt, eta) of a CSV of time (s) and elevation (m), two columns; lines before the first row of numbers
     (a header) and lines starting with # are skipped. One-line ConfigError on anything else."""
@@ -84,6 +88,9 @@ def _read(path: str, mtime_ns: int, size: int) -> tuple[float, np.ndarray]:
     if not np.all(np.isfinite(data)):
         raise ConfigError(f"[waves] record {path!r} has a value that is not a finite number")
     t, eta = data[:, 0], data[:, 1]
+    if np.max(np.abs(eta)) > MAX_ELEVATION or np.max(np.abs(t)) > MAX_ELEVATION * 1e4:  # (before any sum of them overflows)
+        raise ConfigError(f"[waves] record {path!r} has an elevation of {np.max(np.abs(eta)):.3g} m or a time of {np.max(np.abs(t)):.3g} s: "
+                          f"no sea rises {MAX_ELEVATION:g} m, nor a record lasts 1e8 s (a unit or a damaged value?)")  # fmt: skip
     dt = (t[-1] - t[0]) / (len(t) - 1)
     if not dt > 0 or np.max(np.abs(np.diff(t) - dt)) > SPACING_SLACK * dt:
         raise ConfigError(f"[waves] record {path!r}: the times must rise in equal steps (resample it onto a uniform grid first)")

@@ -157,3 +157,17 @@ def test_two_devices_close_together_take_the_pairs_frequency_domain_power(monkey
     np.testing.assert_allclose(got, expected, rtol=0.02)
     assert np.all(abs(q_expected - 1) > 0.02) and abs(q_expected[0] - q_expected[1]) > 0.01
     np.testing.assert_allclose(q_got, q_expected, rtol=0.02)
+
+
+def test_devices_that_would_overlap_are_refused_in_one_line(tmp_path):
+    """Cubes 1 m wide on a grid 0.1 m apart would start inside one another (before: run without a word): refused in one
+    line naming the spacing that clears them; 1 m apart (touching) they run. A turned cube reaches its half diagonal."""
+    scene = tmp_path / "close.toml"
+    scene.write_text((ROOT / "assets" / "scenes" / "farm.toml").read_text().replace("spacing = 10.0", "spacing = 0.1"))
+    done = subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(scene), "--t-end", "0.01"], cwd=ROOT, capture_output=True,
+                          text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert "neighbouring devices overlap along x" in done.stderr and "spacing >= 1 m" in done.stderr
+    with_overrides(load_scene("farm"), farm__spacing=1.0)  # touching: accepted
+    with pytest.raises(ConfigError, match=r"spacing >= 1.73"):
+        with_overrides(load_scene("drop"), initial__orientation=(0.9238795, 0.3826834, 0.0, 0.0), farm__columns=2, farm__spacing=1.2)

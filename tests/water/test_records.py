@@ -127,6 +127,7 @@ def test_a_body_in_the_record_of_a_jonswap_sea_moves_as_in_that_sea(tmp_path):
         ("".join(f"{0.1 * i},{1000 * math.sin(i / 4)}\n" for i in range(200)), [], "breaking limit"),
         ("".join(f"{0.01 * i},{0.1 * math.sin(i * i)}\n" for i in range(10000)), ["--wave-cutoff-period", "0.02"], "--wave-cutoff-period"),
         ("".join(f"{0.1 * i},{0.1 * math.sin(i / 50)}\n" for i in range(400)), ["--current", "0.5", "0"], "with a current"),
+        ("".join(f"{0.1 * i},{1e308 if i == 7 else 0.1}\n" for i in range(200)), [], "no sea rises"),  # (4 overflow warnings first before)
     ],
     ids=[
         "missing",
@@ -137,6 +138,7 @@ def test_a_body_in_the_record_of_a_jonswap_sea_moves_as_in_that_sea(tmp_path):
         "millimetres read as metres",
         "too many components",
         "current",
+        "a damaged value",
     ],  # fmt: skip
 )
 def test_a_bad_record_is_one_line_and_exit_2(tmp_path, rows, flags, says):

@@ -71,7 +71,7 @@ class SeaGrid:
     patch are fans onto the patch's own edge vertices, so the two share every vertex of their seam: no
     T-junction, and no crack for the sky to show through."""
 
-    def __init__(self, half: float, cells: int, far: float = FAR):
+    def __init__(self, half: float, cells: int, far: float = FAR, blend: bool = True):
         self.fine = np.linspace(-half, half, cells + 1)
         per = cells // RING_CELLS  # patch cells per ring cell along the seam
         step, out = self.fine[per] - self.fine[0], [half]
@@ -113,10 +113,11 @@ class SeaGrid:
         self.seam = np.full(len(self.fine), self.fine[per] - self.fine[0])
         """The ring's cells beside the patch, for each patch coordinate: what the patch's edge shows, as the ring does."""
         s = np.clip((1.0 - np.hypot.outer(self.fine, self.fine) / half) / (1.0 - INNER), 0.0, 1.0)
-        self.inner = s * s * (3.0 - 2.0 * s)
+        self.inner = s * s * (3.0 - 2.0 * s) if blend else None
         """(n, n) the weight of the whole surface in the patch: 1 within INNER of its half-width from its centre, falling
         smoothly (a circle: no corner for the eye) to 0 at its half-width and beyond, where the patch shows what the ring shows (a wave too short for the ring, drawn to the patch's edge,
-        met the ring's flat water in facets that the shading lit as sharp-edged wedges)."""
+        met the ring's flat water in facets that the shading lit as sharp-edged wedges); None (`blend` False): the whole
+        surface to the edge, for a recording's patch drawn alone."""
 
     def xy(self, origin: np.ndarray) -> np.ndarray:
         """(v, 2) the vertices' horizontal positions, the grid centred on `origin`."""
@@ -128,8 +129,9 @@ class SeaGrid:
         the patch fades from the whole surface to that towards its edge)."""
         xs, ys = self.fine + origin[0], self.fine + origin[1]
         whole = water.elevation_on_grid(xs, ys, t)
-        seam = water.elevation_on_grid(xs, ys, t, self.seam, self.seam)
-        fine = (seam + self.inner * (whole - seam)).ravel()
+        if self.inner is not None:
+            whole = water.elevation_on_grid(xs, ys, t, self.seam, self.seam) * (1.0 - self.inner) + self.inner * whole
+        fine = whole.ravel()
         ring = water.elevation_on_grid(self.ring + origin[0], self.ring + origin[1], t, self.ring_side, self.ring_side).ravel()
         return np.concatenate([fine, ring])
 
@@ -243,7 +245,7 @@ class WaterView:
         self.reach = reach
         self.seabed = None
         """The floor under a sea over mooring lines (`show_seabed`), made when first asked."""
-        self.grid = SeaGrid(half, self.cells)
+        self.grid = SeaGrid(half, self.cells, blend=not lighter)  # (a recording draws the patch alone: no ring to meet)
         self.surface = server.scene.add_frame(f"{root}/waves", show_axes=False, visible=False)
         """The sea's node: its children are the surfaces (hidden with it)."""
         flat = np.column_stack([self.grid.xy(np.zeros(2)), np.zeros(len(self.grid.xy(np.zeros(2))))])

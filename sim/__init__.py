@@ -10,7 +10,7 @@ def _interrupted_while_starting(signum, frame) -> None:
     os._exit(130)
 
 
-if sys.argv[:1] == ["-m"] and signal.getsignal(signal.SIGINT) is not None:
+if sys.argv[:1] == ["-m"]:
     # `python -m sim` or `python -m app` (sys.argv[0] is '-m' while Python finds the module): Ctrl-C while the modules
     # load ends in one line and exit 130, not a traceback (or a KeyboardInterrupt some library's bare except swallows,
     # the run then going on); the command takes Ctrl-C over once it starts (commands.dispatch, app.main)

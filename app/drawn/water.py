@@ -115,9 +115,9 @@ class SeaGrid:
         s = np.clip((1.0 - np.hypot.outer(self.fine, self.fine) / half) / (1.0 - INNER), 0.0, 1.0)
         self.inner = s * s * (3.0 - 2.0 * s) if blend else None
         """(n, n) the weight of the whole surface in the patch: 1 within INNER of its half-width from its centre, falling
-        smoothly (a circle: no corner for the eye) to 0 at its half-width and beyond, where the patch shows what the ring shows (a wave too short for the ring, drawn to the patch's edge,
-        met the ring's flat water in facets that the shading lit as sharp-edged wedges); None (`blend` False): the whole
-        surface to the edge, for a recording's patch drawn alone."""
+        smoothly (a circle: no corner for the eye) to 0 at its half-width, where the patch shows what the ring shows (a
+        wave too short for the ring, drawn to the patch's edge, met the ring's flat water in facets that the shading lit
+        as sharp-edged wedges); None (`blend` False): the whole surface to the edge, for a recording's patch drawn alone."""
 
     def xy(self, origin: np.ndarray) -> np.ndarray:
         """(v, 2) the vertices' horizontal positions, the grid centred on `origin`."""

@@ -35,7 +35,7 @@ class GainsArgs:
     """Regular waves' height H, m (default: the scene's)."""
     search: bool = True
     """Search the latching pair (latch time, damping) in the time domain where latching applies (T > T_n): 25 runs of
-    18 wave periods, on all cores (about half a minute for point-absorber on two); --no-search: the rule (T - T_n) / 2 alone."""
+    18 wave periods, on all cores (about 40 s for point-absorber on two); --no-search: the rule (T - T_n) / 2 alone."""
 
 
 SETTLE, MEASURE = 8, 10

@@ -77,7 +77,7 @@ class Ensemble:
         from sim.kernels import compiled_terms  # numba's import (0.6 s): only where compiled kernels run
 
         sims = self.sims if live is None else [self.sims[i] for i in live]
-        return sims[0].spec._replace(terms=compiled_terms({name for s in sims for name in s.model.term_names}))
+        return sims[0].spec._replace(terms=compiled_terms({name for s in sims for name in s.model.term_names}, sims[0].spec.scheme))
 
     def _step_compiled(self, live: list[int], n: int, check_energy: bool = True) -> None:
         from sim import kernels  # numba's import (0.6 s): only where compiled kernels run

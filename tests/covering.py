@@ -19,19 +19,25 @@ from functools import cache
 
 import pytest
 
-from sim.kernels import COMPILED_TERMS, SCHEMES, Spec
+from sim.kernels import COMPILED_TERMS, EVERY_TERM, SCHEMES, Spec
 
 LINEAR = tuple(t for t in COMPILED_TERMS if t != "drag")
 """The terms every scene's kernels compile (kernels.compiled_terms): a scene without drag."""
 EVERY = COMPILED_TERMS
 
 
+def terms_for(scheme: str, terms: tuple[str, ...]) -> tuple[str, ...]:
+    """The terms the kernels of a scene using `terms` compile under `scheme` (kernels.compiled_terms: every one for
+    kernels.EVERY_TERM's schemes)."""
+    return EVERY if scheme in EVERY_TERM else terms
+
+
 def still(scheme: str, model: str, terms: tuple[str, ...] = EVERY, current: bool = False) -> Spec:
-    return Spec(scheme, model, terms, False, False, current)
+    return Spec(scheme, model, terms_for(scheme, terms), False, False, current)
 
 
 def waves(scheme: str, model: str, terms: tuple[str, ...] = EVERY) -> Spec:
-    return Spec(scheme, model, terms, True, False)
+    return Spec(scheme, model, terms_for(scheme, terms), True, False)
 
 
 FORCES_ONLY = [spec for term in COMPILED_TERMS for spec in (still("implicit", "points", (term,)), waves("implicit", "panels", (term,)))]

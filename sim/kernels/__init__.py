@@ -88,15 +88,24 @@ from SYSTEM_STEP, so that a scene compiles only the loop it runs."""
 def spec_of(model, scheme: str) -> Spec:
     """The specialisation a forces.Model stepped by `scheme` needs. Terms linear in the twist are cheap to
     compile and vanish exactly with their coefficient, so they are always in: a scene whose damping goes
-    from 0 to 100 keeps its kernels; a nonlinear one (drag) is compiled only where used."""
+    from 0 to 100 keeps its kernels; a nonlinear one (drag) is compiled only where used, or where the scheme takes it
+    as any other load (compiled_terms)."""
     water = model.water
-    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names), not water.flat, model.radiation is not None, water.flat and not water.at_rest,
+    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names, scheme), not water.flat, model.radiation is not None, water.flat and not water.at_rest,
                 model.held is not None)  # fmt: skip
 
 
-def compiled_terms(used) -> tuple[str, ...]:
-    """The terms kernels compile for a scene using the terms `used`: every linear one, and the nonlinear ones used."""
-    return tuple(t.name for t in forces.TERMS if t.name in COMPILED_TERMS and (t.linear or t.name in used))
+EVERY_TERM = ("euler", "rk4")
+"""The schemes whose step takes each twist load as it comes (no modes, no relinearisation): their kernels compile every
+term, drag too, as drag at a zero coefficient adds exactly nothing (its loop is skipped): one specialisation a scheme
+serves a scene with drag and without (issue 57: fewer compiles)."""
+
+
+def compiled_terms(used, scheme: str = "implicit") -> tuple[str, ...]:
+    """The terms kernels compile for a scene using the terms `used` stepped by `scheme`: every linear one, and the
+    nonlinear ones used (every one for EVERY_TERM's schemes)."""
+    every = scheme in EVERY_TERM
+    return tuple(t.name for t in forces.TERMS if t.name in COMPILED_TERMS and (t.linear or every or t.name in used))
 
 
 def missing_terms(model) -> tuple[str, ...]:
@@ -211,5 +220,5 @@ def warm_up(spec: Spec) -> float:
     return seconds
 
 
-__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_LINEAR", "SYSTEM_STEP", "Model", "Spec", "cached", "compiled_terms", "missing_terms", "pack", "radiation_pack",
+__all__ = ["KERNEL_CACHE", "MODELS", "NO_RADIATION", "SCHEMES", "COMPILED_TERMS", "SYSTEM_LINEAR", "SYSTEM_STEP", "Model", "Spec", "cached", "EVERY_TERM", "compiled_terms", "missing_terms", "pack", "radiation_pack",
            "sea_pack", "spec_of", "specialised", "warm_up"]  # fmt: skip

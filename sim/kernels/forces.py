@@ -13,11 +13,11 @@ import numpy as np
 from .jit import JIT, njit
 from .layout import HELD
 from .spec import DAMPING, DRAG, GRAVITY, HAS_NONLINEAR, HEAVE_DAMPING, HOLDING, LINEAR_TWIST, PRESSURE, TWIST_TERMS, USED, WET_TERMS
-from .terms import damping, drag, gravity, heave_damping, pressure
+from .terms import C_DRAG, damping, drag, gravity, heave_damping, pressure
 from .wet import wet_surface
 
 
-@njit(inline="always", **JIT)
+@njit(**JIT)
 def pose_loads(x, R, t, model, s, sea):
     """(F, T, D, wet): the pose terms' force and torque at a pose and time (and the held load), the linear twist terms' matrix
     D there (damping's and the heave damping's), and whether any twist term has a wet surface to act on. Damping's part from the water's
@@ -58,6 +58,13 @@ def nonlinear_loads(x, R, u, w, model, s, need_D):
 
 
 @njit(inline="always", **JIT)
+def nonlinear_acting(model):
+    """Whether a nonlinear twist term acts: kernels.EVERY_TERM's schemes compile drag for scenes without it too, where
+    its coefficient is zero and it is skipped."""
+    return HAS_NONLINEAR and (USED & DRAG) != 0 and model.coef[C_DRAG] != 0.0
+
+
+@njit(inline="always", **JIT)
 def twist_loads(x, R, u, w, model, D, wet, s, F, T):
     """Add the force and torque of the twist terms at (u, w) to F, T in place (no allocation in the
     hot loop): d u_water - D (u, w) for linear damping (ws[4], zero in still water), plus the nonlinear ones."""
@@ -69,7 +76,7 @@ def twist_loads(x, R, u, w, model, D, wet, s, F, T):
             F[i] += affine[i] - (D[i, 0] * u[0] + D[i, 1] * u[1] + D[i, 2] * u[2] + D[i, 3] * w[0] + D[i, 4] * w[1] + D[i, 5] * w[2])
             T[i] += affine[3 + i] - (D[3 + i, 0] * u[0] + D[3 + i, 1] * u[1] + D[3 + i, 2] * u[2] + D[3 + i, 3] * w[0] + D[3 + i, 4] * w[1]
                                      + D[3 + i, 5] * w[2])  # fmt: skip
-    if HAS_NONLINEAR:
+    if nonlinear_acting(model):
         Fn, Tn, _ = nonlinear_loads(x, R, u, w, model, s, False)
         for i in range(3):
             F[i] += Fn[i]

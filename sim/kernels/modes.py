@@ -57,5 +57,6 @@ def exact_modes(K, h):
         return lam, np.eye(6)
     lam, V = np.linalg.eigh(K)
     # a zero mode (a few wet samples: D has rank 3) can come out at -1e-11: clamped, or lam[0] < 0 would read as
-    # the mild flag above and sum a divergent series (a 1 kg cube at d = 1e7 reached 1e106 m/s in one step)
-    return np.maximum(lam, 0.0), V
+    # the mild flag above and sum a divergent series (a 1 kg cube at d = 1e7 reached 1e106 m/s in one step). V in C order
+    # as np.eye's: one array type for the carry's V, so the linear flow taking it compiles once, not once per layout
+    return np.maximum(lam, 0.0), np.ascontiguousarray(V)

@@ -232,22 +232,32 @@ def fairleads(y, R, inertia, levers, pos, vel):
 
 def held_start(y, t, dt, model, sea, rad, levers, pos, vel):
     """What step_held keeps from step to step, at y's pose: the scratch and the carry (its wet flag as a (1,) array, its
-    mass frames apart), and the fairleads' kinematics for the first step into pos and vel. (Python around the compiled
-    `start` and `fairleads`: compiled, it held a third copy of the loads' machine code, 4 s of a moored compile.)"""
+    mass frames apart), and the fairleads' kinematics for the first step into pos and vel. The carry is made by step_held
+    itself (`first`): an entry point of its own would hold another copy of the loads' machine code (5-7 CPU s of a moored
+    compile)."""
     s = scratch(model.geom)
-    R, F, T, D, wet, K, lam, V, WS = start(y, t, dt, model, s, sea, rad)
-    fairleads(y, R, model.inertia, levers, pos, vel)
-    return s, (R, F, T, D, np.array([wet]), K, lam, V, WS[0], WS[1])
+    frame = (6, 6) if rad is not None else (0, 0)
+    keep = (np.eye(3), np.zeros(3), np.zeros(3), np.zeros((6, 6)), np.zeros(1, dtype=np.bool_), np.zeros((6, 6)), np.zeros(6), np.eye(6),
+            np.zeros(frame), np.zeros(frame))  # fmt: skip
+    step_held(y, t, dt, model, sea, rad, s, keep, np.zeros((len(levers), 3)), np.zeros((len(levers), 3)), levers, pos, vel, True)
+    return s, keep
 
 
 @njit(**JIT)
-def step_held(y, t, dt, model, sea, rad, s, keep, now, ahead, levers, pos, vel):
+def step_held(y, t, dt, model, sea, rad, s, keep, now, ahead, levers, pos, vel, first):
     """One step with the held load (layout.HELD) the mean of the lines' pull at both ends of it: now and ahead (k, 3)
     on the fairleads (body frame levers (k, 3)), their moment taken at the step's starting pose. `keep` (held_start)
     is updated in place, and pos and vel get the fairleads' kinematics for the next step: a moored run calls this once
     a step, with MoorDyn's step between calls, and nothing is rebuilt. Returns (y at t + dt, True), or (y, False)
-    where the step is not finite (nothing updated)."""
+    where the step is not finite (nothing updated). `first`: no step; `keep` gets the carry at y's pose (schemes.start)
+    and pos and vel the fairleads' kinematics there."""
     R, F, T, D, flag, K, lam, V, W, S = keep
+    if first:
+        R0, F0, T0, D0, wet0, K0, lam0, V0, WS0 = start(y, t, dt, model, s, sea, rad)
+        R[:], F[:], T[:], D[:], K[:], lam[:], V[:], W[:], S[:] = R0, F0, T0, D0, K0, lam0, V0, WS0[0], WS0[1]
+        flag[0] = wet0
+        fairleads(y, R, model.inertia, levers, pos, vel)
+        return y, True
     held = np.zeros(6)
     for i in range(levers.shape[0]):
         pull = 0.5 * (now[i] + ahead[i])
@@ -303,6 +313,6 @@ def warm_up() -> None:
     else:
         levers, pos, vel = np.zeros((1, 3)), np.zeros(3), np.zeros(3)
         s, keep = held_start(y, 0.0, 0.01, model, sea, rad, levers, pos, vel)
-        step_held(y, 0.0, 0.01, model, sea, rad, s, keep, np.zeros((1, 3)), np.zeros((1, 3)), levers, pos, vel)
+        step_held(y, 0.0, 0.01, model, sea, rad, s, keep, np.zeros((1, 3)), np.zeros((1, 3)), levers, pos, vel, False)
     observe(y[0:3], np.eye(3), 0.0, y[7:10], y[7:10], model, sea, np.empty(body.n_samples, dtype=np.bool_))
     exact_hydrostatic_energy(y[0:3].copy(), np.eye(3), body.packed, 1.0)  # the energy check of every frame

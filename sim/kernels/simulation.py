@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .forces import linearised, nonlinear_loads, pose_loads, twist_loads
+from .forces import linearised, nonlinear_acting, nonlinear_loads, pose_loads, twist_loads
 from .jit import JIT, njit
 from .layout import RHO, G, Scratch
-from .spec import CELLS, CURRENT, DAMPING, GRAVITY, HAS_NONLINEAR, HEAVE_DAMPING, MODEL, POINTS, PRESSURE, USED, WAVES, WET_TERMS
+from .spec import CELLS, CURRENT, DAMPING, GRAVITY, HEAVE_DAMPING, MODEL, POINTS, PRESSURE, USED, WAVES, WET_TERMS
 from .surface import cell_node, mesh_integrals, workspace
 from .terms import C_DAMPING, C_HEAVE_DAMPING
 from .water import elevations, prepare
@@ -126,7 +126,7 @@ def observe_points(x, R, u, w, model, wet):
     if USED & HEAVE_DAMPING and a_sub > 0.0:  # (forces.heave_damping, while wet)
         F2 -= coef[C_HEAVE_DAMPING] * u[2]
     F, T = np.array([F0, F1, F2]), np.array([T0, T1, T2])
-    if HAS_NONLINEAR:  # their own pass over the wet samples just marked
+    if nonlinear_acting(model):  # their own pass over the wet samples just marked
         Fn, Tn, _ = nonlinear_loads(x, R, u, w, model, Scratch(wet, np.zeros(34), workspace(model.geom)), False)  # still water: no flow
         F += Fn
         T += Tn

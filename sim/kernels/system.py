@@ -400,19 +400,26 @@ def memory_into(mem, G0, G1, v, memory, E_rad, h, Hm, nu, after):
     return E_rad + h * power
 
 
+CLOSE, OPEN, CONFIGURE = 0, 1, 2
+"""half_step's parts: the closing half kick; the opening half kick and the drift; the configuration alone."""
+
+
 @njit(**JIT)
-def half_step(tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D_b, held, h, drift):
+def half_step(tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D_b, held, h, part):
     """Half a step of h: a half kick (h/2) under M v_dot = Q0 - D v (linearised at v), solved exactly (System.kick), with
-    f, D_b each body's loads near its twist J_b v and held the load another model holds on each body (k, 6); then, with
-    `drift`, the drift over h, the memory with it and the new configuration's kinematics (its bodies' loads are asked
-    next, then the closing half kick: half_step without drift). One entry point for both halves: each entry point
-    optimises the code it links, so a kick of its own would compile the kick twice."""
+    f, D_b each body's loads near its twist J_b v and held the load another model holds on each body (k, 6); then, for
+    the OPEN part, the drift over h, the memory with it and the new configuration's kinematics (its bodies' loads are
+    asked next, then the CLOSE part: the closing half kick). CONFIGURE: no kick, the configuration at (x_free, q_free,
+    theta) alone (`config` any of the same types). One entry point for the three: each entry point optimises the code
+    it links, so a kick or a configuration of its own would compile the kick or the kinematics twice."""
+    if part == CONFIGURE:
+        return configure(tree, mem, x_free, q_free, theta), x_free, q_free, theta, v, absorbed, memory, E_rad
     w = scratch(tree, mem, memory, 0)
     if mem.on:
         sparse_into(mem.H, memory, w.Hm, False)
     v, absorbed = v.copy(), absorbed.copy()
     kick_into(tree, mem, config, t, theta, v, absorbed, f, D_b, held, 0.5 * h, w)
-    if not drift:
+    if part == CLOSE:
         return config, x_free, q_free, theta, v, absorbed, memory, E_rad
     x_free, q_free, theta = x_free.copy(), q_free.copy(), theta.copy()
     drift_into(tree, x_free, q_free, theta, v, h)
@@ -430,7 +437,8 @@ def finite(x_free, q_free, theta, v):
 @njit(**JIT)
 def advance(tree, lin, mem, t, x_free, q_free, theta, v, absorbed, memory, E_rad, held, h, n):
     """n steps with the linear loads (lin.on), the held loads fixed; stops after a step that leaves the state non-finite.
-    Returns the state and the steps taken. Works in place on copies of the state and on buffers made once: two
+    Returns the state, the steps taken and the configuration reached (n = 0: the configuration at the state, and no
+    configure entry point of its own, which would compile the kinematics a second time). Works in place on copies of the state and on buffers made once: two
     configurations (a step's start and end), swapped each step."""
     x_free, q_free, theta, v, absorbed, memory = x_free.copy(), q_free.copy(), theta.copy(), v.copy(), absorbed.copy(), memory.copy()
     w = scratch(tree, mem, memory, mem.omega.shape[0] if shared_sea(lin, mem) else 0)
@@ -455,4 +463,4 @@ def advance(tree, lin, mem, t, x_free, q_free, theta, v, absorbed, memory, E_rad
         taken += 1
         if not finite(x_free, q_free, theta, v):
             break
-    return t, x_free, q_free, theta, v, absorbed, memory, E_rad, taken
+    return t, x_free, q_free, theta, v, absorbed, memory, E_rad, taken, now

@@ -17,12 +17,10 @@ from sim.hydro.linear_hydro import LinearLoads
 from sim.scene.config import load_scene, with_overrides
 from sim.system.tree import System, SystemState, build
 
-KERNELS = {
-    "system-step": ("system.half_step", "system.configure"),
-    "system-linear": ("system.advance", "system.configure"),
-}
-"""The compiled functions each system step uses (their disk cache tells whether they are ready), by its Spec's scheme:
-the kick loop whose loads Python asks at each kick, and the linear loads' n steps a call."""
+KERNELS = {"system-step": "system.half_step", "system-linear": "system.advance"}
+"""The compiled function each system step uses (its disk cache tells whether it is ready), by its Spec's scheme: the
+kick loop whose loads Python asks at each kick, and the linear loads' n steps a call. Each also gives a configuration's
+kinematics alone (CompiledStep.configuration): one entry point a step, as each entry point compiles all it calls."""
 
 
 def step_spec(system: System):
@@ -36,7 +34,7 @@ def ready(spec) -> bool:
     """Whether this machine compiled the system step of `spec` before (its disk cache has every kernel it uses)."""
     from sim.kernels import KERNEL_CACHE, compiled_here  # numba's import (0.6 s): only where compiled kernels run
 
-    return set(KERNELS[spec.scheme]) <= compiled_here(os.path.join(KERNEL_CACHE, "shared"))
+    return KERNELS[spec.scheme] in compiled_here(os.path.join(KERNEL_CACHE, "shared"))
 
 
 def warm(spec) -> float:
@@ -61,8 +59,8 @@ def warm(spec) -> float:
     for scene in scenes:
         system, state = build(scene)
         step = CompiledStep(system)
-        step.step(state, float(scene.step.dt), 2)
         step.configuration(state, float(scene.step.dt))
+        step.step(state, float(scene.step.dt), 2)
     return time.perf_counter() - started
 
 
@@ -100,16 +98,19 @@ class CompiledStep:
         mem, held = self.memory(dt), self.held()
         args = (float(s.t), s.x_free, s.q_free, s.theta, s.v, s.absorbed, s.memory, float(s.E_rad))
         if self.linear.on and before is None:
-            *out, taken = kernels.advance(self.tree, self.linear, mem, *args, held, dt, n)
-            return self._state(*out), taken
+            *out, taken, config = kernels.advance(self.tree, self.linear, mem, *args, held, dt, n)
+            state = self._state(*out)
+            self._config = (state, config)
+            return state, taken
         if self.linear.on:  # a controller between the steps: one compiled call each
             taken, state = 0, s
             for taken in range(1, n + 1):
                 v, absorbed = state.v.copy(), state.absorbed.copy()
                 before(state.t, state.theta, v, absorbed, lambda: self.configuration(state, dt)[3])  # noqa: B023 (called at once)
                 args = (float(state.t), state.x_free, state.q_free, state.theta, v, absorbed, state.memory, float(state.E_rad))
-                *out, _ = kernels.advance(self.tree, self.linear, mem, *args, held, dt, 1)
+                *out, _, config = kernels.advance(self.tree, self.linear, mem, *args, held, dt, 1)
                 state = self._state(*out)
+                self._config = (state, config)
                 if not state.is_finite():
                     break
             return state, taken
@@ -121,12 +122,12 @@ class CompiledStep:
                 before(t, theta, v, absorbed, lambda: config[3])  # noqa: B023 (called at once)
             f, D = self._loads(config, t, v)
             config, x_free, q_free, theta, v, absorbed, memory, E_rad = kernels.half_step(
-                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, True
+                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, kernels.OPEN
             )
             t = t + dt
             f, D = self._loads(config, t, v)
             v, absorbed = kernels.half_step(
-                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, False
+                self.tree, mem, config, t, x_free, q_free, theta, v, absorbed, memory, E_rad, f, D, held, dt, kernels.CLOSE
             )[4:6]
             if not (np.isfinite(v).all() and np.isfinite(theta).all() and np.isfinite(x_free).all() and np.isfinite(q_free).all()):
                 break
@@ -135,11 +136,22 @@ class CompiledStep:
         return out, taken
 
     def configuration(self, s: SystemState, dt: float):
-        """kernels.system.configure at s's configuration (the last step's end kept: the next step starts there)."""
+        """The configuration's kinematics at s (kernels.system.configure's: x, R, J, M, G, along), from the step's own
+        entry point (the last step's end kept: the next step starts there)."""
         from sim.kernels import system as kernels  # numba's import (0.6 s): only where compiled kernels run
 
         if self._config[0] is not s:
-            self._config = (s, kernels.configure(self.tree, self.memory(dt), s.x_free, s.q_free, s.theta))
+            mem, held = self.memory(dt), self.held()
+            args = (float(s.t), s.x_free, s.q_free, s.theta, s.v, s.absorbed, s.memory, float(s.E_rad))
+            if self.linear.on:
+                config = kernels.advance(self.tree, self.linear, mem, *args, held, dt, 0)[-1]
+            else:
+                k, n = len(self.system.loads), self.tree.n_dofs
+                blank = (np.zeros((k, 3)), np.zeros((k, 3, 3)), np.zeros((k, 6, n)), np.zeros((n, n)), np.zeros((6 * k, n)),
+                         np.zeros((0, k, 6, n)))  # fmt: skip
+                f, D = np.zeros((k, 6)), np.zeros((k, 6, 6))
+                config = kernels.half_step(self.tree, mem, blank, *args, f, D, held, dt, kernels.CONFIGURE)[0]
+            self._config = (s, config)
         return self._config[1]
 
     def pose(self, s: SystemState, dt: float, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

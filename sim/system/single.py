@@ -246,14 +246,14 @@ class Single:
         y = state.as_vector()
         s, keep = compiled.schemes.held_start(y, t, dt, packed, sea, rad, levers, pos, vel)
         step = entry_point(
-            compiled.schemes.step_held, (y, t, dt, packed, sea, rad, s, keep, lines._forces, lines._forces, levers, pos, vel)
+            compiled.schemes.step_held, (y, t, dt, packed, sea, rad, s, keep, lines._forces, lines._forces, levers, pos, vel, False)
         )
         pull = lines.pull
         failed = None
         try:
             for _ in range(n):
                 now = lines._forces
-                y, ok = step(y, t, dt, packed, sea, rad, s, keep, now, pull(pos, vel, dt), levers, pos, vel)
+                y, ok = step(y, t, dt, packed, sea, rad, s, keep, now, pull(pos, vel, dt), levers, pos, vel, False)
                 if not ok:
                     failed = t + dt
                     break

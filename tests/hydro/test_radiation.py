@@ -106,7 +106,7 @@ def test_fitted_impulse_response_is_the_cosine_transform_of_damping(cube):
 from sim import Simulation, load_scene, with_overrides  # noqa: E402
 from sim.errors import ConfigError  # noqa: E402
 from sim.kernels import Spec  # noqa: E402
-from tests.covering import LINEAR, cases  # noqa: E402
+from tests.covering import LINEAR, cases, terms_for  # noqa: E402
 
 
 def decay_run(integrator: str, z0: float, steps: int, dt: float = 0.005, **changes) -> tuple[Simulation, np.ndarray, np.ndarray]:
@@ -123,7 +123,7 @@ def decay_run(integrator: str, z0: float, steps: int, dt: float = 0.005, **chang
 
 def decay_spec(integrator: str) -> Spec:
     """decay_run's kernels: only the implicit one's are the default run's (the sphere preset's, tests/covering.py)."""
-    return Spec(integrator, "panels", LINEAR, False, True)
+    return Spec(integrator, "panels", terms_for(integrator, LINEAR), False, True)
 
 
 def maxima(t: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,7 @@ from sim.kernels import NO_RADIATION, SCHEMES, Spec, pack, sea_pack, spec_of, sp
 from sim.kernels.layout import Model as Packed
 from sim.kernels.layout import Scratch
 from sim.water.seas import jonswap_waves, regular_waves
-from tests.covering import EVERY, LINEAR, cases, still
+from tests.covering import EVERY, LINEAR, cases, still, terms_for
 
 WATER_KIND = {"still": False, "regular": True, "jonswap": True, "spread": True}
 """Whether each of the stage tests' waters (WATERS below) is a sea, for the kernels' spec."""
@@ -331,7 +331,7 @@ only the implicit one alone on panels (the sphere preset's kernels), the others 
 
 
 def radiation_spec(integrator: str, forces: str, changes: dict) -> Spec:
-    return Spec(integrator, forces, EVERY if "fluid__drag_coefficient" in changes else LINEAR, "waves__kind" in changes, True)
+    return Spec(integrator, forces, terms_for(integrator, EVERY if "fluid__drag_coefficient" in changes else LINEAR), "waves__kind" in changes, True)
 
 
 @pytest.mark.parametrize("integrator, forces, changes", cases(RADIATION_CASES, radiation_spec))

@@ -331,7 +331,9 @@ only the implicit one alone on panels (the sphere preset's kernels), the others 
 
 
 def radiation_spec(integrator: str, forces: str, changes: dict) -> Spec:
-    return Spec(integrator, forces, terms_for(integrator, EVERY if "fluid__drag_coefficient" in changes else LINEAR), "waves__kind" in changes, True)
+    return Spec(
+        integrator, forces, terms_for(integrator, EVERY if "fluid__drag_coefficient" in changes else LINEAR), "waves__kind" in changes, True
+    )
 
 
 @pytest.mark.parametrize("integrator, forces, changes", cases(RADIATION_CASES, radiation_spec))

@@ -16,36 +16,33 @@ import statistics
 import time
 
 COMPILE_CPU = {
-    "points": 13.5,
-    "panels": 15.0,
-    "cells": 15.0,
-    "euler": -4.0,
-    "splitting": -2.5,
-    "rk4": -4.0,
-    "drag": 3.5,
-    "current": 3.0,
-    "waves": 11.5,
-    "radiating": 5.0,
-    "held": 13.0,
-    "system-step": 26.0,
-    "system-linear": 28.0,
+    "points": 12.0,
+    "panels": 13.8,
+    "cells": 13.3,
+    "euler": -3.5,
+    "splitting": -2.2,
+    "rk4": -3.5,
+    "drag": 1.1,
+    "current": 2.7,
+    "waves": 15.2,
+    "radiating": 5.1,
+    "held": 0.0,
+    "system-step": 18.5,
+    "system-linear": 23.6,
 }
 """CPU seconds on the reference machine from an empty cache: a spec's force model under the implicit scheme, what
-another scheme saves (no exact modes), then what each feature adds. Fitted on 2026-11-29 to `floatsim bench --startup`
-on a quiet machine (docs/performance.md: drop 17.4, storm 32.6, sphere 31.6, moored-buoy 54.3, rm3 52.5 s) and to the
-covering set's compiles one after the other, then scaled by each kind of spec's own ratio when the implicit step's
-linear flow and loads-with-memory became subroutines (the covering set compiled before and after at the same time:
-drop 13.5 -> 9.9 s, panels with radiation 23.4 -> 14.6, moored-buoy 37.0 -> 30.3, euler 7.2 -> 6.6; alone, the
-drop 16.7 -> 13.4 and moored-buoy 52.0 -> 44.3). The water's shared kernels are counted in every spec that uses them,
-as a first compile on a machine pays them. The two system steps (the kick loop, the linear loads' n steps a call)
-measured apart after they were split, each against the one step of both at the same time (36.4 s then: 24.6-25.5 and
-26.5-28.1), scaled to the quiet table."""
+another scheme saves (no exact modes), then what each feature adds. Fitted on 2026-12-07 to `floatsim bench --startup`
+on a quiet machine (docs/performance.md, after the fifth step: drop 12.5, log 13.8, sphere 18.9, waves 27.2, storm
+28.3, moored-buoy 33.7 s; rm3, absorber-pair, farm and rm3-moored 31.7-33.7 s with their bodies' loads 13.3-14.1 s
+measured apart, rm3-wecsim-moorings 23.6 s). A held load costs nothing of its own now: the moored step replaces the
+scheme's n steps a call. The schemes' own parts are the earlier table's, scaled to it (not measured again). The water's
+shared kernels are counted in every spec that uses them, as a first compile on a machine pays them."""
 
-BODY_OF_SEVERAL = 0.65
+BODY_OF_SEVERAL = 0.47
 """The share of a body's spec that one of several bodies compiles: its loads, without a step or a frame of its own."""
 
-REFERENCE_PROBE = 0.0118
-"""Seconds `_probe` took on the reference machine (Intel Xeon, 2 cores, Python 3.11; quiet, as when the table was
+REFERENCE_PROBE = 0.0109
+"""Seconds `_probe` took on the reference machine (AMD EPYC, 2 cores, Python 3.11; quiet, as when the table was
 measured)."""
 
 

@@ -4,7 +4,8 @@ Each specialisation compiles for 20 s to two minutes of CPU (sim/compile_estimat
 compiles a covering set, once, before the tests start (conftest.py), and no test compiles another:
 - each preset's own (what a user runs first), the system step and the loads of rm3's bodies among them;
 - every term with each scheme (points, still water) and with each force model (implicit, still water); each scheme
-  with the linear terms too (the integrators' orders and energy, without drag);
+  with the linear terms too (the integrators' orders and energy, without drag), which for euler and rk4 is the same
+  specialisation (kernels.EVERY_TERM: they compile drag always);
 - the cells model with its linear terms only (its physics tests settle cubes for minutes of simulated time: no
   preset has cells), and the panels model in waves with them (the cube's heave against the linear RAO: no preset has
   panels in waves without radiation);

@@ -136,6 +136,21 @@ def measured(waves, base_dir: str = ".") -> tuple[float, np.ndarray]:
     return read_record(path)
 
 
+def repeat_period(omega: np.ndarray) -> float:
+    """The time after which a sum of components of frequencies `omega` repeats, s: 2 pi over their greatest common
+    divisor (a record's are whole multiples of 2 pi over its length, so at most its length; its longest kept wave's
+    period only where that divides every other's)."""
+    tol = 1e-9 * float(np.max(omega))
+    common = 0.0
+    for w in map(float, omega):  # Euclid's algorithm, a remainder within round-off of 0 or of the divisor taken as 0
+        a, b = w, common
+        while b > tol:
+            r = math.fmod(a, b)
+            a, b = b, (0.0 if min(r, b - r) <= tol else r)
+        common = a
+    return 2 * math.pi / common
+
+
 def describe(sea, waves) -> str:
     """The note a run with a record gives: how many components it kept, over which periods, and when it repeats."""
     shortest, longest = 2 * math.pi / sea.omega.max(), 2 * math.pi / sea.omega.min()
@@ -145,4 +160,4 @@ def describe(sea, waves) -> str:
         else "a quarter of its peak period: set cutoff_period to keep more"
     )
     return (f"the measured sea: {len(sea.omega)} components of periods {shortest:.3g}-{longest:.4g} s ({why}); "
-            f"the record repeats after {longest:.4g} s")  # fmt: skip
+            f"the sea repeats after {repeat_period(sea.omega):.4g} s")  # fmt: skip

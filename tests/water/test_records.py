@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from sim.scene.config import load_scene
+from sim.water.records import describe, repeat_period
 from sim.water.seas import jonswap_waves, make_water, wavenumber
 
 G = 9.81
@@ -82,6 +83,9 @@ def test_the_record_is_its_periodic_extension_exact_at_every_sample(tmp_path):
     np.testing.assert_allclose(later, at[:50], atol=1e-9)
     cut = make_water(dataclasses.replace(scene.waves, cutoff_period=4.0), 1025.0, G, base_dir=scene.base_dir)
     assert cut.omega.max() <= 2 * math.pi / 4.0 + 1e-12 and len(cut.omega) == int(n * dt / 4.0)
+    assert describe(sea, scene.waves).endswith(f"repeats after {n * dt:.4g} s")  # the record's length, not its longest wave's period
+    assert repeat_period(sea.omega[1::2]) == pytest.approx(n * dt / 2, rel=1e-12)  # only the even multiples: half of it
+    assert repeat_period(np.array([3.0, 4.5, 7.5])) == pytest.approx(2 * math.pi / 1.5, rel=1e-12)
 
 
 def _run(*flags, cwd):

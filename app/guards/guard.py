@@ -2,7 +2,8 @@
 holding the memory its oversized messages took.
 
 - viser drops a connection whose message does not decode (the handler fails, websockets logs the
-  traceback): `OncePerKind` lets one traceback per kind through, then a one-line count.
+  traceback): `OncePerKind` says so in one line (the page's mistake, not the server's: no traceback), once per kind
+  of mistake, then counts; any other failure keeps its first traceback per kind.
 - Decoding a 20 MB frame allocates 20 MB that the C allocator keeps after it is freed (measured: +90
   MiB after a burst, for good). `big_blocks_go_back` makes large blocks mmap'd (freed straight back),
   and `release_memory` hands back what smaller ones leave (glibc's malloc_trim, about 5 ms); the viewer
@@ -17,6 +18,7 @@ import functools
 import logging
 import sys
 import threading
+import warnings
 
 LOGGERS = ("websockets.server", "websockets", "viser", "asyncio")
 
@@ -34,6 +36,11 @@ class OncePerKind(logging.Filter):
         key = (record.name, str(record.msg), kind)
         with self._lock:
             n = self.seen[key] = self.seen.get(key, 0) + 1
+        if n == 1 and _undecodable(record):  # a page's mistake: one quiet line, the frames (and its message) dropped
+            error = record.exc_info[1]
+            record.msg, record.args = "floatsim viewer: closed a page's connection: its message did not decode (%s: %.120s)", (kind, error)
+            record.exc_info, record.exc_text = None, None
+            return True
         if n == 1:
             if record.exc_info:  # the text only: a kept traceback would keep the frames, and the bad message in them
                 record.exc_text = logging.Formatter().formatException(record.exc_info)
@@ -46,10 +53,22 @@ class OncePerKind(logging.Filter):
         return False
 
 
+def _undecodable(record: logging.LogRecord) -> bool:
+    """Whether the record is a connection's failure to decode what its page sent (viser's Message.deserialize)."""
+    tb = record.exc_info[2] if record.exc_info else None
+    while tb is not None:
+        if tb.tb_frame.f_code.co_name == "deserialize":
+            return True
+        tb = tb.tb_next
+    return False
+
+
 _filter = OncePerKind()
 
 
 def quiet_repeated_tracebacks() -> OncePerKind:
+    # a page that left (or was closed) while its controls were being made: viser warns of each message still queued for it
+    warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
     for name in LOGGERS:
         logger = logging.getLogger(name)
         if _filter not in logger.filters:

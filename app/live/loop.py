@@ -48,6 +48,8 @@ _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
 DERIVED = {PARAMS[q].key for q in IN_EFFECT} & CONTROLLED.keys()
 """Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 SHOWN = {"speed": "speed", "pause": "paused"}
+SLOWEST = 0.1
+"""The slowest one page's value may make the shared run: a tenth of real time (issue 59; the time step's cost)."""
 """The viewer's own commands whose control shows the value the run uses after each batch, as the scene parameters' do
 (command -> the setting's field): a clamp written back at once could land after the page's next valid value."""
 
@@ -579,6 +581,9 @@ class SimLoop(Mailbox):
         used, note = param.clamp(value, current)
         if note:
             self._raise_notice(note)
+        if param.key == "dt" and (refusal := self._too_slow(used, current)):
+            self._raise_notice(refusal)
+            return
         old_body, old_integrator = self.sim.bodies[self._focus], self.sim.integrator
         named = self.sim.body_names[self._focus] if body_own(param) else param.section  # a body's own: the chosen one's
         change = {f"{named}__{param.key}": used}
@@ -595,6 +600,15 @@ class SimLoop(Mailbox):
             self._cost_unknown()
         if param.key == "dt":
             self._restart_clock()
+
+    def _too_slow(self, dt: float, current: float) -> str:
+        """Why a time step of dt is refused, or "": one page's value may not slow the shared run below SLOWEST of real
+        time at this machine's measured cost of a step (unknown right after a new body or integrator: not refused)."""
+        cost = self._step_cost
+        if dt >= current or cost >= self._budget or dt / cost >= SLOWEST:
+            return ""
+        return (f"Time step {dt:g} s would run at {dt / cost:.2g}x real time here ({cost * 1e6:.3g} µs a step), for every page: "
+                f"kept {current:g} s (the shortest that keeps {SLOWEST:g}x real time: {SLOWEST * cost:.2g} s).")  # fmt: skip
 
     def _cmd_notice(self, value) -> None:
         """A note from another thread (a refused upload, a link not understood) shown like the loop's own."""

@@ -15,17 +15,18 @@ from viewer import wait_for
 
 from app.live.loop import CONTROLLED
 from app.tools.page import Page, opened_with
+from sim.scene.config import load_scene
 
 DENSITY_MAX = (CONTROLLED["density"].live or (CONTROLLED["density"].lo, CONTROLLED["density"].hi))[1]
 
 
 @contextlib.contextmanager
-def viewer(**kwargs):
+def viewer(scene: str = "damped", **kwargs):
     from app.args import ViewArgs
     from app.main import start
 
     with contextlib.redirect_stdout(io.StringIO()):
-        app = start(ViewArgs(scene="damped", port=0, **kwargs), kernels=False, publish_hz=20.0)
+        app = start(ViewArgs(scene=scene, port=0, **kwargs), kernels=False, publish_hz=20.0)
     try:
         yield app
     finally:
@@ -296,3 +297,30 @@ def test_a_burst_of_updates_leaves_every_control_showing_what_runs():
         for label, key, _bad, good in ((p[0], p[0].lower(), *p[1:]) for p in pairs[:4]):
             assert snap.settings.value(key) == good, key
             assert shown.value(label) == good and page.value(label) == good, label
+
+
+def test_a_page_cannot_slow_the_shared_run_below_a_tenth_of_real_time():
+    """Issue 59: a page setting Time step to -1 got the range's 1e-5 s, 500 times the steps, slowing the shared run for
+    every page. A time step that would run below a tenth of real time at the measured cost of a step is refused with a
+    note giving that cost; a shorter step that keeps up is taken. (storm on the numpy reference: about a millisecond a
+    step, so 1e-5 s would run at about 0.01x.)"""
+    with viewer("storm") as app:
+
+        async def steer():
+            async with Page.open(app.port) as page:
+                await page.read(1.5, until=lambda p: "Mesh unit" in p.controls)
+                await page.camera()
+                wait_for(app, lambda s: s.frame.t > 0.2, what="storm running")
+                await page.update("Time step", -1.0)
+                refused = wait_for(app, lambda s: "real time here" in s.notice, what="the refusal")
+                await page.read(0.5)
+                shown = page.value("Time step")
+                await page.update("Time step", 0.004)
+                return refused, shown, wait_for(app, lambda s: s.settings.value("dt") == 0.004, what="the shorter step that keeps up")
+
+        refused, shown, taken = asyncio.run(steer())
+        assert refused.settings.value("dt") == load_scene("storm").step.dt and shown == refused.settings.value("dt")
+        assert "µs a step" in refused.notice and "kept" in refused.notice, refused.notice
+        rate = float(refused.notice.split("would run at ")[1].split("x real time")[0])
+        assert rate < 0.1, refused.notice
+        assert taken.settings.value("dt") == 0.004

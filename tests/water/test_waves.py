@@ -267,3 +267,24 @@ def test_the_ramp_starts_a_free_body_without_a_kick(tmp_path):
         assert np.abs(odd).max() < 0.33 * a
     assert even[0.02][-1] / even[0.01][-1] == pytest.approx(4.0, rel=0.05)
     assert even[0.02][-1] > 1e-3  # the mean force moves it (5 mm in 25 s at 2 cm)
+
+
+def test_a_broad_sea_at_many_points_is_taken_in_blocks_with_the_same_values(monkeypatch):
+    """Issue 59: 60 000 samples in 4096 components took 6 GB in the numpy reference's sea (points x components arrays
+    at once; 290 MB now). Taken in blocks of at most seas.BLOCK points x components, each point's elevation, pressure
+    and velocity are the unblocked ones to round-off, for points in any leading shape."""
+    from sim.water import seas
+
+    sea = seas.jonswap_waves(1025.0, 9.81, 1.5, 8.0, components=64, seed=3, depth=30.0)
+    rng = np.random.default_rng(5)
+    points = np.concatenate([rng.uniform(-20, 20, (7, 5, 2)), rng.uniform(-6, 0, (7, 5, 1))], axis=-1)
+    whole = sea.elevation(points[..., :2], 4.2), sea.pressure(points, 4.2), *sea.field(points, 4.2)
+    rows = []
+    psi = seas.Waves._psi
+    monkeypatch.setattr(seas.Waves, "_psi", lambda self, xy, t: rows.append(len(xy)) or psi(self, xy, t))
+    monkeypatch.setattr(seas, "BLOCK", 64 * 4)  # four points a block: 9 blocks for 35 points
+    blocked = sea.elevation(points[..., :2], 4.2), sea.pressure(points, 4.2), *sea.field(points, 4.2)
+    for got, want in zip(blocked, whole):
+        assert got.shape == want.shape
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-9)
+    assert max(rows) == 4 and len(rows) == 3 * 9  # each of the three evaluations in nine blocks

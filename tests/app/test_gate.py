@@ -275,3 +275,27 @@ def test_a_change_that_needs_a_boundary_element_solve_is_refused_not_solved_on_t
         assert "python -m sim run" in snap.notice and not list(tmp_path.iterdir())
         t0 = snap.frame.t
         assert wait_for(app, lambda s: s.frame.t > t0 + 0.5, what="the run going on").density == before
+
+
+@pytest.mark.parametrize("outcomes", [[["time going on"], []], [["Pause from the server"], ["Pause from the server"]], [[]]])
+def test_the_campaign_tells_a_lockout_from_a_slow_machine_and_names_the_check(monkeypatch, outcomes):
+    """Issue 59: `hostile --rounds 3` exited 1 with "lockouts 1" under load, without saying which check failed. A user
+    check that fails is made again 2 s later: passing then is a slow machine (counted apart, not bad), failing again a
+    lockout; the note names the checks either way."""
+    from app.tools import hostile
+
+    calls = iter(outcomes)
+    monkeypatch.setattr(hostile, "_still_works", lambda app: next(calls))
+    monkeypatch.setattr(hostile.time, "sleep", lambda s: None)
+    tally = hostile.Tally()
+    hostile._lockout(None, tally)
+    failed_then, *again = outcomes
+    locked = bool(again and again[0])
+    assert (tally.lockouts, tally.slow_checks) == ((1, 0) if locked else (0, 1) if failed_then else (0, 0))
+    assert bool(tally.bad()) == locked
+    if failed_then:
+        assert tally.notes == [
+            f"lockout: {failed_then[0]} failed, and again 2 s later"
+            if locked
+            else f"slow, not locked out: {failed_then[0]} failed, then passed 2 s later"
+        ]

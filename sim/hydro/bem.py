@@ -23,7 +23,9 @@ import contextlib
 import dataclasses
 import hashlib
 import math
+import multiprocessing
 import os
+import signal
 import sys
 import tempfile
 import threading
@@ -391,7 +393,7 @@ def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
         import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:
             note(f"note: {bad[0]}: solving again" if bad else f"note: the stored solve for this body lacks {wanted}: solving again with it")
-        result = solve_now()
+        result = in_child(solve_now)
     except (ImportError, MissingSolver):
         if partial is not None:
             raise MissingSolver(f'{what} for this body needs Capytaine (the stored solve lacks it): pip install -e ".[bem]"') from None
@@ -400,6 +402,48 @@ def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
                             'pip install -e ".[bem]"') from None  # fmt: skip
     keep(result, cached)
     return result
+
+
+def in_child(solve_now) -> Coefficients:
+    """`solve_now()` in a child process (forked: nothing pickled), its result handed back through a file. Capytaine's
+    solve runs minutes in compiled code that a Ctrl-C does not reach: here the parent waits, so a Ctrl-C stops it at
+    once (KeyboardInterrupt, within 0.2 s) and ends the child. The child ignores Ctrl-C (the terminal sends it to both)
+    and says a failure's type and text back (re-raised here as that type, or as a RuntimeError). In this process where
+    there is no fork, and off the main thread (as MoorDyn's start-up, lines/moorings.py: no Ctrl-C arrives there, and a
+    fork would copy other threads' locks)."""
+    if "fork" not in multiprocessing.get_all_start_methods() or threading.current_thread() is not threading.main_thread():
+        return solve_now()
+    with tempfile.TemporaryDirectory(prefix="floatsim-solve-") as folder:
+        out, failed = Path(folder) / "result.npz", Path(folder) / "failed.txt"
+
+        def child() -> None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            try:
+                solve_now().save(out)
+            except BaseException as e:  # noqa: BLE001 -- said to the parent, which raises it
+                failed.write_text(f"{type(e).__name__}\n{e}")
+                os._exit(1)
+            os._exit(0)
+
+        process = multiprocessing.get_context("fork").Process(target=child, name="floatsim-solve", daemon=True)
+        process.start()
+        try:
+            while process.is_alive():
+                process.join(0.2)
+        finally:
+            if process.is_alive():  # a Ctrl-C (or any error) here: the solve stops with it
+                process.terminate()
+                process.join(2.0)
+                if process.is_alive():
+                    process.kill()
+                    process.join()
+        if failed.exists():
+            name, _, text = failed.read_text().partition("\n")
+            kind = {"MissingSolver": MissingSolver, "ConfigError": ConfigError, "ImportError": ImportError, "ValueError": ValueError}
+            raise kind.get(name, RuntimeError)(text if name in kind else f"{name}: {text}")
+        if process.exitcode != 0 or not out.exists():
+            raise RuntimeError(f"the boundary-element solve ended without a result (exit code {process.exitcode})")
+        return Coefficients.load(out)
 
 
 CAPYTAINE_CACHE = ("CAPYTAINE_CACHE_DIR", "XDG_CACHE_HOME")

@@ -113,3 +113,37 @@ def test_a_cylinders_irregular_frequency_is_removed_and_its_solve_cached(monkeyp
     monkeypatch.setattr(bem, "solve", lambda *a, **k: pytest.fail("solved again"))
     again = radiation_coefficients(cylinder.vertices, cylinder.faces, omega=omega, panel=0.15, progress=False)
     np.testing.assert_array_equal(again.damping, c.damping)
+
+
+@pytest.mark.slow  # a live solve started, then stopped
+def test_ctrl_c_stops_a_boundary_element_solve_at_once(tmp_path):
+    """Issue 59: Ctrl-C did not stop a solve (minutes inside Capytaine's compiled code; 11 s to stop at best). The solve
+    runs in a forked child that the parent ends: a Ctrl-C in the middle of it is out within 2 s, exit 130, one line, the
+    child gone, and nothing cached."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    pytest.importorskip("capytaine")
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path)}  # no cached solve: it solves
+    proc = subprocess.Popen([sys.executable, "-m", "sim", "run", "--scene", "damped", "--radiation", "bem", "--forces", "panels", "--rho", "1031",
+                             "--t-end", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    deadline = time.monotonic() + 120
+    while proc.poll() is None and not children.read_text().split() and time.monotonic() < deadline:
+        time.sleep(0.02)  # until the solve's child exists
+    assert proc.poll() is None, proc.communicate()
+    child = children.read_text().split()[0]
+    time.sleep(3.0)  # in the middle of the solve
+    proc.send_signal(signal.SIGINT)
+    sent = time.monotonic()
+    _, err = proc.communicate(timeout=60)
+    stopped_in = time.monotonic() - sent
+    assert proc.returncode == 130 and stopped_in < 2.0, (proc.returncode, stopped_in, err)
+    assert "Traceback" not in err and "interrupted (Ctrl-C)" in err.strip().splitlines()[-1], err
+    time.sleep(0.5)
+    assert not Path(f"/proc/{child}").exists()
+    assert not list(tmp_path.rglob("*.npz"))

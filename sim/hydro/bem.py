@@ -25,6 +25,7 @@ import hashlib
 import math
 import multiprocessing
 import os
+import pickle
 import signal
 import sys
 import tempfile
@@ -408,9 +409,9 @@ def in_child(solve_now) -> Coefficients:
     """`solve_now()` in a child process (forked: nothing pickled), its result handed back through a file. Capytaine's
     solve runs minutes in compiled code that a Ctrl-C does not reach: here the parent waits, so a Ctrl-C stops it at
     once (KeyboardInterrupt, within 0.2 s) and ends the child. The child ignores Ctrl-C (the terminal sends it to both)
-    and says a failure's type and text back (re-raised here as that type, or as a RuntimeError). In this process where
-    there is no fork, and off the main thread (as MoorDyn's start-up, lines/moorings.py: no Ctrl-C arrives there, and a
-    fork would copy other threads' locks)."""
+    and hands a failure back pickled (raised here as it was; one that does not pickle, as a RuntimeError of its text).
+    In this process where there is no fork, and off the main thread (as MoorDyn's start-up, lines/moorings.py: no
+    Ctrl-C arrives there, and a fork would copy other threads' locks)."""
     if "fork" not in multiprocessing.get_all_start_methods() or threading.current_thread() is not threading.main_thread():
         return solve_now()
     with tempfile.TemporaryDirectory(prefix="floatsim-solve-") as folder:
@@ -420,8 +421,12 @@ def in_child(solve_now) -> Coefficients:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
             try:
                 solve_now().save(out)
-            except BaseException as e:  # noqa: BLE001 -- said to the parent, which raises it
-                failed.write_text(f"{type(e).__name__}\n{e}")
+            except BaseException as e:  # noqa: BLE001 -- handed to the parent, which raises it
+                try:
+                    said = pickle.dumps(e)
+                except Exception:  # noqa: BLE001 -- an error that does not pickle: its type and text
+                    said = pickle.dumps(RuntimeError(f"{type(e).__name__}: {e}"))
+                failed.write_bytes(said)
                 os._exit(1)
             os._exit(0)
 
@@ -437,10 +442,8 @@ def in_child(solve_now) -> Coefficients:
                 if process.is_alive():
                     process.kill()
                     process.join()
-        if failed.exists():
-            name, _, text = failed.read_text().partition("\n")
-            kind = {"MissingSolver": MissingSolver, "ConfigError": ConfigError, "ImportError": ImportError, "ValueError": ValueError}
-            raise kind.get(name, RuntimeError)(text if name in kind else f"{name}: {text}")
+        if failed.exists():  # (our own child's file, in a folder of our own)
+            raise pickle.loads(failed.read_bytes())
         if process.exitcode != 0 or not out.exists():
             raise RuntimeError(f"the boundary-element solve ended without a result (exit code {process.exitcode})")
         return Coefficients.load(out)

@@ -48,10 +48,10 @@ _QUALNAME = {p.key: qualname for qualname, p in PARAMS.items()}
 DERIVED = {PARAMS[q].key for q in IN_EFFECT} & CONTROLLED.keys()
 """Controls whose value in effect other parameters decide: shown again after every batch of commands."""
 SHOWN = {"speed": "speed", "pause": "paused"}
-SLOWEST = 0.1
-"""The slowest one page's value may make the shared run: a tenth of real time (issue 59; the time step's cost)."""
 """The viewer's own commands whose control shows the value the run uses after each batch, as the scene parameters' do
 (command -> the setting's field): a clamp written back at once could land after the page's next valid value."""
+SLOWEST = 0.1
+"""The slowest one page's value may make the shared run: a tenth of real time (issue 59; the time step's cost)."""
 
 
 @dataclass(frozen=True)

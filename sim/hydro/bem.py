@@ -23,10 +23,7 @@ import contextlib
 import dataclasses
 import hashlib
 import math
-import multiprocessing
 import os
-import pickle
-import signal
 import sys
 import tempfile
 import threading
@@ -39,6 +36,7 @@ import numpy as np
 from sim import limits
 from sim.bodies.surface import clip_triangles
 from sim.errors import ConfigError
+from sim.forked import in_child
 from sim.hydro.lid import make_lid
 
 DOFS = ("Surge", "Sway", "Heave", "Roll", "Pitch", "Yaw")
@@ -394,7 +392,7 @@ def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
         import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:
             note(f"note: {bad[0]}: solving again" if bad else f"note: the stored solve for this body lacks {wanted}: solving again with it")
-        result = in_child(solve_now)
+        result = in_child(solve_now)  # (a child: Ctrl-C stops a solve of minutes in Capytaine's compiled code at once)
     except (ImportError, MissingSolver):
         if partial is not None:
             raise MissingSolver(f'{what} for this body needs Capytaine (the stored solve lacks it): pip install -e ".[bem]"') from None
@@ -403,50 +401,6 @@ def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
                             'pip install -e ".[bem]"') from None  # fmt: skip
     keep(result, cached)
     return result
-
-
-def in_child(solve_now) -> Coefficients:
-    """`solve_now()` in a child process (forked: nothing pickled), its result handed back through a file. Capytaine's
-    solve runs minutes in compiled code that a Ctrl-C does not reach: here the parent waits, so a Ctrl-C stops it at
-    once (KeyboardInterrupt, within 0.2 s) and ends the child. The child ignores Ctrl-C (the terminal sends it to both)
-    and hands a failure back pickled (raised here as it was; one that does not pickle, as a RuntimeError of its text).
-    In this process where there is no fork, and off the main thread (as MoorDyn's start-up, lines/moorings.py: no
-    Ctrl-C arrives there, and a fork would copy other threads' locks)."""
-    if "fork" not in multiprocessing.get_all_start_methods() or threading.current_thread() is not threading.main_thread():
-        return solve_now()
-    with tempfile.TemporaryDirectory(prefix="floatsim-solve-") as folder:
-        out, failed = Path(folder) / "result.npz", Path(folder) / "failed.txt"
-
-        def child() -> None:
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-            try:
-                solve_now().save(out)
-            except BaseException as e:  # noqa: BLE001 -- handed to the parent, which raises it
-                try:
-                    said = pickle.dumps(e)
-                except Exception:  # noqa: BLE001 -- an error that does not pickle: its type and text
-                    said = pickle.dumps(RuntimeError(f"{type(e).__name__}: {e}"))
-                failed.write_bytes(said)
-                os._exit(1)
-            os._exit(0)
-
-        process = multiprocessing.get_context("fork").Process(target=child, name="floatsim-solve", daemon=True)
-        process.start()
-        try:
-            while process.is_alive():
-                process.join(0.2)
-        finally:
-            if process.is_alive():  # a Ctrl-C (or any error) here: the solve stops with it
-                process.terminate()
-                process.join(2.0)
-                if process.is_alive():
-                    process.kill()
-                    process.join()
-        if failed.exists():  # (our own child's file, in a folder of our own)
-            raise pickle.loads(failed.read_bytes())
-        if process.exitcode != 0 or not out.exists():
-            raise RuntimeError(f"the boundary-element solve ended without a result (exit code {process.exitcode})")
-        return Coefficients.load(out)
 
 
 CAPYTAINE_CACHE = ("CAPYTAINE_CACHE_DIR", "XDG_CACHE_HOME")

@@ -23,8 +23,6 @@ import ctypes
 import math
 import os
 import re
-import signal
-import struct
 import sys
 import tempfile
 import threading
@@ -36,6 +34,7 @@ import numpy as np
 
 from sim.bodies.rotation import quat_to_matrix, skew
 from sim.errors import ConfigError, SimulationDiverged
+from sim.forked import ChildDied, in_child
 from sim.lines.catenary import catenary
 from sim.lines.line_energy import LineEnergy, read_spec
 from sim.lines.moordyn_input import check_input, coupled_bodies_as_points
@@ -307,41 +306,16 @@ def _settle(md, system, x, v) -> int:
 
 
 def _init_in_child(md, system, x, v) -> tuple[int, bytes]:
-    read, write = os.pipe()
-    pid = os.fork()
-    if pid == 0:
-        os.close(read)
-        _child(md, system, x, v, write)  # never returns
-    os.close(write)
-    try:
-        with open(read, "rb") as pipe:
-            data = pipe.read()
-    except BaseException:  # Ctrl-C (KeyboardInterrupt) while it relaxes: end it now
-        os.kill(pid, signal.SIGKILL)
-        raise
-    finally:
-        _, code = os.waitpid(pid, 0)
-    if os.waitstatus_to_exitcode(code) != 0 or len(data) < 4:
-        why = f"signal {-os.waitstatus_to_exitcode(code)}" if os.WIFSIGNALED(code) else f"exit status {os.waitstatus_to_exitcode(code)}"
-        raise ConfigError(f"MoorDyn stopped while finding the lines' rest shape ({why})")
-    return struct.unpack("<i", data[:4])[0], data[4:]
+    """MoorDyn's Init on the child's copy of the system: its status, and its state where it succeeded."""
 
-
-def _child(md, system, x, v, fd: int) -> None:
-    """In the forked child: Init on its copy of the system, the status and state down the pipe, then out with os._exit
-    (no Python clean-up: the temporary folder and any open output are the parent's)."""
-    code = 1
-    try:
-        with contextlib.suppress(Exception):
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # a terminal's Ctrl-C reaches the whole group: the parent decides
-            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # Linux's PR_SET_PDEATHSIG: die with the parent
-        os.dup2(os.open(os.devnull, os.O_WRONLY), 1)  # MoorDyn's progress ("t = ...") is not the parent's stdout
+    def init() -> tuple[int, bytes]:
         status = md.Init(system, x, v)
-        with open(fd, "wb") as pipe:
-            pipe.write(struct.pack("<i", status) + (md.Serialize(system) if status == 0 else b""))
-        code = 0
-    finally:
-        os._exit(code)
+        return status, (md.Serialize(system) if status == 0 else b"")
+
+    try:
+        return in_child(init, quiet=True)  # MoorDyn's progress ("t = ...") is not the parent's stdout
+    except ChildDied as e:
+        raise ConfigError(f"MoorDyn stopped while finding the lines' rest shape ({e})") from None
 
 
 def lines_of(section) -> LineSet | None:

@@ -1,0 +1,75 @@
+"""A blocking call that Ctrl-C can stop: run in a forked child, its result handed back through a pipe.
+
+A call into compiled code (MoorDyn's start-up, Capytaine's solve) runs seconds to minutes where Python's Ctrl-C does
+not reach it. In a forked child it can be ended: the parent waits on the pipe, and a KeyboardInterrupt there kills the
+child at once. The child ignores Ctrl-C (a terminal sends it to the whole group: the parent decides) and dies with its
+parent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import pickle
+import signal
+import threading
+from collections.abc import Callable
+
+
+class ChildDied(RuntimeError):
+    """The child ended without handing back a result (a signal, or an exit before it wrote)."""
+
+
+def in_child(work: Callable[[], object], quiet: bool = False):
+    """work() in a forked child, its (picklable) result returned here, or its exception raised here as it was (one that
+    does not pickle, as a RuntimeError of its type and text); `quiet`: the child's stdout to /dev/null. In this process
+    where there is no fork, and off the main thread (the viewer's simulation thread), where no Ctrl-C arrives and a fork
+    would copy a process whose other threads may hold locks the child needs."""
+    if not hasattr(os, "fork") or threading.current_thread() is not threading.main_thread():
+        return work()
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read)
+        _child(work, write, quiet)  # never returns
+    os.close(write)
+    try:
+        with open(read, "rb") as pipe:
+            data = pipe.read()
+    except BaseException:  # Ctrl-C (KeyboardInterrupt) while it works: end it now
+        os.kill(pid, signal.SIGKILL)
+        raise
+    finally:
+        _, code = os.waitpid(pid, 0)
+    if not data:
+        status = os.waitstatus_to_exitcode(code)
+        raise ChildDied(f"signal {-status}" if os.WIFSIGNALED(code) else f"exit status {status}")
+    done, value = pickle.loads(data)  # (our own child's, down our own pipe)
+    if not done:
+        raise value
+    return value
+
+
+def _child(work, fd: int, quiet: bool) -> None:
+    """In the forked child: work(), its result or its exception pickled down the pipe, then out with os._exit (no Python
+    clean-up: temporary folders and open outputs are the parent's)."""
+    code = 1
+    try:
+        with contextlib.suppress(Exception):
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # Linux's PR_SET_PDEATHSIG: die with the parent
+        if quiet:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+        try:
+            said = pickle.dumps((True, work()))
+        except BaseException as e:  # noqa: BLE001 -- handed to the parent, which raises it
+            try:
+                said = pickle.dumps((False, e))
+            except Exception:  # noqa: BLE001 -- an error that does not pickle: its type and text
+                said = pickle.dumps((False, RuntimeError(f"{type(e).__name__}: {e}")))
+        with open(fd, "wb") as pipe:
+            pipe.write(said)
+        code = 0
+    finally:
+        os._exit(code)

@@ -1,18 +1,36 @@
 """Stated limits on every setting whose cost grows, checked before anything is allocated, with the
 estimated memory (or time) in the message and the flag that changes it.
 
-Measured here (`python -m sim bench`, RSS of a Simulation): about 400 bytes per surface sample
-(body arrays, the compiled kernels' workspace, one frame), about 5 ns per sample and step.
+Measured here (AMD EPYC, `python -m sim run --scene drop --points-per-edge N --t-end 0.01`, peak RSS over the 0.23 GB of
+N = 10): about 950 bytes per surface sample at its peak (0.22 GB for 240,000 samples, 0.91 GB for 960,000), 3 us
+(a cube) to 7 us (a mesh: `--scene sphere --samples 1000000`) per sample to set up, about 5 ns per sample and step.
+Several bodies add the system's dense matrices (farm.toml with [farm] rows = columns = 14, 20, 32: 196, 400 and 1024
+degrees of freedom): a step's matrix exponential grows as n^3 (0.107 s, 0.90 s, 29 s a step; `scene_step_time`), its
+set-up likewise (about a step's worth), its memory as n^2 (0.45 GB at n = 1024).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from sim.errors import ConfigError
 
-BYTES_PER_SAMPLE = 450
+BYTES_PER_SAMPLE = 950
+SETUP_US_PER_SAMPLE = 7.0
 NS_PER_SAMPLE_STEP = 5.0
+BYTES_PER_DOF2 = 430
+"""The system of several bodies: bytes per (degree of freedom)^2."""
+NS_PER_DOF3 = 14.0
+"""The system's step: ns per (degree of freedom)^3, growing by a further (1 + n / 1000) as its matrices leave the caches."""
+SETUP_STEPS = 1.0
+"""The system's set-up (its first configuration and rest) in steps' worth."""
 MAX_SAMPLES = 2_000_000
-"""Surface samples of one body (a cube of N = 577 per edge): about 0.9 GB."""
+"""Surface samples of one body (a cube of N = 577 per edge): about 1.9 GB."""
+MAX_HOURS = 24.0
+"""Estimated hours on one core past which `run` refuses unless given --max-hours."""
+SETUP_NOTE_SECONDS = 3.0
+"""A scene whose set-up is estimated past this many seconds is announced with its estimate before it starts."""
+JOINT_DOFS = {"free": 6, "fixed": 0, "prismatic": 1, "revolute": 1, "planar": 3}
 MAX_CASES = 200_000
 """Cases in one sweep (each case's scene is checked up front)."""
 MAX_HISTORY_BYTES = 4e9
@@ -55,6 +73,46 @@ def check_samples(n: int, flag: str) -> None:
     check_memory(f"{n:,} surface samples", n * BYTES_PER_SAMPLE, flag)
 
 
-def step_time(samples: int, steps: int) -> float:
-    """Estimated seconds to take `steps` steps of a body of `samples` samples on one core."""
-    return samples * steps * NS_PER_SAMPLE_STEP * 1e-9
+def step_time(samples: int, steps: int, dofs: int = 0) -> float:
+    """Estimated seconds to take `steps` steps on one core of bodies of `samples` samples in all, with `dofs` degrees of
+    freedom in a system of several bodies (0: one body)."""
+    return steps * (samples * NS_PER_SAMPLE_STEP * 1e-9 + system_step_time(dofs))
+
+
+def system_step_time(dofs: int) -> float:
+    """Estimated seconds of a step of a system of `dofs` degrees of freedom, apart from its bodies' loads."""
+    return NS_PER_DOF3 * 1e-9 * dofs**3 * (1.0 + dofs / 1000.0)
+
+
+@dataclass(frozen=True)
+class Cost:
+    """What a scene's bodies cost before the first step: their surface samples and degrees of freedom in all (dofs 0:
+    one body), the estimated seconds of set-up on one core and the peak memory."""
+
+    samples: int
+    dofs: int
+
+    @property
+    def setup_seconds(self) -> float:
+        return self.samples * SETUP_US_PER_SAMPLE * 1e-6 + SETUP_STEPS * system_step_time(self.dofs)
+
+    @property
+    def memory(self) -> float:
+        return self.samples * BYTES_PER_SAMPLE + self.dofs**2 * BYTES_PER_DOF2
+
+    def describe(self) -> str:
+        system = f" and {self.dofs:,} degrees of freedom" if self.dofs else ""
+        return f"{self.samples:,} surface samples{system}: about {duration(self.setup_seconds)} to set up and {size(self.memory)} of memory"
+
+
+def check_cost(cost: Cost, flag: str) -> None:
+    """ConfigError when the bodies would take more than MEMORY_SHARE of the memory available, before any is built."""
+    check_memory(
+        f"a scene of {cost.samples:,} surface samples" + (f" and {cost.dofs:,} degrees of freedom" if cost.dofs else ""), cost.memory, flag
+    )
+
+
+def duration(seconds: float) -> str:
+    if seconds >= 3600:
+        return f"{seconds / 3600:.3g} h"
+    return f"{seconds / 60:.0f} min" if seconds >= 90 else f"{seconds:.0f} s"

@@ -17,8 +17,8 @@ from sim.compiling import cached, compile_all, default_backend
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
 from sim.hydro.radiation import misfit_note
-from sim.limits import step_time
-from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, with_overrides
+from sim.limits import MAX_HOURS, SETUP_NOTE_SECONDS, duration, step_time
+from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, scene_cost, with_overrides
 from sim.simulation import Simulation, SimulationDiverged
 from sim.system.frame import csv_line
 
@@ -64,6 +64,8 @@ class _RunBase:
     """Wall seconds an adaptive integrator (rk45, dop853, radau) may spend on one output step before the run stops, naming a better one."""
     max_steps: int = MAX_STEPS
     """Refuse a run of more steps than this (t_end / dt): a typo such as --dt 1e-30 would run for ever."""
+    max_hours: float = MAX_HOURS
+    """Refuse a run estimated to take longer than this on one core (its bodies' samples and degrees of freedom, its steps)."""
 
 
 RunArgs = declared_flags("RunArgs", _RunBase, PARAMS.values())
@@ -196,13 +198,32 @@ def run(args: RunArgs, watch=None) -> int:
         raise ConfigError(f"--step-budget must be > 0 s, got {args.step_budget}")
     if args.max_steps < 1:
         raise ConfigError(f"--max-steps must be >= 1, got {args.max_steps}")
+    if not args.max_hours > 0:
+        raise ConfigError(f"--max-hours must be > 0, got {args.max_hours}")
     check_output(args.out, inputs=(args.scene if Path(args.scene).is_file() else None, args.mesh), overwrite=args.overwrite)
     scene = scene_from_args(args)
+    check_budget(scene, args)
     sim = Simulation(scene, backend="numpy")  # nothing compiles before we know the run needs it
     try:
         return _run(sim, args, watch)
     finally:
         sim.close()
+
+
+def check_budget(scene: SceneConfig, args: RunArgs) -> None:
+    """Refuse a run past its budgets (steps; estimated hours on one core), and announce a long set-up with its estimate,
+    all before any body is built."""
+    n_steps = max(0, round(scene.step.t_end / scene.step.dt))
+    cost = scene_cost(scene)
+    hours = (cost.setup_seconds + step_time(cost.samples, n_steps, cost.dofs)) / 3600
+    if n_steps > args.max_steps:
+        raise ConfigError(f"t_end / dt = {scene.step.t_end:g} s / {scene.step.dt:g} s is {n_steps:.3g} steps, more than --max-steps "
+                          f"{args.max_steps:.3g} (about {hours:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
+    if hours > args.max_hours:
+        raise ConfigError(f"{n_steps:,} steps of {cost.describe()} would take about {hours:.3g} h on one core, more than --max-hours "
+                          f"{args.max_hours:g}: give a shorter --t-end, a larger --dt or fewer samples, or --max-hours to run it anyway")  # fmt: skip
+    if cost.setup_seconds > SETUP_NOTE_SECONDS:
+        print(f"floatsim: note: {cost.describe()}; Ctrl-C stops it", file=sys.stderr, flush=True)
 
 
 def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
@@ -211,12 +232,10 @@ def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
-    if n_steps > args.max_steps:
-        raise ConfigError(f"t_end / dt = {scene.step.t_end:g} s / {sim.dt:g} s is {n_steps:.3g} steps, more than --max-steps {args.max_steps:.3g} "
-                          f"(about {step_time(sim.n_samples, n_steps) / 3600:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
     announce_compile(sim, n_steps)
-    if (seconds := step_time(sim.n_samples, n_steps)) > 600:
-        print(f"floatsim: note: about {seconds / 60:.0f} min on one core ({sim.n_samples:,} samples x {n_steps:,} steps); "
+    cost = scene_cost(scene)
+    if (seconds := step_time(cost.samples, n_steps, cost.dofs)) > 600:
+        print(f"floatsim: note: about {duration(seconds)} on one core ({cost.samples:,} samples x {n_steps:,} steps); "
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     first = sim.frame()
     started = time.perf_counter()

@@ -22,7 +22,7 @@ from sim.dynamics.integrators import INTEGRATORS
 from sim.dynamics.joints import JOINTS
 from sim.errors import ConfigError
 from sim.hydro.forces import TERMS
-from sim.limits import check_samples
+from sim.limits import JOINT_DOFS, Cost, check_cost, check_samples
 from sim.lines.moorings import SURFACE, check_start, lines_of, moored
 from sim.parameters import Param
 from sim.scene.farm import expand
@@ -383,8 +383,7 @@ def _check_body(b, i, c, where: str = "") -> None:
         raise ConfigError(f"{where}body shape 'mesh' needs a mesh file")
     if b.mass is None and b.density is None:
         raise ConfigError(f"{where}give the body a density or a mass")
-    samples, flag = (b.samples, "--samples ([body] samples)") if b.shape == "mesh" else (6 * b.points_per_edge**2, "--points-per-edge")
-    check_samples(samples, flag)  # before any array is made
+    check_samples(body_samples(b), "--samples ([body] samples)" if b.shape == "mesh" else "--points-per-edge")  # before any array is made
     if c.joint != "free" and not any(c.axis):
         raise ConfigError(f"{where}[constraint] axis must not be zero")
     if c.start is not None and c.joint not in ("prismatic", "revolute", "planar"):
@@ -461,15 +460,17 @@ def _validate_entries(scene: SceneConfig) -> tuple[BodyEntry, ...]:
     return tuple(entries)
 
 
-def validate(scene: SceneConfig) -> SceneConfig:
+def validate(scene: SceneConfig, grown_by: str = "the [[bodies]] (fewer, or fewer samples each)") -> SceneConfig:
     """Check every field against its declaration, then the rules between fields; raise ConfigError
-    with a one-line message on the first problem. Vectors come back as tuples of floats."""
+    with a one-line message on the first problem. Vectors come back as tuples of floats. `grown_by`: what the bodies'
+    memory check names to lower (a farm's rows and columns)."""
     checked = {}
     for name, params in SECTIONS.items():
         section = getattr(scene, name)
         checked[name] = dataclasses.replace(section, **{p.key: p.check(getattr(section, p.key)) for p in params})
-    if checked["farm"].rows * checked["farm"].columns > 1:  # laid out as [[bodies]] once (the table goes back to one device)
-        return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked), BodyEntry), farm=FarmConfig()))
+    if (farm := checked["farm"]).rows * farm.columns > 1:  # laid out as [[bodies]] once (the table goes back to one device)
+        grown = f"[farm] rows and columns ({farm.rows} x {farm.columns} devices)"
+        return validate(dataclasses.replace(expand(dataclasses.replace(scene, **checked), BodyEntry), farm=FarmConfig()), grown)
     _check_body(checked["body"], checked["initial"], checked["constraint"])
     if checked["fluid"].g == 0.0 and (checked["waves"].kind != "still" or checked["fluid"].radiation != "none" or moored(scene)):
         raise ConfigError("waves, radiation and mooring lines need gravity: g = 0 (a torque-free body, say) is for still water alone")
@@ -516,7 +517,23 @@ def validate(scene: SceneConfig) -> SceneConfig:
         raise ConfigError('quadratic drag needs the instantaneous wet surface: with [fluid] hydro = "linear" set drag_coefficient = 0')
     if not scene.bodies and checked.moorings.body:
         raise ConfigError(f"[moorings] body = {checked.moorings.body!r} names one of several bodies: this scene has one ([body])")
-    return dataclasses.replace(checked, bodies=_validate_entries(checked)) if scene.bodies else checked
+    if not scene.bodies:
+        return checked
+    checked = dataclasses.replace(checked, bodies=_validate_entries(checked))
+    check_cost(scene_cost(checked), grown_by)  # the system's dense matrices grow as the square of its degrees of freedom
+    return checked
+
+
+def body_samples(b) -> int:
+    """The surface samples a body's table asks for (a mesh's count is near it: its triangles are split to reach it)."""
+    return int(b.samples) if b.shape == "mesh" else 6 * int(b.points_per_edge) ** 2
+
+
+def scene_cost(scene: SceneConfig) -> Cost:
+    """The samples and degrees of freedom of a validated scene's bodies, and so its set-up's estimated time and memory."""
+    if not scene.bodies:
+        return Cost(body_samples(scene.body), 0)
+    return Cost(sum(body_samples(e.body) for e in scene.bodies), sum(JOINT_DOFS[e.constraint.joint] for e in scene.bodies))
 
 
 def diffracting(scene: SceneConfig) -> bool:

@@ -120,3 +120,51 @@ def test_ctrl_c_at_any_moment_of_a_run_is_one_line_and_exit_130(after, tmp_path)
     if csv.exists():
         rows = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
         assert rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()
+
+
+FARM_20 = """[body]
+shape = "cube"
+size = 1.0
+density = 900.0
+[constraint]
+joint = "prismatic"
+axis = [0.0, 0.0, 1.0]
+pto_damping = 2000.0
+[initial]
+position = [0.0, 0.0, -0.4]
+[farm]
+rows = 20
+columns = 20
+spacing = 10.0
+"""
+
+
+def _commands(tmp_path: Path) -> dict[str, list[str]]:
+    """Each command on work that lasts well past 4 s: the error study, the benchmark tables, a sweep on all cores, the
+    lines following 4000 s of slow surge, and a farm of 400 devices (its set-up announced, then seconds long)."""
+    root = Path(__file__).resolve().parents[2]
+    t = np.linspace(0.0, 4000.0, 801)
+    motion = tmp_path / "surge.txt"
+    np.savetxt(motion, np.column_stack([t, 4.0 * (1 - np.cos(np.pi * t / 4000.0)), *([0 * t] * 5)]), header="t x y z roll pitch yaw")
+    farm = tmp_path / "farm.toml"
+    farm.write_text(FARM_20)
+    return {
+        "compare": ["compare", "--scene", "damped"],
+        "bench": ["bench"],
+        "sweep": ["sweep", "--scene", "damped", "--param", "density=300:900:50", "--backend", "local", "--out", str(tmp_path / "sweep")],
+        "lines": ["lines", "--lines", str(root / "assets" / "moorings" / "md_5MW_OC4Semi.dat"), "--motion", str(motion), "--dt", "0.05",
+                  "--out", str(tmp_path / "lines.csv")],
+        "farm": ["run", "--scene", str(farm), "--t-end", "1"],
+    }  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ["compare", "bench", "sweep", "lines", "farm"])
+@pytest.mark.parametrize("after", [0.3, 1.5, 3.5])
+def test_ctrl_c_at_any_moment_of_every_command_is_one_line_and_exit_130(command, after, tmp_path):
+    """SIGINT at a spread of moments into each command (imports, set-up, work): exit 130 within 3 s, the last line of
+    stderr says it was interrupted, and no traceback."""
+    started = time.monotonic()
+    done, stopped_in = interrupt(_commands(tmp_path)[command], lambda: time.monotonic() - started >= after)
+    assert done.returncode == 130 and stopped_in < 3.0, (done.stderr, stopped_in)
+    assert "Traceback" not in done.stderr and "interrupted (Ctrl-C)" in done.stderr.strip().splitlines()[-1], done.stderr

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import os
+import signal
 import sys
 import threading
 import typing
@@ -109,6 +110,9 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
         name = next((n for n, (cls, _) in loaded.items() if isinstance(args, cls)), "")
         print(f"{prog}: {name} interrupted (Ctrl-C) before writing its results", file=sys.stderr)
         return EXIT
+    finally:
+        if argv is None and threading.current_thread() is threading.main_thread():  # the process's own command line: it ends next
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # said and written: a Ctrl-C in the teardown (a Dask cluster's) changes nothing
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,6 +5,7 @@ one: Python would report a SystemError)."""
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
 import threading
@@ -54,11 +55,24 @@ class StopOnCtrlC:
     def __init__(self):
         self.asked = False
         self._old = None
+        self._at_once = False
 
     def _handler(self, signum, frame) -> None:
+        was, self.asked = self.asked, True
+        if was or self._at_once:
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def at_once(self):
+        """Within: a Ctrl-C raises KeyboardInterrupt at once, for a set-up that keeps nothing yet and waits in calls that
+        cannot check (a Dask cluster starting)."""
         if self.asked:
             raise KeyboardInterrupt
-        self.asked = True
+        self._at_once = True
+        try:
+            yield
+        finally:
+            self._at_once = False
 
     def __enter__(self) -> StopOnCtrlC:
         self.asked = _asked_before

@@ -8,6 +8,7 @@ BLAS. Results come back to this process, which writes each chunk's file as it ar
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 from collections.abc import Callable, Iterable
@@ -159,38 +160,73 @@ def _run_local(sweep, todo, done, n, stop=None) -> None:
 
 def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:
     try:
-        from distributed import Client, LocalCluster, wait
+        from distributed import wait
     except ImportError:
         raise ConfigError("the dask backend needs dask.distributed: pip install -e '.[dask]'") from None
     first = todo[0][1] if todo else None
-    _warm(sweep, first)  # compiled here once, not by every worker at the same time
+    with _at_once(stop):  # nothing to keep yet, and calls that cannot check: Ctrl-C ends them at once
+        _warm(sweep, first)  # compiled here once, not by every worker at the same time
     cluster = None
     try:
-        if scheduler:
-            try:
-                client = Client(scheduler, timeout=f"{timeout}s")
-            except (OSError, TimeoutError, ValueError) as e:
-                raise ConfigError(
-                    f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})"
-                ) from None
-        else:
-            # no dashboard; the scheduler's HTTP server (health checks) on a free port: on 8787, taken by another cluster, it warned
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},
-                                   silence_logs=logging.ERROR)  # fmt: skip
-            client = Client(cluster)
+        cluster, client = _connect(scheduler, timeout, n)  # (under a second; a cluster cut short in its start cannot close)
         with client:
-            client.run(_warm, sweep, first)  # from the disk cache this process filled, on this machine
+            # each worker loads the kernels from the disk cache this process filled (as tasks: waited on with Ctrl-C heard)
+            warming = [client.submit(_warm, sweep, first, workers=[address], pure=False) for address in client.scheduler_info()["workers"]]
+            _until_done(warming, lambda future: None, stop, client, cluster, wait)
             futures = [client.submit(_task, sweep, indices, key=f"floatsim-chunk-{sweep.key()}-{cid}", retries=2) for cid, indices in todo]
             ids = {f.key: cid for f, (cid, _) in zip(futures, todo)}
-            pending = set(futures)
-            while pending:
-                _check(stop)
-                try:
-                    finished, pending = wait(pending, timeout=0.2, return_when="FIRST_COMPLETED")
-                except TimeoutError:
-                    continue
-                for future in finished:
-                    done(ids[future.key], future.result())
+            _until_done(futures, lambda future: done(ids[future.key], future.result()), stop, client, cluster, wait)
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _at_once(stop):
+    return stop.at_once() if stop is not None else contextlib.nullcontext()
+
+
+def _connect(scheduler, timeout, n):
+    """(cluster, client): a client of the running scheduler (no cluster of ours), or of a LocalCluster of n workers."""
+    from distributed import Client, LocalCluster  # (the dask extra: _run_dask checked it is there)
+
+    if scheduler:
+        try:
+            return None, Client(scheduler, timeout=f"{timeout}s")
+        except (OSError, TimeoutError, ValueError) as e:
+            raise ConfigError(
+                f"cannot reach the Dask scheduler at {scheduler} within {timeout:g} s ({type(e).__name__}: {str(e)[:80]})"
+            ) from None
+    # no dashboard; the scheduler's HTTP server (health checks) on a free port: on 8787, taken by another cluster, it warned
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},
+                           silence_logs=logging.ERROR)  # fmt: skip
+    return cluster, Client(cluster)
+
+
+def _until_done(futures, each, stop, client, cluster, wait) -> None:
+    """Wait for the Dask futures, calling `each` on every one as it finishes; on Ctrl-C (`stop`), end them at once
+    and raise Interrupted."""
+    pending = set(futures)
+    while pending:
+        if stop is not None and stop.asked:
+            _end_now(client, cluster, futures)
+            raise Interrupted
+        try:
+            finished, pending = wait(pending, timeout=0.2, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            continue
+        for future in finished:
+            each(future)
+
+
+def _end_now(client, cluster, futures) -> None:
+    """Ctrl-C: drop the chunks still running at once rather than wait for them (a graceful close waits for each busy
+    worker to finish its chunk: seconds). A LocalCluster's workers are this command's own: killed (their chunks would be
+    dropped anyway); a running scheduler's are another's: their tasks are cancelled. Quietly: the command's one line
+    says what was kept."""
+    import signal
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # (the comms the kill closes would each log a line)
+    client.cancel(futures)
+    for nanny in cluster.workers.values() if cluster is not None else ():
+        with contextlib.suppress(OSError, TypeError):  # (a worker already gone: no pid)
+            os.kill(nanny.pid, signal.SIGKILL)

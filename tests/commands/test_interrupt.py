@@ -51,8 +51,10 @@ def test_ctrl_c_during_a_run_keeps_whole_rows_and_says_where_it_stopped(tmp_path
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("backend", ["serial", "local"])
+@pytest.mark.parametrize("backend", ["serial", "local", "dask"])
 def test_ctrl_c_during_a_sweep_keeps_its_chunks_and_resume_finishes(tmp_path, backend):
+    """On each backend, Ctrl-C once a chunk is written: the running chunks are dropped, not waited for (Dask's cluster
+    waited for each busy worker: 4-8 s), one line, exit 130; --resume runs the rest."""
     out = tmp_path / "s"
     args = ["sweep", "--param", "density=300:900:12", "--param", "orientation_seed=0:1:2", "--t-end", "200", "--chunk", "4",
             "--backend", backend, "--workers", "2", "--out", str(out)]  # fmt: skip
@@ -168,3 +170,15 @@ def test_ctrl_c_at_any_moment_of_every_command_is_one_line_and_exit_130(command,
     done, stopped_in = interrupt(_commands(tmp_path)[command], lambda: time.monotonic() - started >= after)
     assert done.returncode == 130 and stopped_in < 3.0, (done.stderr, stopped_in)
     assert "Traceback" not in done.stderr and "interrupted (Ctrl-C)" in done.stderr.strip().splitlines()[-1], done.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("after", [4.0, 5.5])
+def test_ctrl_c_while_dask_workers_compute_drops_their_chunks_at_once(after, tmp_path):
+    """A sweep on a Dask LocalCluster, Ctrl-C while its workers compute: they are ended, not waited for (a graceful
+    close waited for each busy worker's chunk: 2.4-7.8 s), so the command stops within 2 s with its one line."""
+    args = ["sweep", "--scene", "damped", "--param", "density=300:900:100", "--backend", "dask", "--out", str(tmp_path / "s")]
+    started = time.monotonic()
+    done, stopped_in = interrupt(args, lambda: time.monotonic() - started >= after)
+    assert done.returncode == 130 and stopped_in < 2.0, (done.stderr, stopped_in)
+    assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C)" in done.stderr and "Traceback" not in done.stderr, done.stderr

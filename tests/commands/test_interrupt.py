@@ -153,7 +153,7 @@ def _commands(tmp_path: Path) -> dict[str, list[str]]:
     return {
         "compare": ["compare", "--scene", "damped"],
         "bench": ["bench"],
-        "sweep": ["sweep", "--scene", "damped", "--param", "density=300:900:50", "--backend", "local", "--out", str(tmp_path / "sweep")],
+        "sweep": ["sweep", "--scene", "damped", "--param", "density=300:900:50", "--t-end", "400", "--backend", "local", "--out", str(tmp_path / "sweep")],
         "lines": ["lines", "--lines", str(root / "assets" / "moorings" / "md_5MW_OC4Semi.dat"), "--motion", str(motion), "--dt", "0.05",
                   "--out", str(tmp_path / "lines.csv")],
         "farm": ["run", "--scene", str(farm), "--t-end", "1"],

@@ -18,6 +18,10 @@ def pytest_sessionstart(session):
     _compile_covering(session.config.pluginmanager.get_plugin("terminalreporter"))
 
 
+CHILDREN = 2
+"""Processes compiling the covering set side by side (this project's machines have two cores)."""
+
+
 def _compile_covering(terminal=None) -> None:
     from sim.compiling import default_backend
 
@@ -29,7 +33,7 @@ def _compile_covering(terminal=None) -> None:
     import sys
     import time
 
-    from sim.compile_estimate import compile_seconds, spec_cpu
+    from sim.compile_estimate import compile_seconds, shares_of, slowness, spec_cpu
     from sim.compiling import cached, parse_spec, spec_argument
     from sim.kernels import KERNEL_CACHE
     from tests.covering import compiled_first
@@ -43,14 +47,15 @@ def _compile_covering(terminal=None) -> None:
         if not todo:
             return
         started = time.monotonic()
-        cpu = compile_seconds([parse_spec(word) for word in todo])
-        say(f"floatsim: compiling the numba kernels of {len(todo)} specialisations (the presets' and those the tests cover) in two processes, once per machine "
-            f"(cached in {KERNEL_CACHE}; about {cpu:.0f} s of this machine's CPU, half that on two free cores); the tests start after")  # fmt: skip
+        factor, shares = slowness(), shares_of([parse_spec(word) for word in todo], CHILDREN)
+        cpu, wall = sum(compile_seconds(share, factor) for share in shares), max(compile_seconds(share, factor) for share in shares)
+        say(f"floatsim: compiling the numba kernels of {len(todo)} specialisations (the presets' and those the tests cover) in {len(shares)} processes, once per machine "
+            f"(cached in {KERNEL_CACHE}; about {cpu:.0f} s of this machine's CPU, {wall:.0f} s on {len(shares)} free cores); the tests start after")  # fmt: skip
         # each child takes the next spec as it finishes one, the longest first: two cores busy to the end
         todo.sort(key=lambda word: -spec_cpu(parse_spec(word)))
         queue = list(todo)
         children = [subprocess.Popen([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), "-"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, text=True) for _ in range(min(2, len(todo)))]  # fmt: skip
+                                     stdout=subprocess.PIPE, text=True) for _ in range(min(CHILDREN, len(todo)))]  # fmt: skip
         watch = selectors.DefaultSelector()
         for child in children:
             watch.register(child.stdout, selectors.EVENT_READ, child)

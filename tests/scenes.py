@@ -28,3 +28,28 @@ def shipped_solve(scene: str) -> Path:
 
     c = Simulation(load_scene(scene), backend="numpy").model.radiation.coefficients
     return next(p for p in sorted(SHIPPED.glob("*.npz")) if np.array_equal(np.load(p)["damping"], c.damping))
+
+
+HEAVING_FARM = """[body]
+shape = "cube"
+size = 1.0
+density = 900.0
+[constraint]
+joint = "prismatic"
+axis = [0.0, 0.0, 1.0]
+pto_damping = 2000.0
+[initial]
+position = [0.0, 0.0, -0.4]
+[farm]
+rows = {n}
+columns = {n}
+spacing = 10.0
+"""
+
+
+def heaving_farm(folder: Path, n: int) -> str:
+    """A scene file of n x n cubes 10 m apart, each heaving on its slide with a take-off damper (600 samples and one
+    degree of freedom each): a farm as large as a test needs, written into `folder`."""
+    path = folder / f"farm{n}.toml"
+    path.write_text(HEAVING_FARM.format(n=n))
+    return str(path)

@@ -14,6 +14,7 @@ import pytest
 
 from sim.commands import main
 from sim.system.frame import CSV_COLUMNS
+from tests.scenes import heaving_farm
 
 
 @pytest.mark.parametrize("out, why", [("/tmp", "is a folder"), ("/nonexistent/dir/x.csv", "does not exist"), ("/proc/x.csv", "cannot write"),
@@ -124,23 +125,6 @@ def test_ctrl_c_at_any_moment_of_a_run_is_one_line_and_exit_130(after, tmp_path)
         assert rows.shape[1] == len(CSV_COLUMNS) and np.isfinite(rows).all()
 
 
-FARM_20 = """[body]
-shape = "cube"
-size = 1.0
-density = 900.0
-[constraint]
-joint = "prismatic"
-axis = [0.0, 0.0, 1.0]
-pto_damping = 2000.0
-[initial]
-position = [0.0, 0.0, -0.4]
-[farm]
-rows = 20
-columns = 20
-spacing = 10.0
-"""
-
-
 def _commands(tmp_path: Path) -> dict[str, list[str]]:
     """Each command on work that lasts well past 4 s: the error study, the benchmark tables, a sweep on all cores, the
     lines following 4000 s of slow surge, and a farm of 400 devices (its set-up announced, then seconds long)."""
@@ -148,15 +132,13 @@ def _commands(tmp_path: Path) -> dict[str, list[str]]:
     t = np.linspace(0.0, 4000.0, 801)
     motion = tmp_path / "surge.txt"
     np.savetxt(motion, np.column_stack([t, 4.0 * (1 - np.cos(np.pi * t / 4000.0)), *([0 * t] * 5)]), header="t x y z roll pitch yaw")
-    farm = tmp_path / "farm.toml"
-    farm.write_text(FARM_20)
     return {
         "compare": ["compare", "--scene", "damped"],
         "bench": ["bench"],
         "sweep": ["sweep", "--scene", "damped", "--param", "density=300:900:50", "--t-end", "400", "--backend", "local", "--out", str(tmp_path / "sweep")],
         "lines": ["lines", "--lines", str(root / "assets" / "moorings" / "md_5MW_OC4Semi.dat"), "--motion", str(motion), "--dt", "0.05",
                   "--out", str(tmp_path / "lines.csv")],
-        "farm": ["run", "--scene", str(farm), "--t-end", "1"],
+        "farm": ["run", "--scene", heaving_farm(tmp_path, 20), "--t-end", "1"],
     }  # fmt: skip
 
 

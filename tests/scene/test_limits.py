@@ -6,6 +6,7 @@ from __future__ import annotations
 import pytest
 
 from sim.commands import main
+from tests.scenes import heaving_farm
 
 
 def one_line(capsys) -> str:
@@ -43,34 +44,11 @@ def test_a_long_decay_record_is_checked_against_memory(monkeypatch, capsys):
         decay(DecayArgs(scene="damped", duration=1e5))
 
 
-FARM = """[body]
-shape = "cube"
-size = 1.0
-density = 900.0
-[constraint]
-joint = "prismatic"
-axis = [0.0, 0.0, 1.0]
-pto_damping = 2000.0
-[initial]
-position = [0.0, 0.0, -0.4]
-[farm]
-rows = {n}
-columns = {n}
-spacing = 10.0
-"""
-
-
-def farm(tmp_path, n: int) -> str:
-    path = tmp_path / f"farm{n}.toml"
-    path.write_text(FARM.format(n=n))
-    return str(path)
-
-
 def test_a_farm_past_the_memory_is_refused_before_a_device_is_built(monkeypatch, capsys, tmp_path):
     """100 x 100 heaving cubes: 6,000,000 samples (5.7 GB) and the system's matrices over 10,000 degrees of freedom
     (430 B each of n^2: 43 GB), refused in one line naming the farm's rows and columns (it took 10 GB and minutes, silent)."""
     monkeypatch.setattr("sim.limits.available_bytes", lambda: 16e9)
-    assert main(["run", "--scene", farm(tmp_path, 100), "--t-end", "0.1"]) == 2
+    assert main(["run", "--scene", heaving_farm(tmp_path, 100), "--t-end", "0.1"]) == 2
     err = one_line(capsys)
     assert "6,000,000 surface samples and 10,000 degrees of freedom" in err and "48.7 GB" in err
     assert "[farm] rows and columns (100 x 100 devices)" in err
@@ -80,7 +58,7 @@ def test_a_run_past_its_hours_is_refused_and_runs_when_asked(capsys, tmp_path):
     """A farm of 20 x 20 (400 degrees of freedom: about 1.3 s a step on one core) for 1000 s of 0.01 s steps: about 35 h,
     refused naming --max-hours before any device is built; under a larger budget the same scene is let through to its
     set-up (cut short here by --max-steps, which is checked first)."""
-    scene = farm(tmp_path, 20)
+    scene = heaving_farm(tmp_path, 20)
     assert main(["run", "--scene", scene, "--t-end", "1000", "--dt", "0.01"]) == 2
     err = one_line(capsys)
     assert "100,000 steps of 240,000 surface samples and 400 degrees of freedom" in err and "more than --max-hours 24" in err

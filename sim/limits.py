@@ -5,7 +5,7 @@ Measured here (AMD EPYC, `python -m sim run --scene drop --points-per-edge N --t
 N = 10): about 950 bytes per surface sample at its peak (0.22 GB for 240,000 samples, 0.91 GB for 960,000), 3 us
 (a cube) to 7 us (a mesh: `--scene sphere --samples 1000000`) per sample to set up, about 5 ns per sample and step.
 Several bodies add the system's dense matrices (farm.toml with [farm] rows = columns = 14, 20, 32: 196, 400 and 1024
-degrees of freedom): a step's matrix exponential grows as n^3 (0.107 s, 0.90 s, 29 s a step; `scene_step_time`), its
+degrees of freedom): a step's matrix exponential grows as n^3 (0.107 s, 0.90 s, 29 s a step; `system_step_time`), its
 set-up likewise (about a step's worth), its memory as n^2 (0.45 GB at n = 1024).
 """
 

@@ -10,8 +10,16 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import multiprocessing
 import os
+import signal
+import sys
+import threading
+import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor
+from concurrent.futures import wait as wait_any
+from concurrent.futures.process import BrokenProcessPool
 
 from sim.compiling import default_backend, warm_up
 from sim.ensemble import Ensemble
@@ -45,7 +53,6 @@ def _warm(sweep: Sweep | None = None, indices: list[int] | None = None) -> None:
 
 def _task(sweep: Sweep, indices: list[int], stop=None):
     """One chunk on a worker: (rows, history, seconds of compute)."""
-    import time
 
     started = time.perf_counter()
     rows, history = run_chunk(sweep, indices, stop)
@@ -60,7 +67,6 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
     'finished': when each chunk's result arrived, seconds from the start}. `stop` (interrupt.StopOnCtrlC):
     once asked, the run ends within a fraction of a second by raising interrupt.Interrupted (chunks done
     so far have been handed to `done`)."""
-    import time
 
     todo = list(todo)
     stats = {"busy": 0.0, "startup": 0.0, "finished": []}
@@ -93,7 +99,6 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
 
 def _start_worker(parent: int) -> None:
     """Workers leave Ctrl-C to the parent, which stops them, and die with it."""
-    import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with(parent)
@@ -102,9 +107,6 @@ def _start_worker(parent: int) -> None:
 def die_with(parent: int) -> None:
     """End this worker when the process `parent` ends, even by SIGKILL (which leaves it no time to stop its
     workers): on Linux the kernel sends SIGKILL (prctl PR_SET_PDEATHSIG), elsewhere a thread watches os.getppid()."""
-    import signal
-    import sys
-    import threading
 
     if sys.platform.startswith("linux"):
         try:
@@ -117,7 +119,6 @@ def die_with(parent: int) -> None:
         os._exit(1)
 
     def watch() -> None:
-        import time
 
         while os.getppid() == parent:
             time.sleep(0.5)
@@ -132,9 +133,6 @@ def _check(stop) -> None:
 
 
 def _run_local(sweep, todo, done, n, stop=None) -> None:
-    import multiprocessing
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
 
     # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
@@ -147,7 +145,7 @@ def _run_local(sweep, todo, done, n, stop=None) -> None:
         pending = set(futures)
         while pending:
             _check(stop)
-            finished, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            finished, pending = wait_any(pending, timeout=0.2, return_when=FIRST_COMPLETED)
             for future in finished:
                 done(futures[future], future.result())
     except BrokenProcessPool:
@@ -223,7 +221,6 @@ def _end_now(client, cluster, futures) -> None:
     worker to finish its chunk: seconds). A LocalCluster's workers are this command's own: killed (their chunks would be
     dropped anyway); a running scheduler's are another's: their tasks are cancelled. Quietly: the command's one line
     says what was kept."""
-    import signal
 
     logging.getLogger("distributed").setLevel(logging.CRITICAL)  # (the comms the kill closes would each log a line)
     client.cancel(futures)

@@ -13,7 +13,9 @@ import ctypes
 import os
 import pickle
 import signal
+import sys
 import threading
+import time
 from collections.abc import Callable
 
 
@@ -29,10 +31,11 @@ def in_child(work: Callable[[], object], quiet: bool = False):
     if not hasattr(os, "fork") or threading.current_thread() is not threading.main_thread():
         return work()
     read, write = os.pipe()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:
         os.close(read)
-        _child(work, write, quiet)  # never returns
+        _child(work, write, quiet, parent)  # never returns
     os.close(write)
     try:
         with open(read, "rb") as pipe:
@@ -51,14 +54,14 @@ def in_child(work: Callable[[], object], quiet: bool = False):
     return value
 
 
-def _child(work, fd: int, quiet: bool) -> None:
+def _child(work, fd: int, quiet: bool, parent: int) -> None:
     """In the forked child: work(), its result or its exception pickled down the pipe, then out with os._exit (no Python
     clean-up: temporary folders and open outputs are the parent's)."""
     code = 1
     try:
         with contextlib.suppress(Exception):
             signal.signal(signal.SIGINT, signal.SIG_IGN)
-            ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # Linux's PR_SET_PDEATHSIG: die with the parent
+        die_with(parent)
         if quiet:
             os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
         try:
@@ -73,3 +76,22 @@ def _child(work, fd: int, quiet: bool) -> None:
         code = 0
     finally:
         os._exit(code)
+
+
+def die_with(parent: int) -> None:
+    """End this worker when the process `parent` ends, even by SIGKILL (which leaves it no time to stop its
+    workers): on Linux the kernel sends SIGKILL (prctl PR_SET_PDEATHSIG), elsewhere a thread watches os.getppid()."""
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # 1: PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:  # the parent died before the line above took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="floatsim-parent-watch", daemon=True).start()

@@ -17,9 +17,9 @@ import time
 from numba.core import event
 
 from sim.compiling import load, parse_spec, spec_argument
+from sim.forked import die_with
 from sim.scene.config import available_scenes, load_scene
 from sim.simulation import Simulation
-from sim.sweeps.backends import die_with
 
 from .startup import PROFILE_ENV
 

@@ -13,8 +13,6 @@ import logging
 import multiprocessing
 import os
 import signal
-import sys
-import threading
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor
@@ -24,6 +22,7 @@ from concurrent.futures.process import BrokenProcessPool
 from sim.compiling import default_backend, warm_up
 from sim.ensemble import Ensemble
 from sim.errors import ConfigError, Interrupted
+from sim.forked import die_with
 from sim.sweeps.chunk import case_scene, run_chunk
 
 from .grid import Sweep
@@ -102,29 +101,6 @@ def _start_worker(parent: int) -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with(parent)
-
-
-def die_with(parent: int) -> None:
-    """End this worker when the process `parent` ends, even by SIGKILL (which leaves it no time to stop its
-    workers): on Linux the kernel sends SIGKILL (prctl PR_SET_PDEATHSIG), elsewhere a thread watches os.getppid()."""
-
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # 1: PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent:  # the parent died before the line above took effect
-        os._exit(1)
-
-    def watch() -> None:
-
-        while os.getppid() == parent:
-            time.sleep(0.5)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="floatsim-parent-watch", daemon=True).start()
 
 
 def _check(stop) -> None:

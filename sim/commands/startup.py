@@ -20,6 +20,7 @@ import time
 from typing import NamedTuple
 
 from sim.commands.tables import machine, table
+from sim.compile_estimate import compile_seconds, spec_cpu
 from sim.compiling import spec_argument
 from sim.scene.config import ConfigError, available_scenes, load_scene
 from sim.simulation import Simulation
@@ -53,12 +54,18 @@ def timed_run(scene: str, t_end: float, cache: str) -> Timed:
     return timed([sys.executable, "-m", "sim", "run", "--scene", scene, "--t-end", f"{t_end:g}", "--every", "1000000"], cache)
 
 
-def timed_compile(scene: str, cache: str, profile: str | None = None) -> Timed:
-    """Compiling the kernels the preset needs (its kernels.Spec) in a fresh process; its compile profile into `profile`."""
-
+def specs_of(scene: str) -> list:
+    """The kernels.Spec the preset compiles (none when it has no compiled twin)."""
     run = Simulation(load_scene(scene), backend="numpy")
-    specs = run.specs if run.has_twin else []
+    specs = list(run.specs) if run.has_twin else []
     run.close()
+    return specs
+
+
+def timed_compile(scene: str | list, cache: str, profile: str | None = None) -> Timed:
+    """Compiling the kernels the preset needs (its kernels.Spec; or these specs) in a fresh process; its compile profile
+    into `profile`."""
+    specs = specs_of(scene) if isinstance(scene, str) else scene
     if not specs:  # nothing to compile (sim.compiling with no spec would compile every preset's)
         return Timed(0.0, 0.0, 0.0, 0, "")
     return timed([sys.executable, "-m", "sim.commands.compile", str(os.getpid()), *map(spec_argument, specs)], cache,
@@ -106,8 +113,25 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
               f"warm {warm.wall:.1f} s", file=sys.stderr, flush=True)  # fmt: skip
 
     print(f"machine: {machine()}")
+    if len(names) > 1:
+        print(together(names, float(rows[0][3])))
     print(f"`python -m sim run --scene NAME --t-end {t_end:g}` in a fresh process. cold: an empty kernel cache; compile: the kernels "
           "the preset needs, into that cache, in a fresh process (what the viewer and a longer run wait for), wall and CPU; warm: "
           "the run again; most CPU: the kernels whose own compile took the most (their callees' apart)")  # fmt: skip
     table(("preset", "cold run s", "compile s", "compile CPU s", "compile peak MiB", "warm run s", "most CPU", "exit"), rows)
     return 0
+
+
+def together(names: tuple[str, ...], first_cpu: float) -> str:
+    """The presets' kernels compiled in one fresh process from an empty cache, against compile_seconds (what they share
+    counted once), at this machine's speed as the first preset's compile measured it: the check of SHARED_CPU. A timed
+    test of it failed on a loaded machine (40.4 s taken, 31.0 said), so it is measured here, on a quiet one."""
+    specs = list(dict.fromkeys(spec for name in names for spec in specs_of(name)))
+    speed = first_cpu / sum(map(spec_cpu, specs_of(names[0])))
+    with tempfile.TemporaryDirectory(prefix="floatsim-startup-") as cache:
+        taken = timed_compile(specs, cache).cpu
+    said, apart = compile_seconds(specs, factor=speed), sum(map(spec_cpu, specs)) * speed
+    return (
+        f"{' + '.join(names)} compiled in one process: {taken:.1f} s CPU; estimated {said:.1f} s with what they share "
+        f"counted once ({taken / said:.2f}x), {apart:.1f} s counted for each ({taken / apart:.2f}x)"
+    )

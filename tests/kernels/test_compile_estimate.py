@@ -11,17 +11,12 @@ import pytest
 
 import sim
 from sim import compiling
-from sim.compile_estimate import compile_seconds, shares_of, spec_cpu
+from sim.compile_estimate import shares_of, spec_cpu
 from sim.compiling import parse_spec
 
 ROOT = Path(__file__).resolve().parents[2]
 DROP = "implicit,points,gravity+pressure+damping+heave_damping,0,0,0,0,0"
 """The drop preset's kernels (compiling.spec_argument)."""
-
-
-WAVES = "implicit,points,gravity+pressure+damping+heave_damping,1,0,0,0,0"
-STORM = "implicit,points,gravity+pressure+damping+drag+heave_damping,1,0,0,0,0"
-"""The waves and storm presets' kernels: points in waves, without drag and with it."""
 
 
 def _compile_cpu(words: list[str], cache: Path) -> float:
@@ -40,19 +35,6 @@ def test_the_estimate_is_within_a_factor_two_of_a_real_compile(tmp_path):
     of two of the table's (compile_estimate.COMPILE_CPU, the reference machine's), on whatever CPU runs the tests."""
     cpu, table = _compile_cpu([DROP], tmp_path), spec_cpu(parse_spec(DROP))
     assert table / 2 < cpu < 2 * table, (cpu, table)
-
-
-@pytest.mark.slow  # two real compiles from empty caches
-def test_one_process_compiling_two_specs_pays_what_they_share_once(tmp_path):
-    """The waves preset's kernels alone, then with the storm's in one process: the pair's CPU, over this machine's speed
-    measured by the first, is what compile_seconds says with the kernels they share counted once (SHARED_CPU), within
-    20 % (measured: 34.3 s taken, 31.7 said). Counting them twice, the sum of the table's two as the tests' banner did
-    (318 s said for the covering set, 206 s taken), said 45.1 s."""
-    alone = _compile_cpu([WAVES], tmp_path / "alone")
-    pair = _compile_cpu([WAVES, STORM], tmp_path / "pair")
-    speed = alone / spec_cpu(parse_spec(WAVES))
-    said = compile_seconds([parse_spec(WAVES), parse_spec(STORM)], factor=speed)
-    assert 0.8 < pair / said < 1.2, (pair, said, alone)
 
 
 @pytest.mark.parametrize(("args", "said"), [(["--help"], "usage: python -m sim.commands.compile"), (["nope"], "not this command's parent's"),

@@ -108,6 +108,16 @@ def test_10_farm_power_matrix_grows_with_the_waves_height_squared_and_shares_it_
     assert len(shares) == 6 and all(abs(v - 100 / 6) < 0.5 for v in shares), lines[-1]
 
 
+@pytest.mark.slow  # two 40 s runs in waves
+def test_11_wamit_files_heave_as_linear_theory_says_from_either_file():
+    """The ellipsoid's heave from WAMIT's numeric files within 2 % of the frequency-domain heave of the same files' A33,
+    B33, X3 and C33, and the run from the .out within 1 % of it."""
+    out = run("11_wamit_files.py", "--t-end", "40")
+    simulated, linear, apart, percent = numbers(out)[-4:]
+    assert simulated == pytest.approx(linear, rel=0.02) and 0.3 < simulated < 0.7, out
+    assert percent < 1.0 and apart < 0.01 * simulated, out
+
+
 @pytest.mark.slow
 def test_08_take_off_control_absorbs_what_the_frequency_domain_says():
     """Each run's mean power beside its frequency-domain value: the best damper and the reactive optimum within 2 %, the

@@ -30,8 +30,10 @@ import numpy as np
 from sim.errors import ConfigError
 from sim.hydro.bem import Coefficients, note, passive
 from sim.hydro.forces import Model
+from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
 from sim.io.wamit import read_out
+from sim.io.wamit_numeric import Assumed, columns_of, read_numeric, stiffness
 from sim.water.records import record_path
 from sim.water.seas import Waves, wavenumber
 
@@ -48,29 +50,25 @@ def bem_file_path(name: str, base_dir: str) -> Path:
     return path
 
 
+def kind_of(path: Path) -> str:
+    """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "numeric" (one of WAMIT's
+    numeric files: rows of 3, 4, 5 or 7 numbers) or "out" (else: WAMIT's output, which says so itself when it is not)."""
+    with open(path, "rb") as f:
+        if f.read(2) == b"PK":
+            return "npz"
+    return "numeric" if columns_of(path) in (3, 4, 5, 7) else "out"
+
+
 def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coefficients:
     """The coefficients in `path` for the bodies `models` (forces.Model) starting at `starts` (their poses), with the
     excitation of the sea `water` (None: radiation only)."""
-    if path.suffix == ".npz":
+    if kind_of(path) == "npz":
         try:
             c = Coefficients.load(path)
         except ValueError as e:
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
     else:
-        run = read_out(path, fluid.rho)
-        if abs(run.g - fluid.g) > 1e-6 * fluid.g:
-            raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved with g = {run.g:g} m/s^2, the scene has {fluid.g:g}")
-        not_yet = np.zeros_like(run.excitation)  # (split_excitation below)
-        size = max(float(np.ptp(m.body.mesh_vertices, axis=0).max()) for m in models)
-        A, B, change = passive(
-            np.concatenate([run.added_mass, run.added_mass_inf[None]]), np.concatenate([run.damping, run.damping[-1:]]), size
-        )
-        if change > 0.01:
-            note(f"note: {path.name}'s radiation damping made symmetric and passive, as a Capytaine solve's is: entries changed by up "
-                 f"to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
-        c = Coefficients(run.omega, A[:-1], B[:-1], A[-1], fluid.rho, run.depth, run.panels, run.centers, run.headings, run.excitation,
-                         not_yet)  # fmt: skip
-        c = moved(c, run.gravity_centers)
+        c = _from_wamit(path, models, starts, fluid, water)
     bodies = c.added_mass.shape[1] // 6
     if bodies != len(models):
         raise ConfigError(f"[fluid] bem_file {str(path)!r} holds {bodies} bodies, the scene {len(models)}: one per [[bodies]] entry")
@@ -84,9 +82,57 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coef
         if np.hypot(*(centers[b, :2] - s.x_world[:2])) > HORIZONTAL_SLACK:
             raise ConfigError(f"body {b + 1} starts at x, y = ({s.x_world[0]:g}, {s.x_world[1]:g}) m, the bem_file has its centre of "
                               f"mass at ({centers[b, 0]:g}, {centers[b, 1]:g}): place it where the file does")  # fmt: skip
-    if path.suffix != ".npz" and c.has_excitation:
+    if kind_of(path) != "npz" and c.has_excitation:
         c = split_excitation(c, models, starts, fluid)
     return c
+
+
+def _from_wamit(path: Path, models: list, starts: list, fluid, water) -> Coefficients:
+    """A WAMIT run's coefficients (its `.out`, or its numeric `.1` and `.3`), made reciprocal and passive and moved to
+    the bodies' centres of gravity; the numeric files' hydrostatics checked against the scene's bodies."""
+    if kind_of(path) == "out":
+        run = read_out(path, fluid.rho)
+    else:
+        assumed = Assumed(fluid.g, water.depth if water is not None else math.inf, np.array([s.x_world for s in starts]))
+        run, beside = read_numeric(path, fluid.rho, assumed)
+        if not beside:
+            note(f"note: {path.name} read without its .out: taken about the world's origin with ULEN = 1, the scene's g and depth "
+                 "(put the run's .out beside it to have them checked)")  # fmt: skip
+        _check_stiffness(path, stiffness(path, run, fluid.rho), models, starts, fluid)
+    if abs(run.g - fluid.g) > 1e-6 * fluid.g:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved with g = {run.g:g} m/s^2, the scene has {fluid.g:g}")
+    not_yet = np.zeros_like(run.excitation)  # (split_excitation)
+    size = max(float(np.ptp(m.body.mesh_vertices, axis=0).max()) for m in models)
+    A, B, change = passive(
+        np.concatenate([run.added_mass, run.added_mass_inf[None]]), np.concatenate([run.damping, run.damping[-1:]]), size
+    )
+    if change > 0.01:
+        note(f"note: {path.name}'s radiation damping made symmetric and passive, as a Capytaine solve's is: entries changed by up "
+             f"to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
+    c = Coefficients(run.omega, A[:-1], B[:-1], A[-1], fluid.rho, run.depth, run.panels, run.centers, run.headings, run.excitation,
+                     not_yet)  # fmt: skip
+    return moved(c, run.gravity_centers)
+
+
+WATERPLANE_SLACK = 0.05
+"""A WAMIT run's heave stiffness (`.hst`) and the scene body's rho g times its waterplane may differ by this fraction."""
+
+
+def _check_stiffness(path: Path, C: np.ndarray | None, models: list, starts: list, fluid) -> None:
+    """One line unless each body's heave stiffness in the run's `.hst` is the scene's body's at rest (rho g times its
+    waterplane): another body, draft or length scale otherwise. The bodies are the file's in order (several need the
+    .out, which places them)."""
+    if C is None or C.shape[0] != 6 * len(models):
+        return
+    for b, (model, s) in enumerate(zip(models, starts)):
+        h = hydrostatics(model.body, s.x_world, s.R_world_body)
+        if h is None:
+            continue
+        own, file = fluid.rho * fluid.g * h.waterplane_area, C[6 * b + 2, 6 * b + 2]
+        if abs(file - own) > WATERPLANE_SLACK * max(abs(own), 1e-30):
+            raise ConfigError(f"[fluid] bem_file {str(path.with_suffix('.hst'))!r}: body {b + 1}'s heave stiffness is {file:.4g} N/m, "
+                              f"the scene's body at rest has {own:.4g} N/m (rho g times a waterplane of {h.waterplane_area:.4g} m^2): "
+                              "another body, draft or length scale")  # fmt: skip
 
 
 def _check_sea(path: Path, c: Coefficients, water) -> None:

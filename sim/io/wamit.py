@@ -62,6 +62,8 @@ class WamitRun:
     g: float
     panels: int
     """How many panels the bodies had, together."""
+    length: float = 1.0
+    """WAMIT's length scale ULEN, m (its nondimensional coefficients' L)."""
 
 
 def read_out(path: Path, rho: float) -> WamitRun:
@@ -136,7 +138,7 @@ def _parse(text: str, rho: float) -> WamitRun:
     X = np.conj(np.array(X)[order][:, by_heading]) * rho * g * L**moment
     panels = sum(int(n) for n in re.findall(r"Total panels:\s*(\d+)", text))
     depth = depth * L if math.isfinite(depth) else depth
-    return WamitRun(omega, A, B, A_inf * rho * L**power, turn[by_heading], X, centers, gravity_centers, depth, g, panels)
+    return WamitRun(omega, A, B, A_inf * rho * L**power, turn[by_heading], X, centers, gravity_centers, depth, g, panels, L)
 
 
 def _matrix(block: str, d: int, with_damping: bool):

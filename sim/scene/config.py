@@ -71,8 +71,8 @@ FLUID = (
           "than its own (waves 100 times the body's length): a body on a soft spring swings slower than that", "s", lo=0.0, lo_open=True,
           hi=1e4, kind="optional"),
     Param("fluid", "bem_file", "", "Radiation: the bodies' coefficients from a file instead of a Capytaine solve: WAMIT's output "
-          "(.out) or floatsim's own (.npz), one body per [[bodies]] entry in order, relative to the scene file or the working "
-          "directory (docs/physics.md)", kind="text", name="BEM file"),
+          "(.out), WAMIT's numeric files (.1 with its .3 beside it) or floatsim's own (.npz), told by their content; one body per "
+          "[[bodies]] entry, relative to the scene file or the working directory (docs/own-case.md)", kind="text", name="BEM file"),
     *(p for term in TERMS for p in term.params),
 )
 INITIAL = (

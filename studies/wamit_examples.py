@@ -1,0 +1,85 @@
+"""The WAMIT runs the numeric-file reader is checked on: WEC-Sim's BEMIO examples, a subset of their periods.
+
+WEC-Sim (github.com/WEC-Sim/WEC-Sim, Apache-2.0, commit a23d299) ships, in examples/BEMIO/WAMIT/, WAMIT 7.2 runs
+with both their `.out` and their numeric files `.1`, `.3` and `.hst`:
+
+- Cylinder/cyl: a vertical cylinder 0.35 m in radius, 0.63 m draft, in water 3 m deep; 525 frequencies, 0.04 to
+  21 rad/s, heading 0;
+- Ellipsoid/ellipsoid: a half ellipsoid of revolution 9 m across and 1.8 m deep (semi-axes 4.5, 4.5, 1.8 m) in deep
+  water; 308 frequencies, 0.03 to 9.3 rad/s, heading 0.
+
+Both bodies' origins are at the water line on their axis, as are their centres of gravity. Kept here (assets/
+coefficients/wamit/) are every STRIDE-th period of each file, the files otherwise as WAMIT wrote them: the `.out`'s
+blocks of the other periods (and their lines in its table of the solve's times) are dropped, the numeric files' rows of
+the other periods too.
+
+Run: python -m studies.wamit_examples PATH/TO/WEC-Sim/examples/BEMIO/WAMIT
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+TARGET = ROOT / "assets" / "coefficients" / "wamit"
+RUNS = {"Cylinder/cyl": 25, "Ellipsoid/ellipsoid": 8}
+"""Each run and its STRIDE: about 21 and 39 periods of 525 and 308."""
+STAR = re.compile(r"^\s*\*{20,}\s*$")
+PERIOD = re.compile(r"Wave period \(sec\)\s*=\s*(\S+)")
+
+
+def kept_periods(one: Path, stride: int) -> set[str]:
+    """The positive periods of the `.1`, as printed, every `stride`-th from the longest."""
+    periods = []
+    for line in one.read_text().splitlines():
+        words = line.split()
+        if len(words) == 5 and float(words[0]) > 0 and words[0] not in periods:
+            periods.append(words[0])
+    return set(periods[::stride])
+
+
+def numeric(source: Path, target: Path, kept: set[str]) -> None:
+    """`source`'s title and the rows of the periods kept (and PER = -1 and 0); `.hst` whole."""
+    lines = source.read_text().splitlines(keepends=True)
+    out = [
+        line for n, line in enumerate(lines) if n == 0 or source.suffix == ".hst" or line.split()[0] in kept or float(line.split()[0]) <= 0
+    ]
+    target.write_text("".join(out))
+
+
+def out_file(source: Path, target: Path, kept: set[str]) -> None:
+    """The `.out` with the blocks of the other periods dropped (and their rows in the header's table of times)."""
+    values = {float(p) for p in kept}
+    blocks, block = [], []
+    for line in source.read_text().splitlines(keepends=True):
+        block.append(line)
+        if STAR.match(line):
+            blocks.append(block)
+            block = []
+    blocks.append(block)
+    kept_blocks = []
+    for block in blocks:
+        found = PERIOD.search("".join(block))
+        if found is None or float(found.group(1)) in values:
+            kept_blocks.append(block)
+    text = "".join(line for block in kept_blocks for line in block)
+    table = re.compile(r"^\s+(\d+\.\d+)\s+\d\d:\d\d:\d\d\s+-?\d+\s+-?\d+\s*$", re.M)  # "157.0796  11:57:08  -1  -1"
+    text = table.sub(lambda m: m.group(0) if any(abs(float(m.group(1)) - v) < 1e-3 for v in values) else "\x00", text)
+    target.write_text(text.replace("\x00\n", ""))
+
+
+def main(folder: Path) -> None:
+    TARGET.mkdir(parents=True, exist_ok=True)
+    for run, stride in RUNS.items():
+        stem = folder / run
+        kept = kept_periods(stem.with_suffix(".1"), stride)
+        for suffix in (".1", ".3", ".hst"):
+            numeric(stem.with_suffix(suffix), TARGET / (stem.name + suffix), kept)
+        out_file(stem.with_suffix(".out"), TARGET / (stem.name + ".out"), kept)
+        print(f"{stem.name}: {len(kept)} periods -> {TARGET.relative_to(ROOT)}")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]))

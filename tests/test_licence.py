@@ -11,6 +11,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OTHERS = re.compile(r"WEC-Sim|SEA-Stack|OpenFAST|r-test|WAMIT")
 """The projects whose files floatsim derives shipped files from (WAMIT: another code's run, whoever shared it)."""
+TEXT = (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst")
+"""The shipped text files' suffixes (WAMIT's output and numeric files among them)."""
 
 
 def test_the_licence_is_apache_2_in_the_files_and_the_installed_metadata():
@@ -25,7 +27,7 @@ def _derived() -> set[str]:
     """Shipped text files that name another project as their source (a header or a `source` field)."""
     found = set()
     for path in (ROOT / "assets").rglob("*"):
-        if path.suffix in (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst") and OTHERS.search(path.read_text(errors="replace")[:1500]):
+        if path.suffix in TEXT and OTHERS.search(path.read_text(errors="replace")[:1500]):
             found.add(path.relative_to(ROOT).as_posix())
     return found
 

@@ -14,6 +14,8 @@ from pathlib import Path
 from typing import TypeVar
 
 from sim.errors import WriteFailed
+from sim.io import netcdf
+from sim.system.frame import csv_line
 
 T = TypeVar("T")
 TEMPORARY = re.compile(r"_.+\.[0-9a-f]{8}\.partial(\.[a-z0-9]+)?")
@@ -62,6 +64,12 @@ class LineFile:
         self.end = 0
         """Bytes on the disk, all of them whole lines."""
         self.lines = 0
+
+    def header(self, columns: list[str]) -> None:
+        self.write(csv_line(columns))
+
+    def row(self, values) -> None:
+        self.write(csv_line(values))
 
     def write(self, line: str) -> None:
         data = line.encode() + b"\n"
@@ -123,6 +131,42 @@ class LineFile:
             os.replace(self._tmp, self.path)
         except OSError as e:
             raise WriteFailed(self.path, f"{reason(e)} (its rows are in {self._tmp})") from None
+
+
+class NetcdfFile:
+    """A run's rows as netCDF (sim/io/netcdf.py), LineFile's counterpart: the rows collect in memory and the file is
+    written aside and renamed when it is closed, or abandoned after a Ctrl-C, a divergence or a failure (the rows so
+    far: a result is never lost to a stop; a killed process, SIGKILL, loses them, where a CSV keeps its whole rows)."""
+
+    def __init__(self, path: str | Path, scene: dict, history: str):
+        self.path, self._scene, self._history = str(path), scene, history
+        self._before = _stamp(Path(path))
+        self._columns: list[str] = []
+        self._rows: list = []
+        self._open = True
+        self.lines = 0
+        """As LineFile's: the header and the rows in the file once written (0 before)."""
+        self.replaced = ""
+
+    def header(self, columns: list[str]) -> None:
+        self._columns = list(columns)
+
+    def row(self, values) -> None:
+        self._rows.append(values)
+
+    def close(self) -> None:
+        if not self._open:
+            return
+        self._open = False
+        ds = netcdf.dataset(self._columns, self._rows, self._scene, self._history)
+        now = _stamp(Path(self.path))
+        write_whole(self.path, lambda tmp: netcdf.write(ds, tmp))
+        self.lines = 1 + len(self._rows)
+        self.replaced = (
+            "" if now is None else "the earlier file" if now == self._before else "the file another run wrote there while this one ran"
+        )
+
+    abandon = close
 
 
 def write_whole(path: str | Path, write: Callable[[str], T], suffix: str = "") -> T:

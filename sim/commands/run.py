@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import shlex
 import sys
 import time
 from dataclasses import dataclass
@@ -17,14 +19,14 @@ from sim.compiling import cached, compile_all, default_backend
 from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
 from sim.hydro.radiation import misfit_note
+from sim.io import netcdf
 from sim.limits import MAX_HOURS, SETUP_NOTE_SECONDS, duration, step_time
 from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, scene_cost, with_overrides
 from sim.simulation import Simulation, SimulationDiverged
-from sim.system.frame import csv_line
 
 from . import FROM_SCENE, declared_flags, overrides
 from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
-from .output import LineFile
+from .output import LineFile, NetcdfFile
 from .progress import progress_bar
 
 STEP_SECONDS = 30.0
@@ -52,10 +54,11 @@ class _RunBase:
     every: int = 10
     """Write one CSV row every K steps."""
     out: Annotated[str | None, tyro.conf.arg(metavar="FILE", help_behavior_hint="(default: none, a summary only)")] = None
-    """CSV file to write (written aside and renamed when done: a reader never sees half of it). An earlier run's CSV
-    there is replaced, and the summary says so; another existing file only with --overwrite."""
+    """CSV file to write (written aside and renamed when done: a reader never sees half of it), or netCDF for a name
+    ending in .nc (the same columns with their units and the scene in its attributes; the netcdf extra). An earlier
+    run's file there is replaced, and the summary says so; another existing file only with --overwrite."""
     overwrite: bool = False
-    """Replace an existing --out file that is not an earlier run's CSV."""
+    """Replace an existing --out file that is not an earlier run's CSV or netCDF."""
     progress: Annotated[
         bool | None, tyro.conf.arg(metavar="{True,False}", help_behavior_hint="(default: only on a terminal, never under CI)")
     ] = None
@@ -155,7 +158,8 @@ def written_by_run(path: Path) -> bool:
     except OSError:
         return False
     first = head.split(b"\n", 1)[0].split(b",")
-    return not head or (first[0] == b"t" and any(c.endswith(b"E_total") for c in first))
+    netcdf_run = head.startswith(b"CDF") and b"floatsim_scene" in head  # a netCDF3 file's attribute names are in its header
+    return not head or netcdf_run or (first[0] == b"t" and any(c.endswith(b"E_total") for c in first))
 
 
 def check_output(path: str | None, flag: str = "out", suffix: str | None = None, inputs: tuple = (), overwrite: bool = True) -> None:
@@ -165,6 +169,8 @@ def check_output(path: str | None, flag: str = "out", suffix: str | None = None,
     if path is None:
         return
     p = Path(path)
+    if p.suffix.lower() == ".nc":
+        netcdf.check_extra()
     if suffix and p.suffix.lower() != suffix:
         raise ConfigError(f"--{flag} must name a {suffix} file, got {path!r}")
     if any(p.resolve() == Path(i).resolve() for i in inputs if i):
@@ -354,17 +360,17 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
     whole rows in the file: a write that fails (a full disk) cuts it back to the last of them. `stepping`: wall seconds
     spent stepping alone (in `sim.step`, less its energy check after each call), without the rows, the bar and the rest.
     `replaced`: what the file replaced under its name (LineFile.replaced)."""
-    out = LineFile(args.out) if args.out else None
+    out = open_output(args.out, sim.scene) if args.out else None
     bar = progress_bar(n_steps, flag=args.progress)
     clock = [0.0]
 
     def write(frame):
         if out:
-            out.write(csv_line(frame.row()))
+            out.row(frame.row())
 
     try:  # numpy's overflow warnings would only repeat what the divergence message says better
         if out:
-            out.write(csv_line(columns))
+            out.header(columns)
         write(sim.frame())
         if watch is not None:
             watch(sim)
@@ -387,12 +393,20 @@ def stream(sim, columns, args, n_steps: int, watch=None) -> tuple[str | None, in
     return error, data_rows(out), clock[0], out.replaced if out else ""
 
 
-def data_rows(out: LineFile | None) -> int:
+def open_output(path: str, scene) -> LineFile | NetcdfFile:
+    """The run's output file: netCDF for a name ending in .nc (with the scene and the command in its attributes), else
+    CSV."""
+    if Path(path).suffix.lower() != ".nc":
+        return LineFile(path)
+    return NetcdfFile(path, dataclasses.asdict(scene), "floatsim " + shlex.join(sys.argv[1:]))
+
+
+def data_rows(out: LineFile | NetcdfFile | None) -> int:
     """Whole rows of data in the file (its first line is the header)."""
     return max(out.lines - 1, 0) if out else 0
 
 
-def kept_rows(out: LineFile) -> str:
+def kept_rows(out: LineFile | NetcdfFile) -> str:
     if not out.lines:
         return "kept nothing: the file is empty"
     return f"kept the header and {data_rows(out)} whole rows; the file ends with the last of them"

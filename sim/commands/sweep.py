@@ -10,6 +10,7 @@ import json
 import math
 import os
 import re
+import shlex
 import sys
 import time
 from collections import Counter
@@ -20,10 +21,11 @@ from typing import Annotated, Literal
 import tyro
 
 from sim.errors import ConfigError, Interrupted, WriteFailed
+from sim.io import netcdf
 from sim.limits import BYTES_PER_SAMPLE, MAX_CASES, MAX_HISTORY_BYTES, check_memory, size
 from sim.scene.config import available_scenes
 from sim.sweeps.backends import WorkerLost, run
-from sim.sweeps.grid import Sweep, case_scene, chunks, load_sweep_file, parse_param
+from sim.sweeps.grid import BODY_VARIABLE, START, VARIABLE, Sweep, case_scene, chunks, load_sweep_file, parse_param
 
 from .interrupt import EXIT, StopOnCtrlC
 from .output import reason, temporaries, write_whole
@@ -77,6 +79,10 @@ class SweepArgs:
     """Also keep each case's pose every K steps (in --out/_history/)."""
     progress: bool | None = None
     """Progress bar (default: only on a terminal, never under CI)."""
+    netcdf: str | None = None
+    """Also gather every case's results into this netCDF file once the sweep is whole: the swept parameters its
+    dimensions, each result a variable over them with its units (a farm's power matrix: d1_power over hs and tp;
+    xarray.open_dataset reads it; the netcdf extra)."""
 
 
 def parse_set(item: str) -> tuple[str, object]:
@@ -194,6 +200,10 @@ def check_size(sweep: Sweep) -> None:
 
 
 def sweep(args: SweepArgs) -> int:
+    if args.netcdf is not None:
+        if Path(args.netcdf).suffix.lower() != ".nc":
+            raise ConfigError(f"--netcdf must name a .nc file, got {args.netcdf!r}")
+        netcdf.check_extra()
     spec = build(args)
     backend = "dask" if args.scheduler else args.backend
     base = spec.base()
@@ -263,7 +273,32 @@ def sweep(args: SweepArgs) -> int:
     wall = time.perf_counter() - started
     summary = ", ".join(f"{n} {s}" for s, n in sorted(statuses.items()))
     print(f"ran {ran} chunks ({sum(statuses.values())} cases: {summary}) in {wall:.3g} s -> {out}/ (pandas.read_parquet('{out}'))")
+    if args.netcdf is not None:
+        gather(out, files, spec, info, args.netcdf)
+        print(f"every case's results, over {' x '.join(name for name, _ in spec.params) or 'no parameter'} -> {args.netcdf}")
     return 3 if statuses.get("diverged") else 0
+
+
+def gather(out: Path, files: dict, spec: Sweep, info: dict, path: str) -> None:
+    """The sweep's chunks as one netCDF dataset over its swept parameters (sim/io/netcdf.grid_dataset), written whole."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.concat_tables([pq.read_table(out / name) for name in sorted(files) if name.startswith("chunk-")])
+    params = [(name, *parameter_units(name)) for name, _ in spec.params]
+    ds = netcdf.grid_dataset(table.to_pandas(), params, {"title": f"floatsim sweep {spec.key()} of scene {spec.scene!r}",
+                                                         "history": "floatsim " + shlex.join(sys.argv[1:]), "floatsim_sweep": json.dumps(info, default=str)})  # fmt: skip
+    write_whole(path, lambda tmp: netcdf.write(ds, tmp))
+
+
+def parameter_units(name: str) -> tuple[str, str]:
+    """(units, long name) of a swept parameter: a scene parameter's declared unit and help, a start parameter's."""
+    if name in START:
+        words = START[name]
+        return ("degree" if name == "tilt" else "m" if name == "z0" else ""), words
+    key = name.split(".", 1)[-1]
+    param = VARIABLE.get(name) or BODY_VARIABLE.get(key)
+    return (param.unit, param.help) if param is not None else ("", name)
 
 
 def chunk_name(cid: int) -> str:

@@ -32,6 +32,7 @@ from sim.hydro.bem import Coefficients, note, passive
 from sim.hydro.forces import Model
 from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
+from sim.io.capytaine_nc import read_capytaine
 from sim.io.wamit import read_out
 from sim.io.wamit_numeric import Assumed, columns_of, read_numeric, stiffness
 from sim.water.records import record_path
@@ -51,11 +52,15 @@ def bem_file_path(name: str, base_dir: str) -> Path:
 
 
 def kind_of(path: Path) -> str:
-    """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "numeric" (one of WAMIT's
-    numeric files: rows of 3, 4, 5 or 7 numbers) or "out" (else: WAMIT's output, which says so itself when it is not)."""
+    """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "netcdf" (a Capytaine
+    dataset, netCDF3 or 4), "numeric" (one of WAMIT's numeric files: rows of 3, 4, 5 or 7 numbers) or "out" (else:
+    WAMIT's output, which says so itself when it is not)."""
     with open(path, "rb") as f:
-        if f.read(2) == b"PK":
-            return "npz"
+        head = f.read(4)
+    if head[:2] == b"PK":
+        return "npz"
+    if head[:3] == b"CDF" or head == b"\x89HDF":
+        return "netcdf"
     return "numeric" if columns_of(path) in (3, 4, 5, 7) else "out"
 
 
@@ -67,6 +72,8 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coef
             c = Coefficients.load(path)
         except ValueError as e:
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
+    elif kind_of(path) == "netcdf":
+        c = _from_capytaine(path, models, starts, fluid)
     else:
         c = _from_wamit(path, models, starts, fluid, water)
     bodies = c.added_mass.shape[1] // 6
@@ -98,20 +105,38 @@ def _from_wamit(path: Path, models: list, starts: list, fluid, water) -> Coeffic
         if not beside:
             note(f"note: {path.name} read without its .out: taken about the world's origin with ULEN = 1, the scene's g and depth "
                  "(put the run's .out beside it to have them checked)")  # fmt: skip
-        _check_stiffness(path, stiffness(path, run, fluid.rho), models, starts, fluid)
-    if abs(run.g - fluid.g) > 1e-6 * fluid.g:
-        raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved with g = {run.g:g} m/s^2, the scene has {fluid.g:g}")
+        _check_stiffness(path.with_suffix(".hst"), stiffness(path, run, fluid.rho), models, starts, fluid)
+    _check_g(path, run.g, fluid)
     not_yet = np.zeros_like(run.excitation)  # (split_excitation)
+    c = Coefficients(run.omega, run.added_mass, run.damping, run.added_mass_inf, fluid.rho, run.depth, run.panels, run.centers, run.headings,
+                     run.excitation, not_yet)  # fmt: skip
+    return moved(_passive(path, c, models), run.gravity_centers)
+
+
+def _from_capytaine(path: Path, models: list, starts: list, fluid) -> Coefficients:
+    """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py), made reciprocal and passive and moved to the bodies'
+    centres of mass; its hydrostatic stiffness, when it has one, checked against the scene's bodies."""
+    c, gravity, g, C = read_capytaine(path)
+    _check_g(path, g, fluid)
+    if C is not None:
+        _check_stiffness(path, C, models, starts, fluid)
+    return moved(_passive(path, c, models), gravity)
+
+
+def _check_g(path: Path, g: float, fluid) -> None:
+    if abs(g - fluid.g) > 1e-6 * fluid.g:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} was solved with g = {g:g} m/s^2, the scene has {fluid.g:g}")
+
+
+def _passive(path: Path, c: Coefficients, models: list) -> Coefficients:
+    """`c` with its damping symmetric and positive semi-definite and its added mass symmetric (bem.passive), as a
+    Capytaine solve's is here, and a note when that changed it by more than 1 %."""
     size = max(float(np.ptp(m.body.mesh_vertices, axis=0).max()) for m in models)
-    A, B, change = passive(
-        np.concatenate([run.added_mass, run.added_mass_inf[None]]), np.concatenate([run.damping, run.damping[-1:]]), size
-    )
+    A, B, change = passive(np.concatenate([c.added_mass, c.added_mass_inf[None]]), np.concatenate([c.damping, c.damping[-1:]]), size)
     if change > 0.01:
         note(f"note: {path.name}'s radiation damping made symmetric and passive, as a Capytaine solve's is: entries changed by up "
              f"to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
-    c = Coefficients(run.omega, A[:-1], B[:-1], A[-1], fluid.rho, run.depth, run.panels, run.centers, run.headings, run.excitation,
-                     not_yet)  # fmt: skip
-    return moved(c, run.gravity_centers)
+    return replace(c, added_mass=A[:-1], damping=B[:-1], added_mass_inf=A[-1])
 
 
 WATERPLANE_SLACK = 0.05
@@ -119,9 +144,9 @@ WATERPLANE_SLACK = 0.05
 
 
 def _check_stiffness(path: Path, C: np.ndarray | None, models: list, starts: list, fluid) -> None:
-    """One line unless each body's heave stiffness in the run's `.hst` is the scene's body's at rest (rho g times its
-    waterplane): another body, draft or length scale otherwise. The bodies are the file's in order (several need the
-    .out, which places them)."""
+    """One line unless each body's heave stiffness in the file `path` (a WAMIT `.hst`, a Capytaine dataset's) is the
+    scene's body's at rest (rho g times its waterplane): another body, draft or length scale otherwise. The bodies are
+    the file's in order."""
     if C is None or C.shape[0] != 6 * len(models):
         return
     for b, (model, s) in enumerate(zip(models, starts)):
@@ -130,7 +155,7 @@ def _check_stiffness(path: Path, C: np.ndarray | None, models: list, starts: lis
             continue
         own, file = fluid.rho * fluid.g * h.waterplane_area, C[6 * b + 2, 6 * b + 2]
         if abs(file - own) > WATERPLANE_SLACK * max(abs(own), 1e-30):
-            raise ConfigError(f"[fluid] bem_file {str(path.with_suffix('.hst'))!r}: body {b + 1}'s heave stiffness is {file:.4g} N/m, "
+            raise ConfigError(f"[fluid] bem_file {str(path)!r}: body {b + 1}'s heave stiffness is {file:.4g} N/m, "
                               f"the scene's body at rest has {own:.4g} N/m (rho g times a waterplane of {h.waterplane_area:.4g} m^2): "
                               "another body, draft or length scale")  # fmt: skip
 

@@ -71,7 +71,8 @@ FLUID = (
           "than its own (waves 100 times the body's length): a body on a soft spring swings slower than that", "s", lo=0.0, lo_open=True,
           hi=1e4, kind="optional"),
     Param("fluid", "bem_file", "", "Radiation: the bodies' coefficients from a file instead of a Capytaine solve: WAMIT's output "
-          "(.out), WAMIT's numeric files (.1 with its .3 beside it) or floatsim's own (.npz), told by their content; one body per "
+          "(.out), WAMIT's numeric files (.1 with its .3 beside it), a Capytaine dataset (.nc) or floatsim's own (.npz), told by "
+          "their content; one body per "
           "[[bodies]] entry, relative to the scene file or the working directory (docs/own-case.md)", kind="text", name="BEM file"),
     *(p for term in TERMS for p in term.params),
 )

@@ -49,7 +49,8 @@ from sim.system.frequency import stiffness
 from sim.system.linear import exact_linear
 from sim.system.single import Motion, Single, StepFailed, from_system, system_of_one, to_system
 from sim.system.tree import SystemState, build, lines_scene, moored_body
-from sim.water.records import describe
+from sim.water.gauges import Gauges
+from sim.water.records import describe, measured
 from sim.water.seas import make_water
 
 GEOMETRY = ("shape", "size", "extents", "points_per_edge", "mesh", "mesh_unit", "samples", "centre_of_mass", "inertia")
@@ -107,6 +108,9 @@ class Simulation:
         self.exact = None
         """Several bodies' exact stepper where the system is linear (system/linear.py), else None: Stormer-Verlet."""
         self._frame: tuple = (None, None)  # (what the frame is of, the frame)
+        g = self.scene.gauges
+        self.gauges = Gauges([x.name for x in g], [(x.x, x.y) for x in g], [x.at_record for x in g],
+                             measured(self.scene.waves, self.scene.base_dir) if any(x.at_record for x in g) else None)  # fmt: skip
         self._parts: tuple = (None, None)
         if self.scene.bodies:
             self._start_bodies(backend)
@@ -661,7 +665,8 @@ class Simulation:
         energies) and the energies of all."""
         if self.single is None:
             if self._frame[0] is not self.state:
-                self._frame = (self.state, system_frame(self.system, self.state, self.moorings))
+                frame = system_frame(self.system, self.state, self.moorings)
+                self._frame = (self.state, replace(frame, gauges=self.gauges.read(self.water, self.state.t)))
             return self._frame[1]
         frame = self._checked()
         if self.moorings is not None and not frame.lines:  # asked of MoorDyn node by node (126 calls): only for a frame shown
@@ -680,7 +685,7 @@ class Simulation:
             if j is not None and j.kind != "fixed":
                 reading = joint_reading(self.system.joints[0].name, self._law, self.joint_theta, j.rate(self.body, s), self.pto_energy)
                 readings.update(joints=(reading,), joint_axes=(((j.pivot if j.kind == "revolute" else j.x0), j.axis),))
-            self._frame = (key, of_body(body, s.t, E_rad=s.E_rad, **readings))
+            self._frame = (key, of_body(body, s.t, E_rad=s.E_rad, gauges=self.gauges.read(self.water, s.t), **readings))
         return self._frame[1]
 
     def parts(self) -> list[Frame]:

@@ -21,7 +21,8 @@ from sim.hydro.hydrostatics import describe_rest
 from sim.hydro.radiation import misfit_note
 from sim.io import netcdf
 from sim.limits import MAX_HOURS, SETUP_NOTE_SECONDS, duration, step_time
-from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, scene_cost, with_overrides
+from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, scene_cost, validate, with_overrides
+from sim.scene.gauges import added
 from sim.simulation import Simulation, SimulationDiverged
 
 from . import FROM_SCENE, declared_flags, overrides
@@ -69,6 +70,8 @@ class _RunBase:
     """Refuse a run of more steps than this (t_end / dt): a typo such as --dt 1e-30 would run for ever."""
     max_hours: float = MAX_HOURS
     """Refuse a run estimated to take longer than this on one core (its bodies' samples and degrees of freedom, its steps)."""
+    gauge: Annotated[tuple[tuple[float, float], ...], tyro.conf.UseAppendAction, tyro.conf.arg(metavar="X Y")] = ()
+    """A wave gauge at (X, Y), m, repeatable: a column eta_gN of the water's elevation there (besides the scene's [[gauges]])."""
 
 
 RunArgs = declared_flags("RunArgs", _RunBase, PARAMS.values())
@@ -83,6 +86,8 @@ def scene_from_args(args: RunArgs) -> SceneConfig:
     given = overrides(args, PARAMS.values())
     if given.get("body__mesh"):  # a path typed here is the shell's, not the scene file's folder's
         given["body__mesh"] = str(Path(given["body__mesh"]).expanduser().absolute())
+    if args.gauge:
+        scene = validate(dataclasses.replace(scene, gauges=added(scene.gauges, args.gauge)))
     return with_overrides(scene, **given, initial__position=position, initial__orientation=args.q0, initial__velocity=args.u0,
                           initial__omega=args.omega0)  # fmt: skip
 

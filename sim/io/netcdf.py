@@ -70,6 +70,10 @@ def describe(column: str, table: dict = UNITS) -> tuple[str, str]:
         return table[column]
     if column.startswith("T_fair_"):
         return "N", f"tension at fairlead {column[7:]}"
+    if column.startswith("eta_"):
+        return "m", f"water surface elevation at gauge {column[4:]}"
+    if column.startswith("record_"):
+        return "m", f"measured record at gauge {column[7:]} (its mean removed)"
     for known in sorted(table, key=len, reverse=True):
         if column.endswith("_" + known):
             units, name = table[known]

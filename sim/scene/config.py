@@ -26,6 +26,7 @@ from sim.limits import JOINT_DOFS, Cost, check_cost, check_samples
 from sim.lines.moorings import SURFACE, check_start, lines_of, moored
 from sim.parameters import Param
 from sim.scene.farm import expand
+from sim.scene.gauges import Gauge, check_gauges, parse_gauges
 from sim.water.records import measured, peak_period
 from sim.water.seas import ramp_seconds, wavenumber
 
@@ -290,6 +291,8 @@ class SceneConfig:
     """[farm]: copies of the device on a grid; validation lays them out as [[bodies]] and sets it back to one (scene/farm.py)."""
     bodies: tuple[BodyEntry, ...] = ()
     """[[bodies]]: several bodies on joints (system/tree.py); empty: the one body of [body], [initial], [constraint]."""
+    gauges: tuple[Gauge, ...] = ()
+    """[[gauges]]: points where the run writes the water's elevation (scene/gauges.py)."""
     base_dir: str = "."
     """Folder that relative mesh paths are resolved against (the scene file's)."""
 
@@ -345,6 +348,8 @@ def _from_dict(data: dict, where: str) -> SceneConfig:
             if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
                 raise ConfigError(f"{where}: bodies must be an array of tables ([[bodies]])")
             value = tuple(_body_entry(v, f"{where} [[bodies]] #{i + 1}") for i, v in enumerate(value))
+        elif key == "gauges":
+            value = parse_gauges(value, where)
         elif key in SECTION_TYPES:
             if not isinstance(value, dict):
                 raise ConfigError(f"{where}: [{key}] must be a table")
@@ -476,6 +481,7 @@ def validate(scene: SceneConfig, grown_by: str = "the [[bodies]] (fewer, or fewe
     if checked["fluid"].g == 0.0 and (checked["waves"].kind != "still" or checked["fluid"].radiation != "none" or moored(scene)):
         raise ConfigError("waves, radiation and mooring lines need gravity: g = 0 (a torque-free body, say) is for still water alone")
     _check_steepness(checked["waves"], checked["fluid"].g, scene.base_dir)
+    gauges = check_gauges(scene.gauges, checked["waves"].kind == "record", checked["waves"].record_point)
     if checked["waves"].kind == "record" and any(checked["water"].current):
         raise ConfigError("a measured record with a current is not modelled (the record's frequencies would be met, not intrinsic): "
                           "set [water] current = [0, 0]")  # fmt: skip
@@ -505,7 +511,7 @@ def validate(scene: SceneConfig, grown_by: str = "the [[bodies]] (fewer, or fewe
         raise ConfigError('[fluid] bem_file is for scenes of [[bodies]] (one entry for one body) with radiation = "bem"')
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":
         raise ConfigError('diffraction comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
-    checked = dataclasses.replace(scene, **checked)
+    checked = dataclasses.replace(scene, **checked, gauges=gauges)
     if not scene.bodies and checked.constraint.start is not None:
         raise ConfigError("[constraint] start is for a [[bodies]] entry for now: one body starts where [initial] puts it")
     if not scene.bodies and checked.constraint.joint == "planar":

@@ -75,6 +75,9 @@ class Readings:
     E_total + E_pto + E_lines + D_lines is conserved in still water without damping, drag or radiation."""
     E_rad: float = 0.0
     """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
+    gauges: tuple = ()
+    """Each wave gauge's (name, eta, record or None): the sea's elevation at it, m, and a measured record's there
+    (scene/gauges.py), in the scene's order."""
 
     @property
     def E_pto(self) -> float:
@@ -196,6 +199,7 @@ class Frame(Readings):
         twist; each joint's coordinate, rate, take-off power and energy; the lines' pull; the energies. Then E_lines and
         D_lines where the lines' energy is counted."""
         lines = ["E_lines", "D_lines"] if self.line_energy else []
+        lines += [c for name, _, record in self.gauges for c in (f"eta_{name}", *((f"record_{name}",) if record is not None else ()))]
         if self.alone:
             return list(CSV_COLUMNS) + lines
         cols = ["t"]
@@ -214,14 +218,19 @@ class Frame(Readings):
             return [self.t, *b.x_world, *b.q_world_body, *b.u_world, *b.omega_world, *b.L_world, *b.force_world, *b.torque_world,
                     b.E_kin, b.E_grav, b.E_hyd, self.E_total, b.submerged_area, b.submerged_volume, b.eta, self.E_rad,
                     b.E_hyd_of_model, b.P_diff, *self.mooring_force, float(self.fairlead_tensions.max(initial=0.0)), self.P_pto, self.E_pto,
-                    self.F_pto, *self.line_energy]  # fmt: skip
+                    self.F_pto, *self.line_energy, *self.gauge_values]  # fmt: skip
         out = [self.t]
         for b in self.bodies:
             out += [*b.x_world, *b.q_world_body, *b.u_world, *b.omega_world]
         for _, *values in self.joints:
             out += values
         energies = [self.E_kin, self.E_grav, self.E_hyd, self.E_spring, self.E_pto, self.E_total, self.E_rad]
-        return out + [*self.mooring, *energies, *self.line_energy]
+        return out + [*self.mooring, *energies, *self.line_energy, *self.gauge_values]
+
+    @property
+    def gauge_values(self) -> list[float]:
+        """The gauges' columns' values: each one's eta, and its record where it has one."""
+        return [v for _, eta, record in self.gauges for v in (eta, *((record,) if record is not None else ()))]
 
 
 def of_body(body: BodyFrame, t: float, **readings) -> Frame:

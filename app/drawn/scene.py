@@ -14,6 +14,7 @@ import viser
 
 import sim
 from app.drawn.camera import Follower
+from app.drawn.gauges import GaugesView
 from app.drawn.hull import HULL_HZ, HullView
 from app.drawn.markers import MarkersView
 from app.drawn.tension import THICKNESS, TensionLegend, TensionScale, segment_colours
@@ -163,6 +164,7 @@ class SceneView:
         """The lines' colour bar in the panel (a recording keeps no panel)."""
         self.joint = None
         self._joint_of = None  # the joints' axes the node shows
+        self.gauges = GaugesView(server, radius, root=ROOT)
         self._place(parts or (Part("body", body, None),))
 
     def _place(self, parts) -> None:
@@ -204,6 +206,7 @@ class SceneView:
                 nodes.show(part, snap.water, snap.params, now, sent)
             self._show_lines(run.lines, run.line_tensions, frame.t, now, frame.x_world)
             self._show_joint(run.joint_axes)
+            self.gauges.show(run.gauges, now, self.layers.water.value)
             if self.follower is not None:
                 self.follower.step(self.root, frame.x_world, now)
 

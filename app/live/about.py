@@ -16,7 +16,7 @@ viscous damping (and drag, waves and radiation when a scene asks), gravity at it
 - **Red arrow**: the net force, 1 m = the body's weight. **Green arrow**: the net torque, 1 m = weight × the body's radius.
 - **B**: centre of buoyancy; **M**: metacentre; **yellow line**: the waterline (the grey-blue hull is under water). G is the centre of mass (Layers: show body axes): a small heel rights itself when **GM > 0** (M above G) and grows when GM < 0.
 - **Sliders** change the physics live (density: how deep it floats; damping: how fast motion dies out); **Reset** starts again with them.
-- **The sea** is lighter on crests and slopes facing the light; **Follow body** (View) keeps the body in view, **Reset view** the starting camera.
+- **The sea** is lighter on crests and slopes facing the light; **orange balls** are the scene's wave gauges ([[gauges]]), labelled with the elevation there; **Follow body** (View) keeps the body in view, **Reset view** the starting camera.
 - **Record** keeps the run as one HTML page anyone can replay offline; **Your body** loads your own mesh; **Copy link** shares this setup."""
 
 

@@ -76,8 +76,8 @@ class Readings:
     E_rad: float = 0.0
     """Energy carried away by the radiated waves so far, J (E_total + E_rad is conserved without damping and drag)."""
     gauges: tuple = ()
-    """Each wave gauge's (name, eta, record or None): the sea's elevation at it, m, and a measured record's there
-    (scene/gauges.py), in the scene's order."""
+    """Each wave gauge's (name, x, y, eta, record or None): where it stands, the sea's elevation there, m, and a
+    measured record's (scene/gauges.py), in the scene's order."""
 
     @property
     def E_pto(self) -> float:
@@ -199,7 +199,7 @@ class Frame(Readings):
         twist; each joint's coordinate, rate, take-off power and energy; the lines' pull; the energies. Then E_lines and
         D_lines where the lines' energy is counted."""
         lines = ["E_lines", "D_lines"] if self.line_energy else []
-        lines += [c for name, _, record in self.gauges for c in (f"eta_{name}", *((f"record_{name}",) if record is not None else ()))]
+        lines += [c for name, *_, record in self.gauges for c in (f"eta_{name}", *((f"record_{name}",) if record is not None else ()))]
         if self.alone:
             return list(CSV_COLUMNS) + lines
         cols = ["t"]
@@ -230,7 +230,7 @@ class Frame(Readings):
     @property
     def gauge_values(self) -> list[float]:
         """The gauges' columns' values: each one's eta, and its record where it has one."""
-        return [v for _, eta, record in self.gauges for v in (eta, *((record,) if record is not None else ()))]
+        return [v for *_, eta, record in self.gauges for v in (eta, *((record,) if record is not None else ()))]
 
 
 def of_body(body: BodyFrame, t: float, **readings) -> Frame:

@@ -21,8 +21,9 @@ class Gauges:
         return float(np.interp(t % self._times[-1], self._times, self._values))
 
     def read(self, water, t: float) -> tuple:
-        """((name, eta, record or None), ...) at time t in `water` (the running sea)."""
+        """((name, x, y, eta, record or None), ...) at time t in `water` (the running sea)."""
         if not self.names:
             return ()
         eta = water.elevation(self.xy, t)
-        return tuple((name, float(e), self.record_at(t) if at else None) for name, e, at in zip(self.names, eta, self.at_record))
+        return tuple((name, float(x), float(y), float(e), self.record_at(t) if at else None)
+                     for name, (x, y), e, at in zip(self.names, self.xy, eta, self.at_record))  # fmt: skip

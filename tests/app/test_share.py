@@ -5,6 +5,7 @@ reason, and setup links that round-trip."""
 from __future__ import annotations
 
 import base64
+import dataclasses
 import re
 
 import numpy as np
@@ -19,6 +20,7 @@ from app.recording.take import Take, shot_of
 from sim import ConfigError, FluidConfig, Model, Simulation, StillWater, load_scene, with_overrides
 from sim.bodies.rotation import matrix_to_quat, quat_to_matrix
 from sim.hydro.forces import pressure
+from sim.scene.gauges import Gauge
 from sim.system.frame import CSV_COLUMNS
 
 
@@ -281,3 +283,28 @@ def test_viewer_takes_a_mesh_from_the_command_line_and_floats_it(tmp_path):
         assert app.loop.sim.scene.initial.position[2] == pytest.approx(z_rest + 0.125, abs=1e-9)
     finally:
         app.stop()
+
+
+def test_the_gauges_stand_on_the_sea_with_their_elevation_written_beside():
+    """The waves preset with two gauges: a marker at each, at (x, y, eta) of the sea at the frame's time, labelled with
+    its name and elevation to the centimetre; hidden with the water (the layer off), shown again with it."""
+    scene = load_scene("waves")
+    scene = dataclasses.replace(scene, gauges=(Gauge("near", 0.0, 0.0), Gauge("far", 12.0, -3.0)))
+    sim = Simulation(scene, backend="numpy")
+    sim.step(4000)  # 20 s: the sea is up
+    layers = FixedLayers.of()
+    with private_server() as server:
+        view = SceneView(server, layers, sim.body, waves=True, replay=True)
+        view.show(shot_of(sim), now=0.0)
+        t = sim.frame().t
+        heights = []
+        for name, x, y in (("near", 0.0, 0.0), ("far", 12.0, -3.0)):
+            eta = float(sim.water.elevation(np.array([x, y]), t))
+            sphere, label, text = view.gauges.nodes[name]
+            np.testing.assert_allclose(sphere.position, [x, y, eta], atol=1e-12)
+            assert text == f"{name}: {eta:+.2f} m" and sphere.visible
+            heights.append(eta)
+        assert max(map(abs, heights)) > 0.02 and abs(heights[0] - heights[1]) > 0.005  # a sea up, and not the same there
+        layers.water.value = False
+        view.show(shot_of(sim), now=1.0)
+        assert not any(sphere.visible for sphere, _, _ in view.gauges.nodes.values())

@@ -86,25 +86,27 @@ from SYSTEM_STEP, so that a scene compiles only the loop it runs."""
 
 
 def spec_of(model, scheme: str) -> Spec:
-    """The specialisation a forces.Model stepped by `scheme` needs. Terms linear in the twist are cheap to
-    compile and vanish exactly with their coefficient, so they are always in: a scene whose damping goes
-    from 0 to 100 keeps its kernels; a nonlinear one (drag) is compiled only where used, or where the scheme takes it
-    as any other load (compiled_terms)."""
+    """The specialisation a forces.Model stepped by `scheme` needs. Every compiled term is in (compiled_terms): a linear
+    one vanishes exactly with its coefficient, and the nonlinear one (drag) is skipped at run time where its
+    coefficient is zero (forces.nonlinear_acting): a scene whose damping or drag goes from 0 to 100 keeps its kernels."""
     water = model.water
-    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names, scheme), not water.flat, model.radiation is not None, water.flat and not water.at_rest,
+    return Spec(scheme, model.fluid.forces, compiled_terms(model.term_names, scheme, every=model.held is None), not water.flat, model.radiation is not None, water.flat and not water.at_rest,
                 model.held is not None)  # fmt: skip
 
 
-EVERY_TERM = ("euler", "rk4")
-"""The schemes whose step takes each twist load as it comes (no modes, no relinearisation): their kernels compile every
-term, drag too, as drag at a zero coefficient adds exactly nothing (its loop is skipped): one specialisation a scheme
-serves a scene with drag and without (issue 57: fewer compiles)."""
+EVERY_TERM = ("euler", "splitting", "implicit", "rk4")
+"""The schemes whose kernels compile every term, drag too: all of them. Drag at a zero coefficient adds exactly nothing
+(its loop is skipped), and the implicit and splitting steps choose their linear path (exact modes) at run time when it
+is zero (forces.nonlinear_acting): one specialisation a scheme serves a scene with drag and without (issue 57: fewer
+compiles; the waves and storm presets share theirs). Not a moored step's (its held loads) nor a system's bodies' loads:
+drag's code would cost their compile 3-7 s of CPU (moored-buoy 27 s to 34 s) and no preset of theirs shares."""
 
 
-def compiled_terms(used, scheme: str = "implicit") -> tuple[str, ...]:
+def compiled_terms(used, scheme: str = "implicit", every: bool = True) -> tuple[str, ...]:
     """The terms kernels compile for a scene using the terms `used` stepped by `scheme`: every linear one, and the
-    nonlinear ones used (every one for EVERY_TERM's schemes)."""
-    every = scheme in EVERY_TERM
+    nonlinear ones used; every one for EVERY_TERM's schemes unless `every` is False (a moored step's, a body's loads
+    in a system's: see EVERY_TERM)."""
+    every = every and scheme in EVERY_TERM
     return tuple(t.name for t in forces.TERMS if t.name in COMPILED_TERMS and (t.linear or every or t.name in used))
 
 

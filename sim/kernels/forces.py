@@ -59,8 +59,8 @@ def nonlinear_loads(x, R, u, w, model, s, need_D):
 
 @njit(inline="always", **JIT)
 def nonlinear_acting(model):
-    """Whether a nonlinear twist term acts: kernels.EVERY_TERM's schemes compile drag for scenes without it too, where
-    its coefficient is zero and it is skipped."""
+    """Whether a nonlinear twist term acts: every scheme's kernels compile drag (kernels.EVERY_TERM), scenes without it
+    too, where its coefficient is zero: skipped then, and the implicit and splitting steps take their linear path."""
     return HAS_NONLINEAR and (USED & DRAG) != 0 and model.coef[C_DRAG] != 0.0
 
 
@@ -93,7 +93,7 @@ def linearised(x, R, u, w, model, F, T, D, wet, s):
     f[3:] = T
     if wet and USED & DAMPING:
         f += s.ws[4]
-    if not HAS_NONLINEAR or not wet:
+    if not nonlinear_acting(model) or not wet:
         return f, D
     Fn, Tn, Dn = nonlinear_loads(x, R, u, w, model, s, True)
     for i in range(6):

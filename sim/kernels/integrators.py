@@ -12,13 +12,12 @@ import numpy as np
 
 from sim.dynamics.integrators import RELINEARISE, RELINEARISE_TOL
 
-from .forces import linearised, pose_loads, twist_loads
+from .forces import linearised, nonlinear_acting, pose_loads, twist_loads
 from .jit import JIT, njit
 from .modes import damping_modes, exact_modes, mat6v
 from .radiation import derivative_extra, frames, from_scaled, general_modes, memory_load, to_scaled
 from .radiation import kick as rad_kick
 from .rotation import mtv, mv, normalized, quat_multiply, quat_to_matrix
-from .spec import HAS_NONLINEAR
 from .state import angular_velocity
 
 
@@ -168,7 +167,7 @@ def relinearised_flow(x, R, u, L, h, model, F, T, D, wet, s, rad):
     """integrators.linear_flow with nonlinear twist terms (drag): linearised about the end twist of the
     half step, found by fixed-point iteration from the start twist."""
     un, Ln = _flow_about(x, R, u, L, u, L, h, model, F, T, D, wet, s, rad)
-    if not HAS_NONLINEAR or not wet:
+    if not nonlinear_acting(model) or not wet:
         return un, Ln
     inertia = model.inertia
     scale = math.sqrt(max(inertia[0], inertia[1], inertia[2]) / model.mass)

@@ -13,7 +13,7 @@ import numpy as np
 
 from sim.bodies.body import make_box
 
-from .forces import pose_loads, twist_loads
+from .forces import nonlinear_acting, pose_loads, twist_loads
 from .integrators import (
     damped_kick,
     derivative,
@@ -32,7 +32,7 @@ from .layout import COEF_SIZE, HELD, Model, Scratch
 from .radiation import drift_memory, frames
 from .rotation import normalized, quat_multiply, quat_to_matrix, rotation_quat
 from .simulation import linearised_loads, observe
-from .spec import EULER, GENERAL_TWIST, HAS_NONLINEAR, HOLDING, IMPLICIT, MOVING, RADIATING, SCHEME, SPEC, SPLITTING, WAVES
+from .spec import EULER, HOLDING, IMPLICIT, MOVING, RADIATING, SCHEME, SPEC, SPLITTING, WAVES
 from .state import angular_velocity
 from .surface import exact_hydrostatic_energy, workspace
 
@@ -59,7 +59,7 @@ def start(y, t, dt, model, s, sea, rad):
     F, T, D, wet = pose_loads(y[0:3], R, t, model, s, sea)
     K = modes(D, R, model.mass, model.inertia, rad, WS)
     lam, V = np.zeros(6), np.eye(6)
-    if wet and SCHEME == IMPLICIT and not HAS_NONLINEAR:
+    if wet and SCHEME == IMPLICIT and not nonlinear_acting(model):
         lam, V = exact_modes(K, 0.5 * dt)
     return R, F, T, D, wet, K, lam, V, WS
 
@@ -109,15 +109,16 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
     mem, e_rad = (y[13:-1], y[-1]) if rad is not None else (y[:0], 0.0)
     h = 0.5 * dt
     un, Ln = u, L
+    general = MOVING or nonlinear_acting(model)  # drag at a zero coefficient: the linear path, as a spec without it
     if rad is None:  # a literal test on the argument: numba compiles each case apart
-        if wet and GENERAL_TWIST:
+        if wet and general:
             un, Ln = general_twist_flow(x, R, un, Ln, h, model, D, s, rad)
         elif wet:
             un, Ln = twist_flow(K, R, un, Ln, h, mass, inertia, rad, WS)
         un, Ln = kick(rad, R, un, Ln, F, T, h, mass, inertia)
     else:
         Fk, Tk = with_memory(rad, R, F, T, mem, t, x)
-        if wet and not GENERAL_TWIST:
+        if wet and not general:
             un, Ln = damped_kick(K, WS, R, un, Ln, Fk, Tk, h, inertia, True)
         else:
             if wet:
@@ -126,14 +127,14 @@ def splitting_step(y, t, dt, carry, model, s, sea, rad):
     xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn = _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS)
     if rad is None:
         un, Ln = kick(rad, Rn, un, Ln, Fc, Tc, h, mass, inertia)
-        if wetn and GENERAL_TWIST:
+        if wetn and general:
             un, Ln = general_twist_flow(xn, Rn, un, Ln, h, model, Dn, s, rad)
         elif wetn:
             K = modes(Dn, Rn, mass, inertia, rad, WS)
             un, Ln = twist_flow(K, Rn, un, Ln, h, mass, inertia, rad, WS)
     else:
         Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt, xn)
-        if wetn and not GENERAL_TWIST:
+        if wetn and not general:
             K = modes(Dn, Rn, mass, inertia, rad, WS)
             un, Ln = damped_kick(K, WS, Rn, un, Ln, Fk, Tk, h, inertia, False)
         else:
@@ -154,14 +155,15 @@ def implicit_step(y, t, dt, carry, model, s, sea, rad):
     h = 0.5 * dt
     affine = s.ws[4]
     Fk, Tk = with_memory(rad, R, F, T, mem, t, x)
-    if HAS_NONLINEAR:
+    relinearise = nonlinear_acting(model)  # drag at a zero coefficient: the linear path, as a spec without it
+    if relinearise:
         un, Ln = relinearised_flow(x, R, u, L, h, model, Fk, Tk, D, wet, s, rad)
     else:
         Fa, Ta = (Fk + affine[:3], Tk + affine[3:]) if MOVING else (Fk, Tk)
         un, Ln = linear_flow(K, lam, V, R, u, L, Fa, Ta, h, mass, inertia, wet, rad, WS)
     xn, qn, Rn, memn, e_radn, WS, Fc, Tc, Dn, wetn = _drift(x, q, R, un, Ln, mem, e_rad, t, dt, model, s, sea, rad, WS)
     Fk, Tk = with_memory(rad, Rn, Fc, Tc, memn, t + dt, xn)
-    if HAS_NONLINEAR:
+    if relinearise:
         un, Ln = relinearised_flow(xn, Rn, un, Ln, h, model, Fk, Tk, Dn, wetn, s, rad)
     else:
         if wetn:  # the same modes serve the next step's first half, at this pose

@@ -46,5 +46,5 @@ WET_TERMS = sum(bit(t.name) for t in TERMS if t.name != "gravity")  # as forces.
 NONLINEAR = sum(bit(t.name) for t in TERMS if t.twist and not t.linear)
 """Twist terms whose load is not affine in the twist: relinearised by the implicit scheme."""
 HAS_NONLINEAR = bool(USED & NONLINEAR)
-GENERAL_TWIST = MOVING or HAS_NONLINEAR
-"""Whether splitting's twist flow takes the general path: the water's motion makes damping affine, drag is nonlinear."""
+"""Whether the nonlinear terms' code is compiled (always, kernels.EVERY_TERM); whether it acts is decided at run time
+(forces.nonlinear_acting: a zero drag coefficient takes the linear paths)."""

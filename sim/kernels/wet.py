@@ -14,7 +14,15 @@ from .layout import RHO, G, Wet
 from .rotation import mv, rotate_tensor
 from .spec import CELLS, CURRENT, DAMPING, DRAG, MODEL, PANELS, POINTS, PRESSURE, TWIST_TERMS, USED, WAVES
 from .surface import DUNAVANT4, DUNAVANT4_WEIGHTS, clip, vertex_levers, wet_cells, wet_panels, wet_points, wet_triangles, world_normal
+from .terms import C_DRAG
 from .water import cluster_ex, clusters, elevations, fields, prepare
+
+
+@njit(inline="always", **JIT)
+def drag_on(coef):
+    """Whether drag acts: its code is compiled always (kernels.EVERY_TERM), the wet triangles and the water's velocity
+    it reads are made only at a nonzero coefficient (the panels model would pay for them every step)."""
+    return (USED & DRAG) != 0 and coef[C_DRAG] != 0.0
 
 
 @njit(**JIT)
@@ -53,9 +61,9 @@ def wet_surface(x, R, t, model, s, sea):
     if CURRENT:  # the integral of the uniform current over the wet surface, and its torque S x U
         flow[0], flow[1] = A * U[0], A * U[1]
         flow[3], flow[4], flow[5] = -S[2] * U[1], S[2] * U[0], S[0] * U[1] - S[1] * U[0]
-        if USED & DRAG and MODEL != PANELS:  # drag reads the water's velocity at each sample
+        if drag_on(coef) and MODEL != PANELS:  # drag reads the water's velocity at each sample
             s.ws[0][:, 0], s.ws[0][:, 1] = U[0], U[1]
-    if MODEL == PANELS and USED & DRAG and A > 0.0:
+    if MODEL == PANELS and drag_on(coef) and A > 0.0:
         wet_triangles(x, R, geom[3], geom[4], geom[5], s.ws, U)
     return Wet(p, A, S, rr, flow)
 
@@ -217,7 +225,7 @@ def wave_panels(x, R, t, sea, geom, coef, ws, load):
             _vertex_heights(x, sea, ex, lev, faces, order[spans[nd, 0] : spans[nd, 1]], hv, known, scratch)
         wet_count = _part_panels(x, R, sea, ex, geom, coef, order[spans[nd, 0] : spans[nd, 1]], cut[1][c] == 2, lev, hv, scratch, ws, load,
                                  sums, wet_count)  # fmt: skip
-    if USED & DRAG:
+    if drag_on(coef):
         ws[3][0] = wet_count
     rr = np.empty((3, 3))
     for i in range(3):
@@ -292,7 +300,7 @@ def _part_panels(x, R, sea, ex, geom, coef, faces_of_part, all_wet, lev, hv, scr
         area = 0.5 * ((e11 * e22 - e12 * e21) * nx + (e12 * e20 - e10 * e22) * ny + (e10 * e21 - e11 * e20) * nz)
         _add_moments(t, area, sums)
         _triangle_load(x, nodes, out, 6 * k, area, nx, ny, nz, pressure_on, d, load, ws[5])
-    if USED & DRAG:  # the wet triangles and the water's velocity at their vertices
+    if drag_on(coef):  # the wet triangles and the water's velocity at their vertices
         corners = np.empty((3 * m, 3))
         for k in range(m):
             for v in range(3):

@@ -25,9 +25,10 @@ class BodyLoads:
     @property
     def spec(self):
         """The kernels.Spec of this body's loads."""
-        from sim.kernels import spec_of  # numba's import (0.6 s): only where compiled kernels run
+        from sim.kernels import compiled_terms, spec_of  # numba's import (0.6 s): only where compiled kernels run
 
-        return spec_of(self.model, "implicit")._replace(radiating=False, held=False, system=True)
+        terms = compiled_terms(self.model.term_names, "implicit", every=False)  # (kernels.EVERY_TERM: not a system's loads)
+        return spec_of(self.model, "implicit")._replace(terms=terms, radiating=False, held=False, system=True)
 
     @property
     def has_twin(self) -> bool:

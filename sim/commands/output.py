@@ -154,6 +154,11 @@ class NetcdfFile:
     def row(self, values) -> None:
         self._rows.append(values)
 
+    @property
+    def rows(self) -> int:
+        """The rows collected so far."""
+        return len(self._rows)
+
     def close(self) -> None:
         if not self._open:
             return

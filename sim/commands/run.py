@@ -163,7 +163,7 @@ def written_by_run(path: Path) -> bool:
     except OSError:
         return False
     first = head.split(b"\n", 1)[0].split(b",")
-    netcdf_run = head.startswith(b"CDF") and b"floatsim_scene" in head  # a netCDF3 file's attribute names are in its header
+    netcdf_run = head.startswith(b"CDF") and (b"floatsim_scene" in head or b"floatsim_sweep" in head)  # (its attributes' names)
     return not head or netcdf_run or (first[0] == b"t" and any(c.endswith(b"E_total") for c in first))
 
 
@@ -412,6 +412,8 @@ def data_rows(out: LineFile | NetcdfFile | None) -> int:
 
 
 def kept_rows(out: LineFile | NetcdfFile) -> str:
+    if isinstance(out, NetcdfFile) and not out.lines:
+        return f"its {out.rows} rows were not written; the file under that name is as it was"
     if not out.lines:
         return "kept nothing: the file is empty"
     return f"kept the header and {data_rows(out)} whole rows; the file ends with the last of them"

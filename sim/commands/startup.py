@@ -113,8 +113,9 @@ def startup(presets: tuple[str, ...], t_end: float) -> int:
               f"warm {warm.wall:.1f} s", file=sys.stderr, flush=True)  # fmt: skip
 
     print(f"machine: {machine()}")
-    if len(names) > 1:
-        print(together(names, float(rows[0][3])))
+    compiled = [(name, float(row[3])) for name, row in zip(names, rows) if float(row[3]) > 0]
+    if len(compiled) > 1:
+        print(together(tuple(name for name, _ in compiled), compiled[0][1]))
     print(f"`python -m sim run --scene NAME --t-end {t_end:g}` in a fresh process. cold: an empty kernel cache; compile: the kernels "
           "the preset needs, into that cache, in a fresh process (what the viewer and a longer run wait for), wall and CPU; warm: "
           "the run again; most CPU: the kernels whose own compile took the most (their callees' apart)")  # fmt: skip

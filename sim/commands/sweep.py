@@ -30,6 +30,7 @@ from sim.sweeps.grid import BODY_VARIABLE, START, VARIABLE, Sweep, case_scene, c
 from .interrupt import EXIT, StopOnCtrlC
 from .output import reason, temporaries, write_whole
 from .progress import progress_bar
+from .run import check_output
 
 MANIFEST = "_manifest.json"
 """Names starting with '_' are skipped by pyarrow/pandas when reading the folder as one table."""
@@ -200,10 +201,7 @@ def check_size(sweep: Sweep) -> None:
 
 
 def sweep(args: SweepArgs) -> int:
-    if args.netcdf is not None:
-        if Path(args.netcdf).suffix.lower() != ".nc":
-            raise ConfigError(f"--netcdf must name a .nc file, got {args.netcdf!r}")
-        netcdf.check_extra()
+    check_output(args.netcdf, flag="netcdf", suffix=".nc", overwrite=False)  # (an earlier run's netCDF is replaced; no other file)
     spec = build(args)
     backend = "dask" if args.scheduler else args.backend
     base = spec.base()

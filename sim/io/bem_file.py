@@ -34,7 +34,7 @@ from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
 from sim.io.capytaine_nc import read_capytaine
 from sim.io.wamit import read_out
-from sim.io.wamit_numeric import Assumed, columns_of, read_numeric, stiffness
+from sim.io.wamit_numeric import Assumed, beside, columns_of, read_numeric, stiffness
 from sim.water.records import record_path
 from sim.water.seas import Waves, wavenumber
 
@@ -53,14 +53,16 @@ def bem_file_path(name: str, base_dir: str) -> Path:
 
 def kind_of(path: Path) -> str:
     """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "netcdf" (a Capytaine
-    dataset, netCDF3 or 4), "numeric" (one of WAMIT's numeric files: rows of 3, 4, 5 or 7 numbers) or "out" (else:
-    WAMIT's output, which says so itself when it is not)."""
+    dataset, netCDF3 or 4), "out" (WAMIT's output: its header's words), "numeric" (one of WAMIT's numeric files: rows of
+    3, 4, 5 or 7 numbers) or, else, "out" (whose reader says what is wrong)."""
     with open(path, "rb") as f:
-        head = f.read(4)
+        head = f.read(65536)
     if head[:2] == b"PK":
         return "npz"
-    if head[:3] == b"CDF" or head == b"\x89HDF":
+    if head[:3] == b"CDF" or head[:4] == b"\x89HDF":
         return "netcdf"
+    if any(word in head for word in (b"Gravity:", b"Wave period", b"POTEN run date")):
+        return "out"
     return "numeric" if columns_of(path) in (3, 4, 5, 7) else "out"
 
 
@@ -101,11 +103,11 @@ def _from_wamit(path: Path, models: list, starts: list, fluid, water) -> Coeffic
         run = read_out(path, fluid.rho)
     else:
         assumed = Assumed(fluid.g, water.depth if water is not None else math.inf, np.array([s.x_world for s in starts]))
-        run, beside = read_numeric(path, fluid.rho, assumed)
-        if not beside:
+        run, has_out = read_numeric(path, fluid.rho, assumed)
+        if not has_out:
             note(f"note: {path.name} read without its .out: taken about the world's origin with ULEN = 1, the scene's g and depth "
                  "(put the run's .out beside it to have them checked)")  # fmt: skip
-        _check_stiffness(path.with_suffix(".hst"), stiffness(path, run, fluid.rho), models, starts, fluid)
+        _check_stiffness(beside(path, ".hst"), stiffness(path, run, fluid.rho), run.gravity_centers, models, starts, fluid)
     _check_g(path, run.g, fluid)
     not_yet = np.zeros_like(run.excitation)  # (split_excitation)
     c = Coefficients(run.omega, run.added_mass, run.damping, run.added_mass_inf, fluid.rho, run.depth, run.panels, run.centers, run.headings,
@@ -119,7 +121,7 @@ def _from_capytaine(path: Path, models: list, starts: list, fluid) -> Coefficien
     c, gravity, g, C = read_capytaine(path)
     _check_g(path, g, fluid)
     if C is not None:
-        _check_stiffness(path, C, models, starts, fluid)
+        _check_stiffness(path, C, gravity, models, starts, fluid)
     return moved(_passive(path, c, models), gravity)
 
 
@@ -143,13 +145,15 @@ WATERPLANE_SLACK = 0.05
 """A WAMIT run's heave stiffness (`.hst`) and the scene body's rho g times its waterplane may differ by this fraction."""
 
 
-def _check_stiffness(path: Path, C: np.ndarray | None, models: list, starts: list, fluid) -> None:
+def _check_stiffness(path: Path, C: np.ndarray | None, centers: np.ndarray, models: list, starts: list, fluid) -> None:
     """One line unless each body's heave stiffness in the file `path` (a WAMIT `.hst`, a Capytaine dataset's) is the
-    scene's body's at rest (rho g times its waterplane): another body, draft or length scale otherwise. The bodies are
-    the file's in order."""
+    scene's body's at rest (rho g times its waterplane): another body, draft or length scale otherwise. Each scene body
+    is compared with the file's body nearest its start (`centers`, (k, 3): as `matched` takes them)."""
     if C is None or C.shape[0] != 6 * len(models):
         return
-    for b, (model, s) in enumerate(zip(models, starts)):
+    centers = np.atleast_2d(centers).reshape(-1, 3)
+    for model, s in zip(models, starts):
+        b = int(np.linalg.norm(centers - s.x_world, axis=1).argmin())
         h = hydrostatics(model.body, s.x_world, s.R_world_body)
         if h is None:
             continue

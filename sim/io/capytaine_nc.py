@@ -72,6 +72,9 @@ def read_capytaine(path: Path) -> tuple[Coefficients, np.ndarray, float, np.ndar
         hdf5 = open(path, "rb").read(4) == b"\x89HDF"
         why = "a netCDF4 (HDF5) file needs h5netcdf: pip install h5netcdf" if hdf5 else str(e).splitlines()[0]
         raise ConfigError(f"{where}: cannot read it ({why})") from None
+    keyed = [d for d in ("period", "freq", "wavelength", "wavenumber") if d in ds.dims and "omega" not in ds.dims]
+    if keyed and "omega" in ds.coords:  # a solve keyed by another frequency coordinate (Capytaine allows four)
+        ds = ds.swap_dims({keyed[0]: "omega"})
     missing = [v for v in ("added_mass", "radiation_damping", "omega", "radiating_dof", "influenced_dof", "rho", "g", "water_depth")
                if v not in ds.variables]  # fmt: skip
     if missing:

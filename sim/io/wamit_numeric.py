@@ -74,6 +74,8 @@ def columns_of(path: Path) -> int:
     try:
         with open(path, errors="replace") as f:
             for n, line in zip(range(50), f):
+                if not line.split():
+                    continue  # a blank line
                 try:
                     return len([float(w) for w in line.replace("D", "E").split()])
                 except ValueError:
@@ -81,6 +83,12 @@ def columns_of(path: Path) -> int:
     except OSError:
         return 0
     return 0
+
+
+def beside(path: Path, suffix: str) -> Path:
+    """The file of the same WAMIT run as `path` with `suffix`: its whole name less its own suffix (cyl_0.5m.1 ->
+    cyl_0.5m.3, not cyl_0.3)."""
+    return path.with_name(path.stem + suffix)
 
 
 def _powers(d: int, base: int) -> np.ndarray:
@@ -92,13 +100,11 @@ def _powers(d: int, base: int) -> np.ndarray:
 def read_numeric(path: Path, rho: float, assumed: Assumed) -> tuple[WamitRun, bool]:
     """The coefficients of the WAMIT run whose `.1` (or `.3`, `.hst`) is `path`, and whether its `.out` was beside it.
     One-line ConfigError on a missing, cut or inconsistent file."""
-    stem = path.with_suffix("")
-    one, three = stem.with_suffix(".1"), stem.with_suffix(".3")
+    one, three, out = (beside(path, suffix) for suffix in (".1", ".3", ".out"))
     for need in (one, three):
         if not need.is_file():
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: WAMIT's numeric files come as {one.name} (added mass and damping) "
                               f"and {three.name} (excitation); {need.name} is not beside it")  # fmt: skip
-    out = stem.with_suffix(".out")
     meta = read_out(out, rho) if out.is_file() else None
     g = meta.g if meta else assumed.g
     L = meta.length if meta else 1.0
@@ -186,7 +192,7 @@ def stiffness(path: Path, run: WamitRun, rho: float) -> np.ndarray | None:
     """(d, d) the hydrostatic stiffness in the `.hst` beside `path` of the run `run`, N/m, N and N m (None when there is
     none)."""
     d, g, L = run.added_mass.shape[1], run.g, run.length
-    hst = path.with_suffix(".hst")
+    hst = beside(path, ".hst")
     if not hst.is_file():
         return None
     C = rows(hst, (3,))

@@ -67,6 +67,8 @@ def check_gauges(gauges: tuple[Gauge, ...], record: bool, record_point) -> tuple
         if g.name in seen:
             raise ConfigError(f"two gauges named {g.name!r}: give each its own name")
         seen.add(g.name)
+        if not (math.isfinite(g.x) and math.isfinite(g.y)):
+            raise ConfigError(f"gauge {g.name!r} at ({g.x:g}, {g.y:g}): its x and y must be finite numbers (m)")
         if g.at_record and not record:
             raise ConfigError(f'gauge {g.name!r} is at_record, but the scene\'s sea is not a measured record ([waves] kind = "record")')
         placed.append(Gauge(g.name, *map(float, record_point), True) if g.at_record else g)

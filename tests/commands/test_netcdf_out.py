@@ -105,3 +105,11 @@ def test_a_sweep_gathers_its_cases_over_its_parameters_into_one_netcdf(tmp_path)
                            capture_output=True, text=True, timeout=120)  # fmt: skip
     assert wrong.returncode == 2 and wrong.stderr.count("\n") == 1 and "--netcdf must name a .nc file" in wrong.stderr
     assert not (tmp_path / "other").exists()
+    foreign = tmp_path / "coefficients.nc"  # a netCDF floatsim did not write (a user's Capytaine solve, say): never replaced
+    foreign.write_bytes(b"CDF\x01" + bytes(100))
+    refused = subprocess.run([sys.executable, "-m", "sim", *args[:-1], str(tmp_path / "other"), "--netcdf", str(foreign)], cwd=ROOT,
+                             capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert refused.returncode == 2 and "an existing file floatsim did not write" in refused.stderr and foreign.stat().st_size == 104
+    again = subprocess.run([sys.executable, "-m", "sim", *args, "--resume", "--netcdf", str(nc)], cwd=ROOT, capture_output=True, text=True,
+                           timeout=300)  # fmt: skip
+    assert again.returncode == 0, again.stderr  # its own earlier file is replaced

@@ -78,6 +78,20 @@ def test_a_capytaine_dataset_comes_back_as_the_coefficients_it_was_written_from(
     np.testing.assert_array_equal(gravity, centers)  # no center_of_mass: the rotation centres
 
 
+def test_a_solve_keyed_by_period_reads_as_one_keyed_by_omega(tmp_path):
+    """Capytaine lets a solve be keyed by period (or freq, wavelength, wavenumber), omega then a coordinate: the same
+    coefficients come back."""
+    omega, A, B, X, headings = known(1)
+    path = capytaine_file(tmp_path / "omega.nc", omega, A, B, X, headings, np.zeros((1, 3)), ["a"])
+    with xr.open_dataset(path) as ds:
+        by_period = ds.load().assign_coords(period=("omega", 2 * np.pi / ds["omega"].values)).swap_dims({"omega": "period"})
+    by_period.to_netcdf(tmp_path / "period.nc", engine="scipy")
+    a, b = read_capytaine(path)[0], read_capytaine(tmp_path / "period.nc")[0]
+    np.testing.assert_array_equal(b.omega, a.omega)
+    np.testing.assert_array_equal(b.added_mass, a.added_mass)
+    np.testing.assert_array_equal(b.diffraction, a.diffraction)
+
+
 @pytest.mark.parametrize(
     "change, message",
     [

@@ -106,6 +106,15 @@ def test_a_numeric_run_comes_back_as_the_coefficients_it_was_written_from(tmp_pa
     assert kind_of(tmp_path / "run.1") == "numeric" and kind_of(WAMIT / "cyl.out") == "out"
 
 
+def test_a_run_whose_name_has_dots_reads_its_own_files(tmp_path):
+    """cyl_0.35m.1 reads cyl_0.35m.3 and cyl_0.35m.out, not cyl_0.3 and cyl_0.out (another run's, were they there)."""
+    for suffix in (".1", ".3", ".out"):
+        shutil.copy(WAMIT / f"cyl{suffix}", tmp_path / f"cyl_0.35m{suffix}")
+    shutil.copy(WAMIT / "ellipsoid.out", tmp_path / "cyl_0.out")  # a decoy: a deep-water run
+    run, has_out = read_numeric(tmp_path / "cyl_0.35m.1", RHO, DEEP)
+    assert has_out and run.depth == 3.0
+
+
 @pytest.mark.parametrize(
     "cut, message",
     [

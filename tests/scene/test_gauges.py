@@ -65,6 +65,7 @@ def test_a_gauge_at_a_measured_record_reads_the_record_and_the_sea_made_from_it(
         ('[[gauges]]\nname = "a"\nx = 1.0\ny = 0.0\n[[gauges]]\nname = "a"\nx = 2.0\ny = 0.0\n', "two gauges named 'a'"),
         ('[[gauges]]\nname = "1st"\nx = 1.0\ny = 0.0\n', "use a letter"),
         ("[[gauges]]\nat_record = true\n", "is not a measured record"),
+        ("[[gauges]]\nx = nan\ny = 0.0\n", "x and y must be finite numbers"),
     ],
 )
 def test_a_wrong_gauge_is_one_line(tmp_path, gauges, message):

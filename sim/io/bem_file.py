@@ -69,15 +69,16 @@ def kind_of(path: Path) -> str:
 def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coefficients:
     """The coefficients in `path` for the bodies `models` (forces.Model) starting at `starts` (their poses), with the
     excitation of the sea `water` (None: radiation only)."""
-    if kind_of(path) == "npz":
+    kind = kind_of(path)
+    if kind == "npz":
         try:
             c = Coefficients.load(path)
         except ValueError as e:
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
-    elif kind_of(path) == "netcdf":
+    elif kind == "netcdf":
         c = _from_capytaine(path, models, starts, fluid)
     else:
-        c = _from_wamit(path, models, starts, fluid, water)
+        c = _from_wamit(path, kind, models, starts, fluid, water)
     bodies = c.added_mass.shape[1] // 6
     if bodies != len(models):
         raise ConfigError(f"[fluid] bem_file {str(path)!r} holds {bodies} bodies, the scene {len(models)}: one per [[bodies]] entry")
@@ -91,15 +92,15 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coef
         if np.hypot(*(centers[b, :2] - s.x_world[:2])) > HORIZONTAL_SLACK:
             raise ConfigError(f"body {b + 1} starts at x, y = ({s.x_world[0]:g}, {s.x_world[1]:g}) m, the bem_file has its centre of "
                               f"mass at ({centers[b, 0]:g}, {centers[b, 1]:g}): place it where the file does")  # fmt: skip
-    if kind_of(path) != "npz" and c.has_excitation:
+    if kind != "npz" and c.has_excitation:
         c = split_excitation(c, models, starts, fluid)
     return c
 
 
-def _from_wamit(path: Path, models: list, starts: list, fluid, water) -> Coefficients:
+def _from_wamit(path: Path, kind: str, models: list, starts: list, fluid, water) -> Coefficients:
     """A WAMIT run's coefficients (its `.out`, or its numeric `.1` and `.3`), made reciprocal and passive and moved to
     the bodies' centres of gravity; the numeric files' hydrostatics checked against the scene's bodies."""
-    if kind_of(path) == "out":
+    if kind == "out":
         run = read_out(path, fluid.rho)
     else:
         assumed = Assumed(fluid.g, water.depth if water is not None else math.inf, np.array([s.x_world for s in starts]))

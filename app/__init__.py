@@ -1,7 +1,7 @@
 """floatsim's browser viewer (viser). Importing this package imports no viser; `app.main` does.
 
-Modules: `main` (start/serve, ViewerApp), `loop` (the simulation thread; no viser;
-the settings it shows are a view of the running scene), `controls` (GUI inputs, generated from the
-parameter declarations, that post commands), `scene` (3D nodes),
-`readouts` (numbers and plots), `soak` (long-run benchmark).
+Packages: `live` (the simulation thread, which needs no viser, and the page's controls and readouts), `drawn` (the 3D
+nodes), `recording` (takes, replays, video), `guards` (what a page may do), `tools` (the hostile campaign, bandwidth).
 """
+
+import sim  # noqa: F401  (first: `python -m app` then answers a Ctrl-C while its modules load with one line, exit 130)

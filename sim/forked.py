@@ -1,4 +1,5 @@
-"""A blocking call that Ctrl-C can stop: run in a forked child, its result handed back through a pipe.
+"""A blocking call that Ctrl-C can stop: run in a forked child, its result handed back through a pipe; and a pool of
+worker processes that Ctrl-C ends at once.
 
 A call into compiled code (MoorDyn's start-up, Capytaine's solve) runs seconds to minutes where Python's Ctrl-C does
 not reach it. In a forked child it can be ended: the parent waits on the pipe, and a KeyboardInterrupt there kills the
@@ -10,13 +11,16 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import multiprocessing
 import os
 import pickle
 import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import wait as wait_for
 
 
 class ChildDied(RuntimeError):
@@ -95,3 +99,33 @@ def die_with(parent: int) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, name="floatsim-parent-watch", daemon=True).start()
+
+
+def _leave_ctrl_c_to(parent: int) -> None:
+    """A pool worker's start: Ctrl-C is the parent's (which ends the workers), and it dies with the parent."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with(parent)
+
+
+@contextlib.contextmanager
+def worker_pool(n: int) -> Iterator[ProcessPoolExecutor]:
+    """A pool of `n` worker processes, forked where there is fork (they start with the kernels this process loaded;
+    spawned ones import again: seconds each). They leave Ctrl-C to this process and die with it; on any way out of the
+    block they are ended, not waited for (a worker's task can take seconds to minutes)."""
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_leave_ctrl_c_to,
+                               initargs=(os.getpid(),))  # fmt: skip
+    try:
+        yield pool
+    finally:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+def results(futures: list[Future], slice_seconds: float = 0.2) -> list:
+    """The futures' results in order, waited for in slices: a SIGINT that the kernel hands to another thread (the
+    pool's own) does not wake a main thread blocked on a lock, so a Ctrl-C there is only seen when it next runs."""
+    while wait_for(futures, timeout=slice_seconds).not_done:
+        pass
+    return [future.result() for future in futures]

@@ -7,6 +7,10 @@ N = 10): about 950 bytes per surface sample at its peak (0.22 GB for 240,000 sam
 Several bodies add the system's dense matrices (farm.toml with [farm] rows = columns = 14, 20, 32: 196, 400 and 1024
 degrees of freedom): a step's matrix exponential grows as n^3 (0.107 s, 0.90 s, 29 s a step; `system_step_time`), its
 set-up likewise (about a step's worth), its memory as n^2 (0.45 GB at n = 1024).
+In waves a step costs more (`--points-per-edge 100 --t-end 1`): 20-22 ns per sample (waves), 63-72 ns with drag
+(storm; waves with --drag-coefficient 1), and the first frame, taken on the numpy reference before anything compiles,
+evaluates every wave component at every sample: 60 ns per sample and component (storm, 60,000 samples in 4096
+components: 14.8 s of its 16 s set-up; 64 components: 0.2 s).
 """
 
 from __future__ import annotations
@@ -18,6 +22,13 @@ from sim.errors import ConfigError
 BYTES_PER_SAMPLE = 950
 SETUP_US_PER_SAMPLE = 7.0
 NS_PER_SAMPLE_STEP = 5.0
+"""A step in still water, ns per surface sample."""
+NS_PER_SAMPLE_STEP_WAVES = 25.0
+"""A step in waves, ns per surface sample."""
+NS_PER_SAMPLE_STEP_WAVES_DRAG = 75.0
+"""A step in waves with quadratic drag, ns per surface sample."""
+NS_PER_SAMPLE_COMPONENT = 60.0
+"""The first frame (numpy), ns per surface sample and wave component."""
 BYTES_PER_DOF2 = 430
 """The system of several bodies: bytes per (degree of freedom)^2."""
 NS_PER_DOF3 = 14.0
@@ -73,12 +84,6 @@ def check_samples(n: int, flag: str) -> None:
     check_memory(f"{n:,} surface samples", n * BYTES_PER_SAMPLE, flag)
 
 
-def step_time(samples: int, steps: int, dofs: int = 0) -> float:
-    """Estimated seconds to take `steps` steps on one core of bodies of `samples` samples in all, with `dofs` degrees of
-    freedom in a system of several bodies (0: one body)."""
-    return steps * (samples * NS_PER_SAMPLE_STEP * 1e-9 + system_step_time(dofs))
-
-
 def system_step_time(dofs: int) -> float:
     """Estimated seconds of a step of a system of `dofs` degrees of freedom, apart from its bodies' loads."""
     return NS_PER_DOF3 * 1e-9 * dofs**3 * (1.0 + dofs / 1000.0)
@@ -87,14 +92,22 @@ def system_step_time(dofs: int) -> float:
 @dataclass(frozen=True)
 class Cost:
     """What a scene's bodies cost before the first step: their surface samples and degrees of freedom in all (dofs 0:
-    one body), the estimated seconds of set-up on one core and the peak memory."""
+    one body), the sea's wave components (0: still water) and a step's ns per sample (NS_PER_SAMPLE_STEP...): the
+    estimated seconds of set-up and of the steps on one core, and the peak memory."""
 
     samples: int
     dofs: int
+    components: int = 0
+    ns_per_sample_step: float = NS_PER_SAMPLE_STEP
 
     @property
     def setup_seconds(self) -> float:
-        return self.samples * SETUP_US_PER_SAMPLE * 1e-6 + SETUP_STEPS * system_step_time(self.dofs)
+        sea = self.samples * self.components * NS_PER_SAMPLE_COMPONENT * 1e-9
+        return self.samples * SETUP_US_PER_SAMPLE * 1e-6 + sea + SETUP_STEPS * system_step_time(self.dofs)
+
+    def step_seconds(self, steps: int) -> float:
+        """Estimated seconds of `steps` steps on one core."""
+        return steps * (self.samples * self.ns_per_sample_step * 1e-9 + system_step_time(self.dofs))
 
     @property
     def memory(self) -> float:
@@ -102,7 +115,8 @@ class Cost:
 
     def describe(self) -> str:
         system = f" and {self.dofs:,} degrees of freedom" if self.dofs else ""
-        return f"{self.samples:,} surface samples{system}: about {duration(self.setup_seconds)} to set up and {size(self.memory)} of memory"
+        sea = f" in {self.components:,} wave components" if self.components > 1 else ""
+        return f"{self.samples:,} surface samples{system}{sea}: about {duration(self.setup_seconds)} to set up and {size(self.memory)} of memory"
 
 
 def check_cost(cost: Cost, flag: str) -> None:

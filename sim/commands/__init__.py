@@ -15,7 +15,7 @@ from typing import Annotated
 
 import tyro
 
-from sim.commands.interrupt import EXIT, asked_before, interrupted_by_ctrl_c, listen
+from sim.commands.interrupt import EXIT, asked_before, interrupted_by_ctrl_c, listen, settled
 from sim.errors import ConfigError
 from sim.parameters import Param
 
@@ -111,6 +111,7 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
         print(f"{prog}: {name} interrupted (Ctrl-C) before writing its results", file=sys.stderr)
         return EXIT
     finally:
+        settled()
         if argv is None and threading.current_thread() is threading.main_thread():  # the process's own command line: it ends next
             signal.signal(signal.SIGINT, signal.SIG_IGN)  # said and written: a Ctrl-C in the teardown (a Dask cluster's) changes nothing
 

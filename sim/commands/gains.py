@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from sim.control.gains import body_port, system_port
 from sim.errors import ConfigError
+from sim.forked import results, worker_pool
 from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
 
@@ -102,8 +102,8 @@ def _search_latching(scene, latch: float, reactive_damping: float, damper: float
     dampings = np.geomspace(reactive_damping, damper, 5) if damper > reactive_damping else np.array([damper])
     grid = [(L, c) for L in latches for c in dampings]
     print(f"latching: searching {len(grid)} pairs in the time domain ({SETTLE + MEASURE} wave periods each after the ramp) ...", flush=True)
-    with ProcessPoolExecutor(max_workers=min(len(grid), os.cpu_count() or 1)) as pool:
-        powers = list(pool.map(absorbed_power, [scene] * len(grid), *zip(*grid)))
+    with worker_pool(min(len(grid), os.cpu_count() or 1)) as pool:  # (Ctrl-C ends its workers at once)
+        powers = results([pool.submit(absorbed_power, scene, L, c) for L, c in grid])
     (L, c), best = max(zip(grid, powers), key=lambda pair: pair[1])
     plain = max(P for (L0, _), P in zip(grid, powers) if L0 == 0.0)
     if L == 0.0:

@@ -5,10 +5,12 @@ one: Python would report a SystemError)."""
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import signal
 import sys
 import threading
+import time
 
 from sim.errors import Interrupted
 
@@ -20,12 +22,27 @@ EXIT = 130
 _asked_before = False  # a Ctrl-C outside any loop: its KeyboardInterrupt may have been swallowed
 
 
+RESEND_SECONDS = 0.5
+"""How often a Ctrl-C that no loop has taken over yet is raised again (one a library swallowed)."""
+
+
 def ctrl_c(signum, frame) -> None:
     """A command's SIGINT handler outside its loops (commands.dispatch): KeyboardInterrupt, remembered, for a library that
-    swallows it (trimesh imports its optional modules under `except BaseException`): the next loop then stops at once."""
+    swallows it (trimesh imports its optional modules under `except BaseException`): it is raised again every
+    RESEND_SECONDS until the command ends or a loop takes Ctrl-C over (and stops at once, seeing it remembered)."""
     global _asked_before
-    _asked_before = True
+    if not _asked_before:
+        _asked_before = True
+        threading.Thread(target=_until_heard, name="floatsim-ctrl-c", daemon=True).start()
     raise KeyboardInterrupt
+
+
+def _until_heard() -> None:
+    while True:
+        time.sleep(RESEND_SECONDS)
+        if not _asked_before or signal.getsignal(signal.SIGINT) is not ctrl_c:
+            return
+        _thread.interrupt_main(signal.SIGINT)
 
 
 def listen() -> None:
@@ -36,10 +53,23 @@ def listen() -> None:
     sys.unraisablehook = quiet_unraisable
 
 
+def settled() -> None:
+    """The command has ended (said its result or its interruption): a Ctrl-C it saw is not raised again."""
+    global _asked_before
+    _asked_before = False
+
+
 def asked_before() -> bool:
     """Whether a Ctrl-C came outside any loop (its KeyboardInterrupt raised, perhaps swallowed, perhaps turned into
     another error by the code it landed in: a module left half imported)."""
     return _asked_before
+
+
+def stop_if_asked() -> None:
+    """Between a command's phases: a Ctrl-C that a library swallowed during the last one stops it here (KeyboardInterrupt),
+    not after the next (loading a scene's kernels takes seconds)."""
+    if _asked_before:
+        raise KeyboardInterrupt
 
 
 def quiet_unraisable(unraisable) -> None:

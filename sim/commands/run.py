@@ -20,13 +20,13 @@ from sim.errors import WriteFailed
 from sim.hydro.hydrostatics import describe_rest
 from sim.hydro.radiation import misfit_note
 from sim.io import netcdf
-from sim.limits import MAX_HOURS, SETUP_NOTE_SECONDS, duration, step_time
+from sim.limits import MAX_HOURS, SETUP_NOTE_SECONDS, duration
 from sim.scene.config import PARAMS, ConfigError, SceneConfig, available_scenes, load_scene, scene_cost, validate, with_overrides
 from sim.scene.gauges import added
 from sim.simulation import Simulation, SimulationDiverged
 
 from . import FROM_SCENE, declared_flags, overrides
-from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC
+from .interrupt import CHECK_SECONDS, EXIT, StopOnCtrlC, stop_if_asked
 from .output import LineFile, NetcdfFile
 from .progress import progress_bar
 
@@ -226,7 +226,7 @@ def check_budget(scene: SceneConfig, args: RunArgs) -> None:
     all before any body is built."""
     n_steps = max(0, round(scene.step.t_end / scene.step.dt))
     cost = scene_cost(scene)
-    hours = (cost.setup_seconds + step_time(cost.samples, n_steps, cost.dofs)) / 3600
+    hours = (cost.setup_seconds + cost.step_seconds(n_steps)) / 3600
     if n_steps > args.max_steps:
         raise ConfigError(f"t_end / dt = {scene.step.t_end:g} s / {scene.step.dt:g} s is {n_steps:.3g} steps, more than --max-steps "
                           f"{args.max_steps:.3g} (about {hours:.3g} h on one core): give a larger --dt, or --max-steps to run it anyway")  # fmt: skip
@@ -243,9 +243,10 @@ def _run(sim: Simulation, args: RunArgs, watch=None) -> int:
     for warning in sim.warnings():
         print(f"floatsim: warning: {warning}", file=sys.stderr)
     n_steps = max(0, round(scene.step.t_end / sim.dt))
+    stop_if_asked()  # a Ctrl-C during the set-up that a library swallowed (trimesh's imports): before the kernels load
     announce_compile(sim, n_steps)
     cost = scene_cost(scene)
-    if (seconds := step_time(cost.samples, n_steps, cost.dofs)) > 600:
+    if (seconds := cost.step_seconds(n_steps)) > 600:
         print(f"floatsim: note: about {duration(seconds)} on one core ({cost.samples:,} samples x {n_steps:,} steps); "
               "Ctrl-C stops it keeping the rows so far", file=sys.stderr)  # fmt: skip
     first = sim.frame()

@@ -338,7 +338,8 @@ def radiation_coefficients(vertices: np.ndarray, faces: np.ndarray, rho: float =
     omega = default_frequencies(size, g) if omega is None else np.asarray(omega, float)
     key = cache_key(wv, wf, rho, g, depth, omega, center)
     needs = "far field" if far_field else "excitation" if excitation else ""
-    return _stored_or_solved(key, needs, lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if needs else None))
+    solve_now = lambda: solve(wv, wf, rho, g, depth, omega, progress, center, HEADINGS if needs else None)  # noqa: E731
+    return _stored_or_solved(key, needs, solve_now, len(wf), len(omega))
 
 
 def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth: float = math.inf, omega: np.ndarray | None = None,
@@ -355,21 +356,19 @@ def bodies_coefficients(parts: list, rho: float = 1000.0, g: float = 9.81, depth
     for wv, wf, c in wet:
         h.update(cache_key(wv, wf, rho, g, depth, omega, c).encode())
     needs = "far field" if far_field else "excitation" if excitation else ""
-
-    def solve_now() -> Coefficients:
-        check_panels(sum(len(f) for _, f, _ in wet), len(wet))  # before the dense matrices are made
-        return solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)
-
-    return _stored_or_solved(h.hexdigest()[:20], needs, solve_now)
+    solve_now = lambda: solve_parts(wet, rho, g, depth, omega, progress, HEADINGS if needs else None)  # noqa: E731
+    return _stored_or_solved(h.hexdigest()[:20], needs, solve_now, sum(len(f) for _, f, _ in wet), len(omega), len(wet))
 
 
 def _has(c: Coefficients, needs: str) -> bool:
     return {"": True, "excitation": c.has_excitation, "far field": c.has_far_field}[needs]
 
 
-def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
+def _stored_or_solved(key: str, needs: str, solve_now, panels: int, frequencies: int, bodies: int = 1) -> Coefficients:
     """The shipped file or the user's cached one for `key` (the cached one only with the sha256 recorded beside
-    it) holding what `needs` names ("", "excitation", "far field"), else `solve_now()` (kept in the cache)."""
+    it) holding what `needs` names ("", "excitation", "far field"), else `solve_now()` (kept in the cache), announced
+    with its estimate from its `panels` (wet, in all, over `bodies` bodies) and `frequencies`, or refused when its
+    matrices would not fit the memory."""
     cached = user_cache() / f"{key}.npz"
     bad, partial = [], None
     for path in (SHIPPED / f"{key}.npz", cached):
@@ -392,6 +391,8 @@ def _stored_or_solved(key: str, needs: str, solve_now) -> Coefficients:
         import_capytaine()  # before a solve of minutes starts, or instead of it
         if bad or partial is not None:
             note(f"note: {bad[0]}: solving again" if bad else f"note: the stored solve for this body lacks {wanted}: solving again with it")
+        check_panels(panels, bodies)
+        note(f"note: {solve_estimate(panels, frequencies)}; kept in {cached.parent} for the next run; Ctrl-C stops it")
         result = in_child(solve_now)  # (a child: Ctrl-C stops a solve of minutes in Capytaine's compiled code at once)
     except (ImportError, MissingSolver):
         if partial is not None:
@@ -517,8 +518,21 @@ def solve_parts(parts: list, rho: float, g: float, depth: float, omega: np.ndarr
     return Coefficients(np.asarray(omega, float), A[:-1], B[:-1], A[-1], float(rho), float(depth), panels, center, **excitation)
 
 
+SOLVE_SECONDS_PER_PANEL2 = 1.0e-6
+"""Capytaine's solve, seconds per (wet panel)^2 and frequency (infinity counted; radiation and diffraction together).
+Measured (AMD EPYC, one core, the cube at draft 0.4 m, `solve_parts`): 1280 panels 1.4-1.6 s a frequency, 4864 panels
+23-26 s (so about panels^2.1)."""
+SOLVE_START_SECONDS = 15.0
+"""A solve's start: importing Capytaine and tabulating its Green function, once in the child each solve runs in."""
 BYTES_PER_PANEL_PAIR = 32.0
 """Capytaine's two dense complex matrices (the single- and double-layer influence), bytes per pair of panels."""
+
+
+def solve_estimate(panels: int, frequencies: int) -> str:
+    """What a solve of `panels` wet panels at `frequencies` frequencies (and infinity) will cost, in a phrase."""
+    seconds = SOLVE_START_SECONDS + SOLVE_SECONDS_PER_PANEL2 * float(panels) ** 2 * (frequencies + 1)
+    return (f"a boundary-element solve (Capytaine) of {panels:,} wet panels at {frequencies + 1} frequencies: about "
+            f"{limits.duration(seconds)} and {limits.size(BYTES_PER_PANEL_PAIR * float(panels) ** 2)} of memory")  # fmt: skip
 
 
 def check_panels(panels: int, bodies: int) -> None:
@@ -527,6 +541,7 @@ def check_panels(panels: int, bodies: int) -> None:
     need = BYTES_PER_PANEL_PAIR * float(panels) ** 2
     room = limits.MEMORY_SHARE * limits.available_bytes()
     if need > room:
-        raise ConfigError(f"the BEM solve of {bodies} bodies together has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
+        what = "the body" if bodies == 1 else f"{bodies} bodies together"
+        raise ConfigError(f"the BEM solve of {what} has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
                           f"over the {room / 1e9:.3g} GB this machine can give it; use fewer devices ([farm] rows, columns), coarser "
                           "meshes, or radiation = \"none\"")  # fmt: skip

@@ -22,11 +22,20 @@ from sim.dynamics.integrators import INTEGRATORS
 from sim.dynamics.joints import JOINTS
 from sim.errors import ConfigError
 from sim.hydro.forces import TERMS
-from sim.limits import JOINT_DOFS, Cost, check_cost, check_samples
+from sim.limits import (
+    JOINT_DOFS,
+    NS_PER_SAMPLE_STEP,
+    NS_PER_SAMPLE_STEP_WAVES,
+    NS_PER_SAMPLE_STEP_WAVES_DRAG,
+    Cost,
+    check_cost,
+    check_samples,
+)
 from sim.lines.moorings import SURFACE, check_start, lines_of, moored
 from sim.parameters import Param
 from sim.scene.farm import expand
 from sim.scene.gauges import Gauge, check_gauges, parse_gauges
+from sim.water.records import components as record_components
 from sim.water.records import measured, peak_period
 from sim.water.seas import ramp_seconds, wavenumber
 
@@ -537,10 +546,25 @@ def body_samples(b) -> int:
 
 
 def scene_cost(scene: SceneConfig) -> Cost:
-    """The samples and degrees of freedom of a validated scene's bodies, and so its set-up's estimated time and memory."""
+    """The samples and degrees of freedom of a validated scene's bodies and its sea's components, and so its set-up's and
+    steps' estimated time and its memory."""
+    components = wave_components(scene.waves, scene.base_dir)
+    fluids = [e.fluid_of(scene.fluid) for e in scene.bodies] or [scene.fluid]
+    drag = any((f.drag_coefficient or 0.0) > 0 for f in fluids)
+    per_step = NS_PER_SAMPLE_STEP if not components else NS_PER_SAMPLE_STEP_WAVES_DRAG if drag else NS_PER_SAMPLE_STEP_WAVES
     if not scene.bodies:
-        return Cost(body_samples(scene.body), 0)
-    return Cost(sum(body_samples(e.body) for e in scene.bodies), sum(JOINT_DOFS[e.constraint.joint] for e in scene.bodies))
+        return Cost(body_samples(scene.body), 0, components, per_step)
+    dofs = sum(JOINT_DOFS[e.constraint.joint] for e in scene.bodies)
+    return Cost(sum(body_samples(e.body) for e in scene.bodies), dofs, components, per_step)
+
+
+def wave_components(waves, base_dir: str) -> int:
+    """How many wave components the sea sums (0: still water): a record's are those its spectrum keeps."""
+    if waves.kind == "still":
+        return 0
+    if waves.kind == "record":
+        return len(record_components(*measured(waves, base_dir), waves.cutoff_period)[0])
+    return 1 if waves.kind == "regular" else int(waves.components)
 
 
 def diffracting(scene: SceneConfig) -> bool:

@@ -10,19 +10,18 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import multiprocessing
 import os
 import signal
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED
 from concurrent.futures import wait as wait_any
 from concurrent.futures.process import BrokenProcessPool
 
 from sim.compiling import default_backend, warm_up
 from sim.ensemble import Ensemble
 from sim.errors import ConfigError, Interrupted
-from sim.forked import die_with
+from sim.forked import worker_pool
 from sim.sweeps.chunk import case_scene, run_chunk
 
 from .grid import Sweep
@@ -96,40 +95,24 @@ def run(sweep: Sweep, todo: Iterable[tuple[int, list[int]]], done: Callable[[int
     return stats
 
 
-def _start_worker(parent: int) -> None:
-    """Workers leave Ctrl-C to the parent, which stops them, and die with it."""
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    die_with(parent)
-
-
 def _check(stop) -> None:
     if stop is not None and stop.asked:
         raise Interrupted
 
 
 def _run_local(sweep, todo, done, n, stop=None) -> None:
-
-    # fork where there is one: the workers start with the kernels this process loaded (spawn re-imports: seconds each)
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     _warm(sweep, todo[0][1] if todo else None)  # here first: forked workers start with them, spawned ones load them from the disk cache
-    pool = ProcessPoolExecutor(
-        max_workers=n, mp_context=multiprocessing.get_context(method), initializer=_start_worker, initargs=(os.getpid(),)
-    )
-    try:
-        futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
-        pending = set(futures)
-        while pending:
-            _check(stop)
-            finished, pending = wait_any(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            for future in finished:
-                done(futures[future], future.result())
-    except BrokenProcessPool:
-        raise WorkerLost("a worker process died") from None
-    finally:  # on any way out, no worker outlives the command
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
+    with worker_pool(n) as pool:
+        try:
+            futures = {pool.submit(_task, sweep, indices): cid for cid, indices in todo}
+            pending = set(futures)
+            while pending:
+                _check(stop)
+                finished, pending = wait_any(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    done(futures[future], future.result())
+        except BrokenProcessPool:
+            raise WorkerLost("a worker process died") from None
 
 
 def _run_dask(sweep, todo, done, n, scheduler, timeout, stop=None) -> None:

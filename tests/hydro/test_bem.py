@@ -120,7 +120,7 @@ def test_a_cylinders_irregular_frequency_is_removed_and_its_solve_cached(monkeyp
 def test_ctrl_c_stops_a_boundary_element_solve_at_once(tmp_path):
     """Issue 59: Ctrl-C did not stop a solve (minutes inside Capytaine's compiled code; 11 s to stop at best). The solve
     runs in a forked child that the parent ends: a Ctrl-C in the middle of it is out within 2 s, exit 130, one line, the
-    child gone, and nothing cached."""
+    child gone, and nothing cached. Before it starts, the solve is announced with its estimated time and memory."""
     import os
     import signal
     import subprocess
@@ -145,6 +145,8 @@ def test_ctrl_c_stops_a_boundary_element_solve_at_once(tmp_path):
     stopped_in = time.monotonic() - sent
     assert proc.returncode == 130 and stopped_in < 2.0, (proc.returncode, stopped_in, err)
     assert "Traceback" not in err and "interrupted (Ctrl-C)" in err.strip().splitlines()[-1], err
+    said = next(line for line in err.splitlines() if "boundary-element solve (Capytaine) of" in line)  # its cost said first
+    assert " wet panels at " in said and ": about " in said and "Ctrl-C stops it" in said, said
     time.sleep(0.5)
     assert not Path(f"/proc/{child}").exists()
     assert not list(tmp_path.rglob("*.npz"))

@@ -33,6 +33,7 @@ from sim.limits import (
 )
 from sim.lines.moorings import SURFACE, check_start, lines_of, moored
 from sim.parameters import Param
+from sim.scene.apart import check_apart
 from sim.scene.farm import expand
 from sim.scene.gauges import Gauge, check_gauges, parse_gauges
 from sim.water.records import components as record_components
@@ -536,6 +537,7 @@ def validate(scene: SceneConfig, grown_by: str = "the [[bodies]] (fewer, or fewe
     if not scene.bodies:
         return checked
     checked = dataclasses.replace(checked, bodies=_validate_entries(checked))
+    check_apart(checked.bodies)
     check_cost(scene_cost(checked), grown_by)  # the system's dense matrices grow as the square of its degrees of freedom
     return checked
 

@@ -171,3 +171,31 @@ def test_devices_that_would_overlap_are_refused_in_one_line(tmp_path):
     with_overrides(load_scene("farm"), farm__spacing=1.0)  # touching: accepted
     with pytest.raises(ConfigError, match=r"spacing >= 1.73"):
         with_overrides(load_scene("drop"), initial__orientation=(0.9238795, 0.3826834, 0.0, 0.0), farm__columns=2, farm__spacing=1.2)
+
+
+def _two_cubes(tmp_path: Path, x: float, yaw_deg: float = 0.0, jointed: bool = False) -> str:
+    """Two 1 m cubes, the second x metres along and turned yaw_deg about z (or jointed to the first by a fixed joint)."""
+    w, z = np.cos(np.radians(yaw_deg) / 2), np.sin(np.radians(yaw_deg) / 2)
+    second = 'parent = "a"\njoint = "fixed"\n' if jointed else ""
+    scene = tmp_path / f"two_{x}_{yaw_deg}_{jointed}.toml"
+    scene.write_text(f'[[bodies]]\nname = "a"\nshape = "cube"\nsize = 1.0\ndensity = 500.0\n\n[[bodies]]\nname = "b"\n{second}'
+                     f'shape = "cube"\nsize = 1.0\ndensity = 500.0\nposition = [{x}, 0.0, 0.0]\norientation = [{w}, 0.0, 0.0, {z}]\n')  # fmt: skip
+    return str(scene)
+
+
+@pytest.mark.parametrize("x, yaw, jointed, inside", [
+    (0.3, 0.0, False, 0.7),  # the campaign's case: 0.7 m into one another
+    (1.0, 0.0, False, None),  # touching: apart
+    (1.2, 45.0, False, 0.00711),  # turned 45 degrees it reaches its half diagonal, 0.7071 m: 0.0071 m in
+    (1.25, 45.0, False, None),
+    (0.3, 0.0, True, None),  # a body and its parent may meet at their joint
+])  # fmt: skip
+def test_bodies_that_would_start_inside_one_another_are_refused(tmp_path, x, yaw, jointed, inside):
+    """Issue 59: [[bodies]] placed inside one another ran without a word. Two boxes are compared by the separating-axis
+    test: refused in one line with how far they reach in, before anything is built."""
+    scene = _two_cubes(tmp_path, x, yaw, jointed)
+    if inside is None:
+        load_scene(scene)
+        return
+    with pytest.raises(ConfigError, match=rf"\[\[bodies\]\] a and b start inside one another \(by {inside:.3g} m\)"):
+        load_scene(scene)

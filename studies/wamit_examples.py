@@ -8,12 +8,18 @@ with both their `.out` and their numeric files `.1`, `.3` and `.hst`:
 - Ellipsoid/ellipsoid: a half ellipsoid of revolution 9 m across and 1.8 m deep (semi-axes 4.5, 4.5, 1.8 m) in deep
   water; 308 frequencies, 0.03 to 9.3 rad/s, heading 0.
 
+And WEC-Sim Applications (github.com/WEC-Sim/WEC-Sim_Applications, Apache-2.0, commit 03c12b0) ships, in
+Mean_Drift/WAMIT/outputFiles/, a WAMIT 7 run of a floating hemisphere 1 m in radius (its centre, origin and centre of
+gravity at the water line; 400 panels, no irregular-frequency removal) in deep water, 200 frequencies 0.05 to 10
+rad/s, heading 0, with its mean drift by momentum conservation (`.8`) and by pressure integration (`.9`).
+
 Both bodies' origins are at the water line on their axis, as are their centres of gravity. Kept here (assets/
 coefficients/wamit/) are every STRIDE-th period of each file, the files otherwise as WAMIT wrote them: the `.out`'s
 blocks of the other periods (and their lines in its table of the solve's times) are dropped, the numeric files' rows of
-the other periods too.
+the other periods too. The hemisphere's `.out` keeps every OUT_STRIDE-th (it is read for g, ULEN, the origins and the
+depth only).
 
-Run: python -m studies.wamit_examples PATH/TO/WEC-Sim/examples/BEMIO/WAMIT
+Run: python -m studies.wamit_examples PATH/TO/WEC-Sim/examples/BEMIO/WAMIT [PATH/TO/WEC-Sim_Applications]
 """
 
 from __future__ import annotations
@@ -26,6 +32,8 @@ ROOT = Path(__file__).resolve().parent.parent
 TARGET = ROOT / "assets" / "coefficients" / "wamit"
 RUNS = {"Cylinder/cyl": 25, "Ellipsoid/ellipsoid": 8}
 """Each run and its STRIDE: about 21 and 39 periods of 525 and 308."""
+DRIFT_RUN, DRIFT_STRIDE, OUT_STRIDE = "Mean_Drift/WAMIT/outputFiles/sphere", 2, 10
+"""The hemisphere: 100 of its 200 periods (0.1 rad/s apart, to follow its drift's peak), 20 in its .out."""
 STAR = re.compile(r"^\s*\*{20,}\s*$")
 PERIOD = re.compile(r"Wave period \(sec\)\s*=\s*(\S+)")
 
@@ -43,9 +51,13 @@ def kept_periods(one: Path, stride: int) -> set[str]:
 def numeric(source: Path, target: Path, kept: set[str]) -> None:
     """`source`'s title and the rows of the periods kept (and PER = -1 and 0); `.hst` whole."""
     lines = source.read_text().splitlines(keepends=True)
-    out = [
-        line for n, line in enumerate(lines) if n == 0 or source.suffix == ".hst" or line.split()[0] in kept or float(line.split()[0]) <= 0
-    ]
+    values = sorted(float(p) for p in kept)  # as numbers: a .8 prints 0.125664E+03 where the .1 has 1.256637E+02
+
+    def keep(line: str) -> bool:
+        period = float(line.split()[0])
+        return period <= 0 or any(abs(period - v) <= 1e-5 * v for v in values)
+
+    out = [line for n, line in enumerate(lines) if n == 0 or source.suffix == ".hst" or keep(line)]
     target.write_text("".join(out))
 
 
@@ -81,5 +93,17 @@ def main(folder: Path) -> None:
         print(f"{stem.name}: {len(kept)} periods -> {TARGET.relative_to(ROOT)}")
 
 
+def hemisphere(applications: Path) -> None:
+    """The mean drift case's files, its numeric ones (with the drift's .8 and .9) at every DRIFT_STRIDE-th period."""
+    stem = applications / DRIFT_RUN
+    kept = kept_periods(stem.with_suffix(".1"), DRIFT_STRIDE)
+    for suffix in (".1", ".3", ".8", ".9", ".hst"):
+        numeric(stem.with_suffix(suffix), TARGET / ("hemisphere" + suffix), kept)
+    out_file(stem.with_suffix(".out"), TARGET / "hemisphere.out", kept_periods(stem.with_suffix(".1"), OUT_STRIDE))
+    print(f"hemisphere: {len(kept)} periods -> {TARGET.relative_to(ROOT)}")
+
+
 if __name__ == "__main__":
     main(Path(sys.argv[1]))
+    if len(sys.argv) > 2:
+        hemisphere(Path(sys.argv[2]))

@@ -97,6 +97,10 @@ class Coefficients:
     kochin_radiation: np.ndarray | None = None
     """(n, 6k, KOCHIN_ANGLES) complex: likewise of the wave each dof radiates moving at unit velocity amplitude
     (Capytaine's radiation problem: the body's motion per unit wave, times these, adds its share)."""
+    mean_drift: np.ndarray | None = None
+    """(n, m, 3) real: the mean drift (F_x, F_y, M_z about the world's origin) per unit wave amplitude squared, N/m²
+    and N m/m², read from a file (WAMIT's .8 or .9: its bodies moving as its run had them), at omega and headings; None:
+    from the far field (drift.mean_drift). Not kept in the cache's files."""
 
     @property
     def has_excitation(self) -> bool:

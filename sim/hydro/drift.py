@@ -104,12 +104,13 @@ class Drift:
     difference frequencies only (the complex envelope leaves out the sum frequencies). Its mean is sum_i a_i² D_i, in
     a regular wave the steady a² D. Valid where the slow drift's frequencies are low against the waves' (Newman's
     approximation: the transfer function varies little over them); the sea's ramp r(t) scales it as a².
-    D is 0 at omega = 0, linear up to the solve's lowest frequency, and held at its highest past it (short waves are
+    D comes from the solve's far field with the body moving as `rao`, or as a file gives it (bem.Coefficients.mean_drift:
+    the body moving as that run had it). D is 0 at omega = 0, linear up to the solve's lowest frequency, and held at its highest past it (short waves are
     reflected as from a wall: the drift tends to a constant). Headings interpolate linearly (periodic)."""
 
     def __init__(self, c: Coefficients, water, rao: np.ndarray | None = None):
 
-        table = mean_drift(c, rao, water.g).astype(complex)
+        table = (mean_drift(c, rao, water.g) if c.mean_drift is None else c.mean_drift).astype(complex)
         top = np.asarray(water.omega, float).clip(max=float(c.omega[-1]))
         D = transfer_at(c, table, top, water.direction).real  # (n, 3)
         self.per_amplitude_squared = D

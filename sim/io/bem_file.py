@@ -34,6 +34,7 @@ from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
 from sim.io.capytaine_nc import read_capytaine
 from sim.io.wamit import read_out
+from sim.io.wamit_drift import DRIFT, read_drift
 from sim.io.wamit_numeric import Assumed, beside, columns_of, read_numeric, stiffness
 from sim.water.records import record_path
 from sim.water.seas import Waves, wavenumber
@@ -66,9 +67,10 @@ def kind_of(path: Path) -> str:
     return "numeric" if columns_of(path) in (3, 4, 5, 7) else "out"
 
 
-def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coefficients:
+def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: bool = False) -> Coefficients:
     """The coefficients in `path` for the bodies `models` (forces.Model) starting at `starts` (their poses), with the
-    excitation of the sea `water` (None: radiation only)."""
+    excitation of the sea `water` (None: radiation only); with `drift`, the mean drift too (a one-line ConfigError,
+    before any other work, when the file has none)."""
     kind = kind_of(path)
     if kind == "npz":
         try:
@@ -78,7 +80,9 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coef
     elif kind == "netcdf":
         c = _from_capytaine(path, models, starts, fluid)
     else:
-        c = _from_wamit(path, kind, models, starts, fluid, water)
+        c = _from_wamit(path, kind, models, starts, fluid, water, drift)
+    if drift and c.mean_drift is None and not c.has_far_field:
+        raise ConfigError(no_drift(path))
     bodies = c.added_mass.shape[1] // 6
     if bodies != len(models):
         raise ConfigError(f"[fluid] bem_file {str(path)!r} holds {bodies} bodies, the scene {len(models)}: one per [[bodies]] entry")
@@ -97,7 +101,11 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None) -> Coef
     return c
 
 
-def _from_wamit(path: Path, kind: str, models: list, starts: list, fluid, water) -> Coefficients:
+def no_drift(path: Path) -> str:
+    return f"[fluid] bem_file {str(path)!r} holds no mean drift: WAMIT's .8 or .9 beside its .1 gives it (or leave [waves] drift off)"
+
+
+def _from_wamit(path: Path, kind: str, models: list, starts: list, fluid, water, drift: bool = False) -> Coefficients:
     """A WAMIT run's coefficients (its `.out`, or its numeric `.1` and `.3`), made reciprocal and passive and moved to
     the bodies' centres of gravity; the numeric files' hydrostatics checked against the scene's bodies."""
     if kind == "out":
@@ -111,9 +119,34 @@ def _from_wamit(path: Path, kind: str, models: list, starts: list, fluid, water)
         _check_stiffness(beside(path, ".hst"), stiffness(path, run, fluid.rho), run.gravity_centers, models, starts, fluid)
     _check_g(path, run.g, fluid)
     not_yet = np.zeros_like(run.excitation)  # (split_excitation)
+    table = drift_table(path, run, fluid) if kind == "numeric" and drift else None
+    if drift and table is None:
+        raise ConfigError(no_drift(path))  # before the passivity's note
     c = Coefficients(run.omega, run.added_mass, run.damping, run.added_mass_inf, fluid.rho, run.depth, run.panels, run.centers, run.headings,
-                     run.excitation, not_yet)  # fmt: skip
+                     run.excitation, not_yet, mean_drift=table)  # fmt: skip
     return moved(_passive(path, c, models), run.gravity_centers)
+
+
+def drift_table(path: Path, run, fluid) -> np.ndarray | None:
+    """(n, m, 3) the mean drift of the WAMIT run whose numeric files `path` names, from its `.8` (momentum conservation)
+    or else its `.9` (pressure integration) beside it, at the run's frequencies and headings, the yaw moment about the
+    world's origin; None when neither is there."""
+    found = next((beside(path, s) for s in DRIFT if beside(path, s).is_file()), None)
+    if found is None:
+        return None
+    if run.added_mass.shape[1] > 6:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r}: the drift of several bodies from {found.name} is not read (one body's only)")
+    periods, headings, D = read_drift(found, fluid.rho, run.g, run.length)
+    beta = np.mod(np.radians(headings), 2 * math.pi)
+    if len(beta) != len(run.headings) or not np.allclose(np.sort(beta), np.sort(np.mod(run.headings, 2 * math.pi)), atol=1e-6):
+        raise ConfigError(f"[fluid] bem_file {str(path)!r}: {found.name}'s headings ({', '.join(f'{h:g}' for h in headings)} degrees) "
+                          "are not the excitation's")  # fmt: skip
+    D = D[:, np.argsort(beta)][:, np.argsort(np.argsort(np.mod(run.headings, 2 * math.pi)))]
+    omega = 2 * math.pi / periods[::-1]
+    table = np.stack([[np.interp(run.omega, omega, D[::-1, m, i]) for i in range(3)] for m in range(len(beta))], -1).transpose(1, 2, 0)
+    x0, y0 = np.atleast_2d(run.centers)[0, :2]  # the moment about the body's origin -> the world's
+    table[..., 2] += x0 * table[..., 1] - y0 * table[..., 0]
+    return table
 
 
 def _from_capytaine(path: Path, models: list, starts: list, fluid) -> Coefficients:
@@ -135,10 +168,11 @@ def _passive(path: Path, c: Coefficients, models: list) -> Coefficients:
     """`c` with its damping symmetric and positive semi-definite and its added mass symmetric (bem.passive), as a
     Capytaine solve's is here, and a note when that changed it by more than 1 %."""
     size = max(float(np.ptp(m.body.mesh_vertices, axis=0).max()) for m in models)
-    A, B, change = passive(np.concatenate([c.added_mass, c.added_mass_inf[None]]), np.concatenate([c.damping, c.damping[-1:]]), size)
-    if change > 0.01:
+    A, B, _ = passive(np.concatenate([c.added_mass, c.added_mass_inf[None]]), np.concatenate([c.damping, c.damping[-1:]]), size)
+    change = float(np.abs(B[:-1] - c.damping).max() / max(np.abs(c.damping).max(), 1e-300))  # (not per frequency: a long wave's
+    if change > 0.01:  # damping is round-off small, and its round-off is all a per-frequency measure would see)
         note(f"note: {path.name}'s radiation damping made symmetric and passive, as a Capytaine solve's is: entries changed by up "
-             f"to {100 * change:.1f} % of each frequency's largest")  # fmt: skip
+             f"to {100 * change:.1f} % of its largest")  # fmt: skip
     return replace(c, added_mass=A[:-1], damping=B[:-1], added_mass_inf=A[-1])
 
 

@@ -515,8 +515,6 @@ def validate(scene: SceneConfig, grown_by: str = "the [[bodies]] (fewer, or fewe
         check_start(spread, checked["fluid"].rho, scene.step.dt)  # before MoorDyn: its start-up cannot be cut short
     if checked["waves"].drift and checked["fluid"].radiation != "bem":
         raise ConfigError('the drift force comes from the boundary-element solve: it needs [fluid] radiation = "bem" (--radiation bem)')
-    if checked["waves"].drift and checked["fluid"].bem_file:
-        raise ConfigError("the drift force comes from a Capytaine solve's far field: a bem_file has none (leave [waves] drift off)")
     if checked["fluid"].bem_file and (checked["fluid"].radiation != "bem" or not scene.bodies):
         raise ConfigError('[fluid] bem_file is for scenes of [[bodies]] (one entry for one body) with radiation = "bem"')
     if checked["waves"].diffraction and checked["fluid"].radiation != "bem":

@@ -223,7 +223,7 @@ class SystemRadiation:
         (moored bodies: `moored_lowest`); or from the scene's `bem_file` (io/bem_file.py)."""
 
         if fluid.bem_file:
-            c = from_file(bem_file_path(fluid.bem_file, base_dir), models, starts, fluid, water)
+            c = from_file(bem_file_path(fluid.bem_file, base_dir), models, starts, fluid, water, drift=far_field)
         else:
             parts = [(m.body.mesh_vertices @ s.R_world_body.T + s.x_world, m.body.mesh_faces, s.x_world) for m, s in zip(models, starts)]
             size = max(float(np.ptp(v, axis=0).max()) for v, _, _ in parts)

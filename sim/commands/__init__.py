@@ -94,6 +94,7 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
     classes = {name: cls for name, (cls, _) in loaded.items()}
     args = parse(lambda: tyro.extras.subcommand_cli_from_dict(classes, args=argv, prog=prog), prog)
     handler = next(fn for cls, fn in loaded.values() if isinstance(args, cls))
+    before = signal.getsignal(signal.SIGINT)
     if threading.current_thread() is threading.main_thread():  # a shell starts background jobs with Ctrl-C ignored: take it back
         listen()
     try:
@@ -112,8 +113,10 @@ def dispatch(commands: dict[str, str], argv: list[str] | None = None, prog: str 
         return EXIT
     finally:
         settled()
-        if argv is None and threading.current_thread() is threading.main_thread():  # the process's own command line: it ends next
-            signal.signal(signal.SIGINT, signal.SIG_IGN)  # said and written: a Ctrl-C in the teardown (a Dask cluster's) changes nothing
+        if threading.current_thread() is threading.main_thread():
+            # the process's own command line ends next: said and written, a Ctrl-C in the teardown (a Dask cluster's)
+            # changes nothing; a caller in-process (main([...])) gets its own handler back
+            signal.signal(signal.SIGINT, signal.SIG_IGN if argv is None else (before or signal.default_int_handler))
 
 
 def main(argv: list[str] | None = None) -> int:

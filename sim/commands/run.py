@@ -333,7 +333,11 @@ def summarise_bodies(sim: Simulation, first, last) -> None:
         print(f"t = {last.t:.6g} s: {b.name} at z = {b.x_world[2]:.6f} m, |u| = {np.linalg.norm(b.u_world):.3g} m/s")
     if system.radiation is not None and (drifting := system.radiation.wave_drift) is not None:
         Fx, Fy, Mz = drifting.mean
-        source = "the bem_file's mean drift" if system.radiation.coefficients.mean_drift is not None else "the solve's far field"
+        source = (
+            "the bem_file's mean drift, its run's body moving as it did there"
+            if system.radiation.coefficients.mean_drift is not None
+            else "the solve's far field"
+        )
         print(f"wave drift: mean Fx = {Fx:.6g} N, Fy = {Fy:.6g} N, Mz = {Mz:.6g} N m on {system.members[system.radiation.drift_root].name} "
               f"(the sea at full height, Newman: sum a_i^2 D_i, from {source})")  # fmt: skip
     drift = (last.E_total + last.E_pto) - (first.E_total + first.E_pto)

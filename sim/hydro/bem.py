@@ -545,7 +545,10 @@ def check_panels(panels: int, bodies: int) -> None:
     need = BYTES_PER_PANEL_PAIR * float(panels) ** 2
     room = limits.MEMORY_SHARE * limits.available_bytes()
     if need > room:
-        what = "the body" if bodies == 1 else f"{bodies} bodies together"
+        what, fewer = (
+            ("the body", "a coarser mesh")
+            if bodies == 1
+            else (f"{bodies} bodies together", "fewer devices ([farm] rows, columns), coarser meshes")
+        )
         raise ConfigError(f"the BEM solve of {what} has {panels} wet panels: its matrices take about {need / 1e9:.3g} GB, "
-                          f"over the {room / 1e9:.3g} GB this machine can give it; use fewer devices ([farm] rows, columns), coarser "
-                          "meshes, or radiation = \"none\"")  # fmt: skip
+                          f"over the {room / 1e9:.3g} GB this machine can give it; use {fewer}, or radiation = \"none\"")  # fmt: skip

@@ -4,8 +4,6 @@ body and its parent (a joint may sit where they meet) are not compared."""
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
 from sim.bodies.rotation import quat_to_matrix
@@ -23,8 +21,9 @@ def box(entry) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     if b.shape not in ("cube", "box"):
         return None
     sides = [float(b.size)] * 3 if b.shape == "cube" else [float(v) for v in b.extents]
-    q = np.asarray(entry.initial.orientation, float)
-    return np.asarray(entry.initial.position, float), quat_to_matrix(q), 0.5 * np.asarray(sides)
+    R = quat_to_matrix(np.asarray(entry.initial.orientation, float))
+    shift = np.zeros(3) if b.centre_of_mass is None else R @ np.asarray(b.centre_of_mass, float)
+    return np.asarray(entry.initial.position, float) - shift, R, 0.5 * np.asarray(sides)  # (position: the centre of mass)
 
 
 def depth(a, b) -> float:
@@ -44,12 +43,19 @@ def depth(a, b) -> float:
 
 
 def check_apart(entries) -> None:
-    """ConfigError naming the first two bodies (boxes or cubes, neither the other's parent) that start inside one another."""
+    """ConfigError naming the first two bodies (boxes or cubes, neither the other's parent) that start inside one another.
+    Only pairs whose bounding spheres meet are tested (a farm's hundreds of devices cost a few ms)."""
     if len(entries) > MAX_COMPARED:
         return
-    boxes = [(e, box(e)) for e in entries]
-    for (e, a), (f, b) in itertools.combinations(boxes, 2):
-        if a is None or b is None or e.name == f.parent or f.name == e.parent:
+    boxes = [(e, b) for e in entries if (b := box(e)) is not None]
+    if len(boxes) < 2:
+        return
+    centres = np.array([b[0] for _, b in boxes])
+    radii = np.array([np.linalg.norm(b[2]) for _, b in boxes])
+    apart = np.linalg.norm(centres[:, None] - centres[None], axis=-1) >= radii[:, None] + radii[None]
+    for i, j in zip(*np.nonzero(np.triu(~apart, 1))):
+        (e, a), (f, b) = boxes[i], boxes[j]
+        if e.name == f.parent or f.name == e.parent:
             continue
         if (reach := depth(a, b)) > DEPTH:
             raise ConfigError(f"[[bodies]] {e.name} and {f.name} start inside one another (by {reach:.3g} m): place them apart")

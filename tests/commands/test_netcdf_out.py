@@ -63,9 +63,9 @@ def test_ctrl_c_keeps_the_rows_so_far_in_the_netcdf_file(tmp_path):
     """A long run to run.nc stopped by Ctrl-C once it has stepped a while: exit 130, one line saying how many rows it
     kept, and the file holds them, time increasing, no NaN."""
     nc = tmp_path / "x.nc"
-    started = time.monotonic()
+    started = time.monotonic()  # its set-up (xarray) takes 2-4 s under load: a Ctrl-C there keeps nothing, rightly
     done, stopped_in = interrupt(["run", "--t-end", "1e6", "--max-steps", "1000000000", "--every", "100", "--out", str(nc)],
-                                 lambda: time.monotonic() - started > 3.0)  # fmt: skip
+                                 lambda: time.monotonic() - started > 6.0)  # fmt: skip
     assert done.returncode == 130 and stopped_in < 10.0, done.stderr
     assert done.stderr.count("\n") == 1 and "interrupted (Ctrl-C)" in done.stderr, done.stderr
     with xr.open_dataset(nc) as ds:

@@ -10,11 +10,15 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 import trimesh
 
+from sim.hydro import bem
+from sim.hydro.drift import body_rao, mean_drift
+from sim.io.bem_file import drift_table
 from sim.io.wamit_drift import read_drift
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -85,9 +89,6 @@ def test_floatsims_own_far_field_drift_of_the_hemisphere_meets_wamits(tmp_path, 
     run did not remove (IRR = 0: spikes at 5.0, 6.2 and 7.1 rad/s) and off the resonance's steep flank (below 3.5 rad/s
     the drift rises 30-fold in 0.5 rad/s: a 0.3 % shift of the heave resonance moves it 5 %)."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    from sim.hydro import bem
-    from sim.hydro.drift import body_rao, mean_drift
-
     omega = np.array([3.55, 3.75, 4.05, 4.55, 5.55, 5.95])  # on the shipped grid (0.1 rad/s apart)
     hull = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     c = bem.radiation_coefficients(hull.vertices, hull.faces, RHO, G, math.inf, omega, panel=0.3, progress=False, far_field=True)
@@ -97,3 +98,23 @@ def test_floatsims_own_far_field_drift_of_the_hemisphere_meets_wamits(tmp_path, 
     ours = mean_drift(c, body_rao(c, M, C), G)[:, 0, 0]
     theirs = np.array([drift_at(WAMIT / "hemisphere.8", w) for w in omega])
     np.testing.assert_allclose(ours, theirs, rtol=0.03)
+
+
+def test_a_drift_files_units_headings_and_moment_point(tmp_path):
+    """A `.8` written here (ULEN 2, two headings listed out of order, a yaw row, the body's origin off the world's):
+    forces come out as rho g L Fbar, the yaw moment as rho g L^2 Mbar moved to the world's origin (M_z + x0 F_y - y0 F_x),
+    each heading's in its place, and the file's periods onto the run's frequencies."""
+    rows = [(10.0, 90.0, 90.0, 1, 0.1, 0.0, 0.1, 0.0), (10.0, 90.0, 90.0, 2, 0.3, 0.0, 0.3, 0.0), (10.0, 90.0, 90.0, 6, 0.2, 0.0, 0.2, 0.0),
+            (10.0, 0.0, 0.0, 1, 0.5, 0.0, 0.5, 0.0), (10.0, 0.0, 0.0, 2, 0.0, 0.0, 0.0, 0.0), (10.0, 0.0, 0.0, 6, 0.05, 0.0, 0.05, 0.0),
+            (10.0, 0.0, 90.0, 1, 9.0, 0.0, 9.0, 0.0),  # a bichromatic pair of headings: left out
+            (5.0, 0.0, 0.0, 1, 1.0, 0.0, 1.0, 0.0), (5.0, 90.0, 90.0, 1, 2.0, 0.0, 2.0, 0.0)]  # fmt: skip
+    path = tmp_path / "run.8"
+    path.write_text(" WAMIT Numeric Output -- Filename  run.8\n" + "".join(" ".join(f"{v:.6E}" for v in r) + "\n" for r in rows))
+    L, x0, y0 = 2.0, 3.0, -1.0
+    run = SimpleNamespace(omega=np.array([2 * math.pi / 10.0, 2 * math.pi / 5.0]), headings=np.radians([0.0, 90.0]), g=G, length=L,
+                          centers=np.array([[x0, y0, 0.0]]), added_mass=np.zeros((2, 6, 6)))  # fmt: skip
+    table = drift_table(tmp_path / "run.1", run, SimpleNamespace(rho=RHO))
+    force, moment = RHO * G * L, RHO * G * L**2
+    np.testing.assert_allclose(table[0, 0], [0.5 * force, 0.0, 0.05 * moment + x0 * 0.0 - y0 * 0.5 * force], rtol=1e-6)
+    np.testing.assert_allclose(table[0, 1], [0.1 * force, 0.3 * force, 0.2 * moment + x0 * 0.3 * force - y0 * 0.1 * force], rtol=1e-6)
+    np.testing.assert_allclose(table[1, :, 0], [1.0 * force, 2.0 * force], rtol=1e-6)

@@ -20,6 +20,7 @@ from sim.scene.config import PARAMS, load_scene, with_overrides
 from sim.simulation import Simulation
 
 from . import FROM_SCENE, declared_flags, overrides
+from .interrupt import stop_if_asked
 from .progress import progress_bar
 
 REFERENCE_RTOL = 1e-11
@@ -81,7 +82,9 @@ def timed_run(scene, repeats: int = 1) -> tuple[np.ndarray, float]:
     """Final pose and median wall seconds per simulated second."""
     costs = []
     for _ in range(repeats):
+        stop_if_asked()  # a Ctrl-C a library swallowed while the last one set up (trimesh's imports): before minutes of steps
         sim = Simulation(scene)
+        stop_if_asked()
         start = time.perf_counter()
         sim.step(steps(scene.step.t_end, sim.dt))
         costs.append((time.perf_counter() - start) / scene.step.t_end)

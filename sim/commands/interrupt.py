@@ -5,12 +5,10 @@ one: Python would report a SystemError)."""
 
 from __future__ import annotations
 
-import _thread
 import contextlib
 import signal
 import sys
 import threading
-import time
 
 from sim.errors import Interrupted
 
@@ -22,55 +20,27 @@ EXIT = 130
 _asked_before = False  # a Ctrl-C outside any loop: its KeyboardInterrupt may have been swallowed
 
 
-RESEND_AFTER = (1.0, 1.5, 2.0)
-"""Seconds after a Ctrl-C at which, if no loop has taken it over and the command has not ended, it is raised again (one
-a library swallowed): a KeyboardInterrupt on its way out has ended the command well within the first; three at most,
-so a clean-up that takes longer is not cut again and again."""
-
-_heard = threading.Event()  # a Ctrl-C came: the watcher's cue
-_taken = False  # a loop (StopOnCtrlC) took the Ctrl-C over, or the command ended: no more resending
-_watcher: threading.Thread | None = None
-
-
 def ctrl_c(signum, frame) -> None:
     """A command's SIGINT handler outside its loops (commands.dispatch): KeyboardInterrupt, remembered, for a library that
-    swallows it (trimesh imports its optional modules under `except BaseException`): the watcher raises it again at
-    RESEND_AFTER until a loop takes it over (and stops at once, seeing it remembered) or the command ends."""
+    swallows it (trimesh imports its optional modules under `except BaseException`): the command's next check
+    (`stop_if_asked`, or a loop's StopOnCtrlC) then stops it at once."""
     global _asked_before
     _asked_before = True
-    _heard.set()  # (no thread is started here: a signal handler may run while the main thread holds threading's locks)
     raise KeyboardInterrupt
 
 
-def _watch() -> None:
-    while True:
-        _heard.wait()
-        started = time.monotonic()
-        for at in RESEND_AFTER:
-            time.sleep(max(0.0, started + at - time.monotonic()))
-            if _taken or not _asked_before or signal.getsignal(signal.SIGINT) is not ctrl_c:
-                break
-            _thread.interrupt_main(signal.SIGINT)
-        _heard.clear()
-
-
 def listen() -> None:
-    """A command's Ctrl-C from here on (the main thread): `ctrl_c`, quiet finalisers, no Ctrl-C seen yet, and the watcher
-    that raises a swallowed one again (started once a process)."""
-    global _asked_before, _taken, _watcher
-    _asked_before, _taken = False, False
-    _heard.clear()
-    if _watcher is None:
-        _watcher = threading.Thread(target=_watch, name="floatsim-ctrl-c", daemon=True)
-        _watcher.start()
+    """A command's Ctrl-C from here on (the main thread): `ctrl_c`, quiet finalisers, no Ctrl-C seen yet."""
+    global _asked_before
+    _asked_before = False
     signal.signal(signal.SIGINT, ctrl_c)
     sys.unraisablehook = quiet_unraisable
 
 
 def settled() -> None:
-    """The command has ended (said its result or its interruption): a Ctrl-C it saw is not raised again."""
-    global _asked_before, _taken
-    _asked_before, _taken = False, True
+    """The command has ended (said its result or its interruption): a Ctrl-C it saw is forgotten."""
+    global _asked_before
+    _asked_before = False
 
 
 def asked_before() -> bool:
@@ -119,9 +89,7 @@ class StopOnCtrlC:
             self._at_once = False
 
     def __enter__(self) -> StopOnCtrlC:
-        global _taken
         self.asked = _asked_before
-        _taken = True  # this loop answers a Ctrl-C from here on (the watcher stops raising it)
         if threading.current_thread() is threading.main_thread():
             self._old = signal.signal(signal.SIGINT, self._handler)
         return self

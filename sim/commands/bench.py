@@ -22,6 +22,7 @@ from sim.simulation import Simulation
 from sim.sweeps.backends import run
 from sim.sweeps.grid import Sweep, case_scene, chunks, parse_param
 
+from .interrupt import stop_if_asked
 from .progress import progress_bar
 from .tables import machine, table
 
@@ -94,6 +95,7 @@ def announce(args: BenchArgs, base, cells) -> None:
 
 
 def _median_step_seconds(sim: Simulation, repeats: int, budget: float) -> float:
+    stop_if_asked()  # a Ctrl-C a library swallowed while this case set up (trimesh's imports): before its timed steps
     start = sim.state
     sim.step(1)
     t0 = time.perf_counter()

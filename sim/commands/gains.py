@@ -19,6 +19,8 @@ from sim.forked import results, worker_pool
 from sim.scene.config import load_scene, with_overrides
 from sim.simulation import Simulation
 
+from .interrupt import stop_if_asked
+
 
 @dataclass
 class GainsArgs:
@@ -68,6 +70,7 @@ def gains(args: GainsArgs) -> int:
     print(f"passive (the best damper): pto_damping = {p.passive:.6g} -> {p.power(0.0, p.passive, a):.6g} W")
     latch = p.latch_time()
     if latch is not None and args.search and not scene.bodies:
+        stop_if_asked()  # a Ctrl-C a library swallowed while the scene set up (trimesh's imports): before 40 s of runs
         _search_latching(scene, latch, c, p.passive)
     elif latch is not None:
         print(f"latching: latch_time = {latch:.6g} s ((T - T_n) / 2, Babarit & Clement 2006), with pto_damping = {c:.6g}")

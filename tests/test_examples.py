@@ -150,3 +150,13 @@ def test_a_swell_run_too_short_to_measure_is_one_line_and_exit_2():
     done = subprocess.run([sys.executable, str(ROOT / "examples" / "05_waves_and_radiation.py"), "--t-end", "1"], capture_output=True,
                           text=True, timeout=120, cwd=ROOT, check=False)  # fmt: skip
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "too short a run to measure" in done.stderr, done.stderr
+
+
+@pytest.mark.slow  # the decay of tests/io/test_bemio_h5.py, as a reader runs it
+def test_12_bemio_sphere_heaves_as_sea_stacks_run_of_the_same_file():
+    """The IEA sphere's decay from its BEMIO file within 1 % of the release of SEA-Stack's run with nonlinear hydrostatics,
+    farther from its run with linear ones, and swinging past rest as a decay does."""
+    out = run("12_bemio_sphere.py", "--t-end", "20")
+    nonlinear, linear = (numbers(line)[0] for line in out.splitlines() if "against SEA-Stack" in line)
+    assert nonlinear < 0.01 and linear > 0.02, out
+    assert numbers(out.splitlines()[-1])[0] < -2.8, out

@@ -240,8 +240,9 @@ def misfit_note(memory, tol: float = 0.02) -> str | None:
     error_B, error_A = memory.error
     if max(error_B, error_A) <= tol:
         return None
+    why = " (bodies apart, as in a farm: their interaction oscillates with frequency; docs/farms.md)" if memory.G.shape[1] > 6 else ""
     return (
         f"radiation memory: the fit ({memory.states} states) misses the BEM's damping by up to {error_B:.0%} and its added mass by "
         f"up to {error_A:.0%} of their peaks somewhere on the grid (asked {tol:.0%}): the time-domain radiation is that far off "
-        "at those frequencies (bodies apart, as in a farm: their interaction oscillates with frequency; docs/farms.md)"
+        f"at those frequencies{why}"
     )

@@ -32,6 +32,7 @@ from sim.hydro.bem import Coefficients, note, passive
 from sim.hydro.forces import Model
 from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
+from sim.io.bemio_h5 import is_bemio, read_bemio
 from sim.io.capytaine_nc import read_capytaine
 from sim.io.wamit import read_out
 from sim.io.wamit_drift import DRIFT, read_drift
@@ -53,13 +54,15 @@ def bem_file_path(name: str, base_dir: str) -> Path:
 
 
 def kind_of(path: Path) -> str:
-    """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "netcdf" (a Capytaine
-    dataset, netCDF3 or 4), "out" (WAMIT's output: its header's words), "numeric" (one of WAMIT's numeric files: rows of
+    """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "bemio" (a BEMIO .h5
+    file: HDF5 with its simulation_parameters group), "netcdf" (a Capytaine dataset, netCDF3 or 4), "out" (WAMIT's output: its header's words), "numeric" (one of WAMIT's numeric files: rows of
     3, 4, 5 or 7 numbers) or, else, "out" (whose reader says what is wrong)."""
     with open(path, "rb") as f:
         head = f.read(65536)
     if head[:2] == b"PK":
         return "npz"
+    if is_bemio(head):
+        return "bemio"
     if head[:3] == b"CDF" or head[:4] == b"\x89HDF":
         return "netcdf"
     if any(word in head for word in (b"Gravity:", b"Wave period", b"POTEN run date")):
@@ -79,6 +82,8 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: 
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
     elif kind == "netcdf":
         c = _from_capytaine(path, models, starts, fluid)
+    elif kind == "bemio":
+        c = _from_bemio(path, models, starts, fluid)
     else:
         c = _from_wamit(path, kind, models, starts, fluid, water, drift)
     if drift and c.mean_drift is None and not c.has_far_field:
@@ -86,8 +91,7 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: 
     bodies = c.added_mass.shape[1] // 6
     if bodies != len(models):
         raise ConfigError(f"[fluid] bem_file {str(path)!r} holds {bodies} bodies, the scene {len(models)}: one per [[bodies]] entry")
-    if abs(c.rho - fluid.rho) > 1e-9 * fluid.rho:
-        raise ConfigError(f"[fluid] bem_file {str(path)!r} is for water of density {c.rho:g} kg/m^3, the scene has {fluid.rho:g}")
+    _check_rho(path, c.rho, fluid)
     if water is not None:
         _check_sea(path, c, water)
     c = matched(c, np.array([s.x_world for s in starts]), path)
@@ -97,7 +101,7 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: 
             raise ConfigError(f"body {b + 1} starts at x, y = ({s.x_world[0]:g}, {s.x_world[1]:g}) m, the bem_file has its centre of "
                               f"mass at ({centers[b, 0]:g}, {centers[b, 1]:g}): place it where the file does")  # fmt: skip
     if kind != "npz" and c.has_excitation:
-        c = split_excitation(c, models, starts, fluid)
+        c = split_excitation(c, models, starts, fluid, path, either_time=kind == "bemio")
     return c
 
 
@@ -153,10 +157,26 @@ def _from_capytaine(path: Path, models: list, starts: list, fluid) -> Coefficien
     """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py), made reciprocal and passive and moved to the bodies'
     centres of mass; its hydrostatic stiffness, when it has one, checked against the scene's bodies."""
     c, gravity, g, C = read_capytaine(path)
+    _check_rho(path, c.rho, fluid)  # (before the stiffness, which holds rho)
     _check_g(path, g, fluid)
     if C is not None:
         _check_stiffness(path, C, gravity, models, starts, fluid)
     return moved(_passive(path, c, models), gravity)
+
+
+def _from_bemio(path: Path, models: list, starts: list, fluid) -> Coefficients:
+    """A BEMIO file's coefficients (sim/io/bemio_h5.py), about each body's centre of gravity as WEC-Sim takes them, made
+    reciprocal and passive; its hydrostatic stiffness checked against the scene's bodies."""
+    c, g, C = read_bemio(path)
+    _check_rho(path, c.rho, fluid)  # (before the stiffness, which holds rho)
+    _check_g(path, g, fluid)
+    _check_stiffness(path, C, np.atleast_2d(c.center).reshape(-1, 3), models, starts, fluid)
+    return _passive(path, c, models)
+
+
+def _check_rho(path: Path, rho: float, fluid) -> None:
+    if abs(rho - fluid.rho) > 1e-9 * fluid.rho:
+        raise ConfigError(f"[fluid] bem_file {str(path)!r} is for water of density {rho:g} kg/m^3, the scene has {fluid.rho:g}")
 
 
 def _check_g(path: Path, g: float, fluid) -> None:
@@ -270,13 +290,21 @@ LONG_WAVE_SLACK = 0.05
 the larger part: more, and the bodies are not the ones solved for (a mesh at another draft, another body order)."""
 
 
-def split_excitation(c: Coefficients, models: list, starts: list, fluid) -> Coefficients:
+def split_excitation(c: Coefficients, models: list, starts: list, fluid, path: Path, either_time: bool = False) -> Coefficients:
     """`c` whose `diffraction` holds the whole excitation, split into the scene's Froude-Krylov force and the rest.
     Checked in the file's longest waves, where the rest is the body's added mass times the water's acceleration
     (Taylor's long-wave limit: sum over the bodies c of -omega^2 A_3c e^(k z_c) per unit amplitude in heave, z_c
-    their centres of mass's depths)."""
+    their centres of mass's depths); and its time factor told there too (`flipped_time`): the other one is refused,
+    or, with `either_time` (a BEMIO file, whose writers differ), taken with a note."""
     fk = froude_krylov(c, models, starts, fluid)
     total = c.diffraction
+    if flipped_time(total[0], fk[0]):
+        if not either_time:
+            raise ConfigError(f"[fluid] bem_file {str(path)!r}: its long-wave horizontal force leads the waves' acceleration by half a "
+                              "cycle: its excitation has the other time factor (its phases conjugated)")  # fmt: skip
+        note(f"note: {path.name}'s excitation phases are for the time factor e^(-i omega t) (Capytaine's), not BEMIO's e^(i omega t): "
+             "its long-wave horizontal force says so; taken as such")  # fmt: skip
+        total = np.conj(total)
     w, k = c.omega[0], c.omega[0] ** 2 / fluid.g
     heaves = 6 * np.arange(len(starts)) + 2
     accelerations = -(w**2) * np.exp(k * np.minimum([float(s.x_world[2]) for s in starts], 0.0))
@@ -289,3 +317,13 @@ def split_excitation(c: Coefficients, models: list, starts: list, fluid) -> Coef
                               f"its mesh at rest gives {abs(expected):.4g} N/m (Froude-Krylov and added mass): the mesh or its pose "
                               "is not the one the file was solved for")  # fmt: skip
     return replace(c, diffraction=total - fk, froude_krylov=fk)
+
+
+def flipped_time(total: np.ndarray, fk: np.ndarray) -> bool:
+    """Whether a file's excitation in its longest waves ((m, 6k) per heading) has the other time factor than floatsim's:
+    there the horizontal forces are the water's acceleration times the body's mass and added mass, in phase with
+    the Froude-Krylov force (a quarter cycle from the elevation); the other time factor puts them half a cycle off."""
+    horizontal = np.concatenate([np.arange(b, total.shape[-1], 6) for b in (0, 1)])
+    agree = float(np.sum(total[:, horizontal].imag * fk[:, horizontal].imag))
+    size = float(np.sum(np.abs(total[:, horizontal].imag * fk[:, horizontal].imag)))
+    return size > 0 and agree < -0.5 * size

@@ -184,16 +184,27 @@ def _copied(tmp_path: Path, name: str, hst: str | None = None) -> Path:
     return tmp_path / f"{name}.1"
 
 
+def _conjugated(tmp_path: Path) -> Path:
+    """The ellipsoid's `.1` and a `.3` of the other time factor: each row's phase and imaginary part negated."""
+    one = _copied(tmp_path, "ellipsoid")
+    three = one.with_suffix(".3")
+    title, *rows = [line.split() for line in three.read_text().splitlines()]
+    flipped = [" ".join(w[:4] + [str(-float(w[4])), w[5], str(-float(w[6]))]) for w in rows]
+    three.write_text("\n".join([" ".join(title), *flipped]) + "\n")
+    return one
+
+
 @pytest.mark.parametrize(
     "files, waves, message",
     [
+        (_conjugated, {}, "has the other time factor"),
         (lambda t: _copied(t, "ellipsoid", hst="cyl.hst"), {}, "heave stiffness is"),
         (lambda t: WAMIT / "ellipsoid.1", {"depth": 50.0}, "was solved for water inf m deep, the scene's waves are 50 m deep"),
         (lambda t: _copied(t, "cyl"), {}, "heave force in the bem_file's longest waves"),
     ],
 )
 def test_another_bodys_numeric_files_are_one_line(tmp_path, files, waves, message):
-    """The cylinder's `.hst` beside the ellipsoid's `.1`; the ellipsoid's run (deep water, its `.out` beside it) for a
+    """A `.3` of the other time factor (e^(-i omega t)); the cylinder's `.hst` beside the ellipsoid's `.1`; the ellipsoid's run (deep water, its `.out` beside it) for a
     sea 50 m deep; the cylinder's numeric files alone (no `.out`, no `.hst`) for the ellipsoid."""
     done = run_cli(tmp_path, ellipsoid_scene(tmp_path, str(files(tmp_path)), **waves), "--t-end", "1")
     assert done.returncode == 2 and message in done.stderr, done.stderr

@@ -1,0 +1,164 @@
+"""Issue 60, BEMIO's `.h5` files (WEC-Sim's and SEA-Stack's input) as a scene's coefficients: SEA-Stack's IEA sphere
+read to its units (Hulme's high-frequency added mass, rho g times its waterplane) and run as SEA-Stack ran its decay;
+radiation from the impulse response alone; the other time factor told by physics; the mistakes in one line."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim.io.bem_file import kind_of
+from sim.io.bemio_h5 import read_bemio
+
+h5py = pytest.importorskip("h5py")  # the bemio extra
+trimesh = pytest.importorskip("trimesh")
+ROOT = Path(__file__).resolve().parents[2]
+SPHERE = ROOT / "assets" / "coefficients" / "bemio" / "iea_sphere.h5"
+REFERENCE = ROOT / "assets" / "reference" / "iea_sphere_decay.csv"
+R, MASS = 5.0, 261800.0
+"""The IEA sphere's radius (m) and mass (kg): half submerged at rest, its centre of gravity 2 m below its centre."""
+
+
+def sphere_scene(tmp_path: Path, bem_file: Path, start: float = -1.0, waves: str = "", t_end: float = 40.0) -> Path:
+    """SEA-Stack's IEA sphere decay: the sphere on a vertical slide, its centre of gravity (2 m below its centre) at
+    `start` (rest: -2 m)."""
+    trimesh.creation.icosphere(subdivisions=4, radius=R).export(tmp_path / "sphere.stl")
+    scene = tmp_path / "iea_sphere.toml"
+    scene.write_text(f'[fluid]\nforces = "panels"\nradiation = "bem"\nbem_file = "{bem_file}"\n\n{waves}'
+                     f'[[bodies]]\nname = "sphere"\nshape = "mesh"\nmesh = "sphere.stl"\nmass = {MASS}\n'
+                     f'centre_of_mass = [0.0, 0.0, -2.0]\nposition = [0.0, 0.0, {start}]\njoint = "prismatic"\naxis = [0.0, 0.0, 1.0]\n\n'
+                     f"[step]\ndt = 0.01\nt_end = {t_end}\n")  # fmt: skip
+    return scene
+
+
+def run_cli(scene: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "sim", "run", "--scene", str(scene), *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=600)  # fmt: skip
+
+
+def test_the_iea_sphere_file_reads_to_its_units():
+    """Told apart from a netCDF4 file by content; its added mass at infinite frequency is Hulme's (1982) half the
+    displaced mass in heave; its heave stiffness and its longest waves' heave force are rho g pi R^2 (0.2 %);
+    its coefficients are about the centre of gravity, 2 m below the centre, where a sphere's surge and pitch couple
+    (A15 = 2 A11: a sphere's pressure passes through its centre)."""
+    assert kind_of(SPHERE) == "bemio"
+    c, g, C = read_bemio(SPHERE)
+    displaced = 1000.0 * 2 / 3 * math.pi * R**3
+    assert c.added_mass_inf[2, 2] == pytest.approx(0.5 * displaced, rel=0.002)
+    stiffness = 1000.0 * g * math.pi * R**2
+    assert C[2, 2] == pytest.approx(stiffness, rel=0.002)
+    assert abs(c.diffraction[0, 0, 2]) == pytest.approx(stiffness, rel=0.002)  # (omega = 0.05 rad/s)
+    assert np.allclose(c.center, [0.0, 0.0, -2.0])
+    assert abs(c.added_mass_inf[0, 4]) == pytest.approx(2.0 * c.added_mass_inf[0, 0], rel=0.01)
+    assert c.omega[0] < c.omega[-1] and np.all(np.diff(c.omega) > 0)
+
+
+def test_a_decay_from_the_iea_sphere_file_heaves_as_sea_stacks(tmp_path):
+    """The sphere released 1 m above rest, 40 s, its radiation from the file: its heave is SEA-Stack's (Chrono with the
+    same file and nonlinear hydrostatics) within 1 % of the release at every instant (0.65 % measured), and 2.7 cm from
+    SEA-Stack's run with linear hydrostatics, which floatsim's exact wet surface is not."""
+    out = tmp_path / "decay.csv"
+    done = run_cli(sphere_scene(tmp_path, SPHERE), "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    run = np.genfromtxt(out, delimiter=",", names=True)
+    reference = np.genfromtxt(REFERENCE, delimiter=",", names=True, skip_header=1)
+    z = np.interp(reference["t"], run["t"], run["sphere_z"])
+    assert np.abs(z - reference["z_nonlinear"]).max() < 0.01
+    assert np.abs(z - reference["z_linear"]).max() > 0.02
+    assert reference["z_nonlinear"].min() < -2.8  # (the decay swings: an undamped body would not pass this)
+
+
+def _copy(source: Path, target: Path, change) -> Path:
+    """`source` copied to `target` with `change(file)` applied to the copy."""
+    target.write_bytes(source.read_bytes())
+    with h5py.File(target, "r+") as f:
+        change(f)
+    return target
+
+
+def _impulse_response_only(f) -> None:
+    """WEC-Sim's K(t) = (2/pi) int B(w)/rho cos(w t) dw in place of added_mass/all and radiation_damping/all, as SEA-Stack's
+    own scripts write their files."""
+    hc = f["body1/hydro_coeffs"]
+    w = f["simulation_parameters/w"][()].ravel()
+    B = hc["radiation_damping/all"][()] * w
+    t = np.arange(0.0, 30.0, 0.02)
+    K = (2 / math.pi) * np.trapezoid(B[..., None] * np.cos(np.outer(w, t)), w, axis=-2)
+    del hc["added_mass/all"], hc["radiation_damping/all"]
+    hc["radiation_damping/impulse_response_fun/K"] = K
+    hc["radiation_damping/impulse_response_fun/t"] = t[:, None]
+
+
+def test_radiation_from_the_impulse_response_alone(tmp_path):
+    """A file with only the radiation's impulse response: its A and B are the ones the response was made from,
+    within 1 % of their largest over the sphere's waves (0.3 to 8 rad/s)."""
+    c0, _, _ = read_bemio(SPHERE)
+    c, _, _ = read_bemio(_copy(SPHERE, tmp_path / "irf.h5", _impulse_response_only))
+    band = (c.omega > 0.3) & (c.omega < 8.0)
+    for M, M0 in ((c.added_mass, c0.added_mass), (c.damping, c0.damping)):
+        for i, j in ((2, 2), (0, 0), (0, 4), (4, 4)):
+            assert np.abs(M[band, i, j] - M0[band, i, j]).max() < 0.01 * np.abs(M0[:, i, j]).max()
+
+
+def _other_time_factor(f) -> None:
+    """The excitation's phases for e^(-i omega t), as SEA-Stack's trimaran script writes Capytaine's into its file."""
+    hc = f["body1/hydro_coeffs/excitation"]
+    for name in ("im", "phase"):
+        hc[name][...] = -hc[name][()]
+
+
+@pytest.mark.slow  # two runs in waves (9 s)
+def test_the_other_time_factor_is_told_by_physics_and_taken_with_a_note(tmp_path):
+    """The same file with its excitation's phases conjugated: a note says which time factor its long-wave surge force
+    shows, and the sphere in waves heaves exactly as from the file in BEMIO's own."""
+    waves = '[waves]\nkind = "regular"\nheight = 1.0\nperiod = 7.0\ndepth = 200.0\n\n'
+    heaves = []
+    for name, path in (("bemio", SPHERE), ("other", _copy(SPHERE, tmp_path / "other.h5", _other_time_factor))):
+        out = tmp_path / f"{name}.csv"
+        done = run_cli(sphere_scene(tmp_path, path, start=-2.0, waves=waves, t_end=10.0), "--out", str(out))
+        assert done.returncode == 0, done.stderr
+        assert ("e^(-i omega t) (Capytaine's)" in done.stderr) == (name == "other"), done.stderr
+        heaves.append(np.genfromtxt(out, delimiter=",", names=True)["sphere_z"])
+    assert np.ptp(heaves[0]) > 0.1  # (the waves move it: 0.22 m in these 10 s)
+    assert np.abs(heaves[0] - heaves[1]).max() < 1e-9
+
+
+def _drop(name: str):
+    return lambda f: f.__delitem__(name)
+
+
+@pytest.mark.parametrize(
+    "change, setting, message",
+    [
+        (_drop("body1/hydro_coeffs/added_mass/inf_freq"), "", "body1 has no added_mass/inf_freq"),
+        (lambda f: f["simulation_parameters/g"].__setitem__(Ellipsis, 9.80), "", "was solved with g = 9.8 m/s^2, the scene has 9.81"),
+        (lambda f: f["simulation_parameters/rho"].__setitem__(Ellipsis, 1025.0), "", "density 1025"),
+        (lambda f: f["body1/hydro_coeffs/linear_restoring_stiffness"].__setitem__(Ellipsis, 0.5 * f["body1/hydro_coeffs/linear_restoring_stiffness"][()]),
+         "", "heave stiffness is"),
+        (lambda f: f.move("body1", "body2"), "", "no body1, body2, ... groups in order"),
+        (_drop("body1/hydro_coeffs/excitation/re"), "wave", None),  # (mag and phase serve)
+    ],
+)  # fmt: skip
+def test_mistakes_are_one_line(tmp_path, change, setting, message):
+    """A cut file, another g or density, another body's stiffness, bodies misnumbered: each one line, exit 2."""
+    path = _copy(SPHERE, tmp_path / "case.h5", change)
+    waves = '[waves]\nkind = "regular"\nheight = 1.0\nperiod = 7.0\ndepth = 200.0\n\n' if setting == "wave" else ""
+    done = run_cli(sphere_scene(tmp_path, path, waves=waves), "--t-end", "0.5")
+    if message is None:
+        assert done.returncode == 0, done.stderr
+        return
+    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and len([line for line in done.stderr.splitlines() if "error" in line]) == 1, done.stderr
+
+
+def test_without_h5py_one_line_names_the_extra(tmp_path):
+    code = ("import sys; sys.modules['h5py'] = None; from sim.commands import floatsim; "
+            f"sys.exit(floatsim(['run', '--scene', {str(sphere_scene(tmp_path, SPHERE))!r}, '--t-end', '0.1']))")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and 'pip install -e ".[bemio]"' in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr

@@ -19,7 +19,11 @@ blocks of the other periods (and their lines in its table of the solve's times) 
 the other periods too. The hemisphere's `.out` keeps every OUT_STRIDE-th (it is read for g, ULEN, the origins and the
 depth only).
 
-Run: python -m studies.wamit_examples PATH/TO/WEC-Sim/examples/BEMIO/WAMIT [PATH/TO/WEC-Sim_Applications]
+And RAFT (github.com/WISDEM/RAFT, Apache-2.0, commit e6cb69e) ships, in examples/OC4semi-WAMIT_Coefs/, the OC4
+DeepCwind semi-submersible's WAMIT difference-frequency QTFs `marin_semi.12d` (56 periods, 2.1 to 25 s, heading 0, one
+triangle of the period pairs): kept are the pairs of every SEMI_STRIDE-th period, under a title line naming the source.
+
+Run: python -m studies.wamit_examples PATH/TO/WEC-Sim/examples/BEMIO/WAMIT [PATH/TO/WEC-Sim_Applications [PATH/TO/RAFT]]
 """
 
 from __future__ import annotations
@@ -34,6 +38,8 @@ RUNS = {"Cylinder/cyl": 25, "Ellipsoid/ellipsoid": 8}
 """Each run and its STRIDE: about 21 and 39 periods of 525 and 308."""
 DRIFT_RUN, DRIFT_STRIDE, OUT_STRIDE = "Mean_Drift/WAMIT/outputFiles/sphere", 2, 10
 """The hemisphere: 100 of its 200 periods (0.1 rad/s apart, to follow its drift's peak), 20 in its .out."""
+SEMI_RUN, SEMI_STRIDE = "examples/OC4semi-WAMIT_Coefs/marin_semi.12d", 2
+"""The semi's QTFs: 28 of its 56 periods (0.1 rad/s apart)."""
 STAR = re.compile(r"^\s*\*{20,}\s*$")
 PERIOD = re.compile(r"Wave period \(sec\)\s*=\s*(\S+)")
 
@@ -103,7 +109,25 @@ def hemisphere(applications: Path) -> None:
     print(f"hemisphere: {len(kept)} periods -> {TARGET.relative_to(ROOT)}")
 
 
+def semi(raft: Path) -> None:
+    """The OC4 semi's `.12d`, the rows whose both periods are every SEMI_STRIDE-th of the file's, from the longest."""
+    lines = (raft / SEMI_RUN).read_text().splitlines(keepends=True)
+    periods = sorted({float(line.split()[0]) for line in lines if line.split()}, reverse=True)
+    kept = periods[::SEMI_STRIDE]
+
+    def keep(line: str) -> bool:
+        words = line.split()
+        return all(any(abs(float(w) - p) <= 1e-5 * p for p in kept) for w in words[:2])
+
+    title = " WAMIT Numeric Output -- marin_semi.12d of RAFT (Apache-2.0) commit e6cb69e, every 2nd period (floatsim's subset)\n"
+    out = [line for line in lines if line.split() and keep(line)]
+    (TARGET / "marin_semi.12d").write_text(title + "".join(out))
+    print(f"marin_semi.12d: {len(kept)} periods, {len(out)} rows -> {TARGET.relative_to(ROOT)}")
+
+
 if __name__ == "__main__":
     main(Path(sys.argv[1]))
     if len(sys.argv) > 2:
         hemisphere(Path(sys.argv[2]))
+    if len(sys.argv) > 3:
+        semi(Path(sys.argv[3]))

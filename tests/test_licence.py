@@ -11,7 +11,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OTHERS = re.compile(r"WEC-Sim|SEA-Stack|OpenFAST|r-test|WAMIT")
 """The projects whose files floatsim derives shipped files from (WAMIT: another code's run, whoever shared it)."""
-TEXT = (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst")
+TEXT = (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst", ".8", ".9", ".12d")
 """The shipped text files' suffixes (WAMIT's output and numeric files among them)."""
 
 
@@ -39,5 +39,5 @@ def test_notice_names_every_derived_file_and_each_file_it_names_is_shipped():
     assert {"assets/coefficients/imported/rm3_wecsim.npz", "assets/meshes/f3of_base.stl", "assets/meshes/rm3_wecsim_spar.stl"} <= named
     missing = [name for name in named if not (ROOT / name).is_file()]
     assert not missing, f"NOTICE names files that are not shipped: {missing}"
-    for source in ("Apache License 2.0", "MIT License", "commit 4d1eae6", "commit 3d884b1", "commit a23d299"):
+    for source in ("Apache License 2.0", "MIT License", "commit 4d1eae6", "commit 3d884b1", "commit a23d299", "commit e6cb69e"):
         assert source in notice

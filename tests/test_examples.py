@@ -160,3 +160,19 @@ def test_12_bemio_sphere_heaves_as_sea_stacks_run_of_the_same_file():
     nonlinear, linear = (numbers(line)[0] for line in out.splitlines() if "against SEA-Stack" in line)
     assert nonlinear < 0.01 and linear > 0.02, out
     assert numbers(out.splitlines()[-1])[0] < -2.8, out
+
+
+@pytest.mark.slow  # the runs of tests/io/test_nemoh.py, as a reader runs them
+def test_13_nemoh_run_heaves_as_wamits_run_of_the_same_body():
+    """The ellipsoid's heave from NEMOH's run within 2 % of its amplitude from WAMIT's."""
+    out = run("13_nemoh_run.py", "--t-end", "40")
+    amplitude, apart, percent = numbers(out)[-3:]
+    assert 0.4 < amplitude < 0.6 and percent < 2.0, out
+
+
+@pytest.mark.slow  # a Capytaine solve
+def test_14_capytaine_netcdf_decays_as_floatsims_own_solve():
+    """The sphere's decay from the user's own Capytaine solve within 2 % of the release of the preset's (0.94 %)."""
+    out = run("14_capytaine_netcdf.py", "--t-end", "10")
+    apart, percent = numbers(out)[-2:]
+    assert percent < 2.0, out

@@ -11,7 +11,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OTHERS = re.compile(r"WEC-Sim|SEA-Stack|OpenFAST|r-test|WAMIT")
 """The projects whose files floatsim derives shipped files from (WAMIT: another code's run, whoever shared it)."""
-TEXT = (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst", ".8", ".9", ".12d")
+TEXT = (".dat", ".txt", ".csv", ".json", ".out", ".1", ".3", ".hst", ".8", ".9", ".12d", ".cal", ".tec")
 """The shipped text files' suffixes (WAMIT's output and numeric files among them)."""
 
 

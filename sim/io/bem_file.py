@@ -1,7 +1,9 @@
 """A scene's bodies' coefficients from a file (`[fluid] bem_file`) instead of a Capytaine solve.
 
-The file is WAMIT's output (`.out`, read by sim/io/wamit.py) or floatsim's own coefficients file (`.npz`, as
-`bem.Coefficients.save` writes it). Either is taken to the scene's bodies:
+The file is WAMIT's output (`.out`, read by sim/io/wamit.py) or its numeric files (`.1`, `.3`, `.hst`:
+sim/io/wamit_numeric.py), a BEMIO `.h5` (sim/io/bemio_h5.py), a NEMOH run (sim/io/nemoh.py), a Capytaine dataset
+(sim/io/capytaine_nc.py) or floatsim's own coefficients file (`.npz`, as `bem.Coefficients.save` writes it), told
+apart by content. Each is taken to the scene's bodies:
 
 - its bodies are the scene's [[bodies]] by where they are: each entry takes the file's body whose centre of mass is
   nearest its own at the start, one each (one-line error when the counts differ or two entries want one body);
@@ -34,6 +36,7 @@ from sim.hydro.hydrostatics import hydrostatics
 from sim.hydro.linear_hydro import LinearLoads
 from sim.io.bemio_h5 import is_bemio, read_bemio
 from sim.io.capytaine_nc import read_capytaine
+from sim.io.nemoh import is_nemoh, read_nemoh
 from sim.io.wamit import read_out
 from sim.io.wamit_drift import DRIFT, read_drift
 from sim.io.wamit_numeric import Assumed, beside, columns_of, read_numeric, stiffness
@@ -55,7 +58,7 @@ def bem_file_path(name: str, base_dir: str) -> Path:
 
 def kind_of(path: Path) -> str:
     """What `path` holds, told by its content (not its name): "npz" (floatsim's coefficients), "bemio" (a BEMIO .h5
-    file: HDF5 with its simulation_parameters group), "netcdf" (a Capytaine dataset, netCDF3 or 4), "out" (WAMIT's output: its header's words), "numeric" (one of WAMIT's numeric files: rows of
+    file: HDF5 with its simulation_parameters group), "nemoh" (a NEMOH run's Nemoh.cal or Tecplot results), "netcdf" (a Capytaine dataset, netCDF3 or 4), "out" (WAMIT's output: its header's words), "numeric" (one of WAMIT's numeric files: rows of
     3, 4, 5 or 7 numbers) or, else, "out" (whose reader says what is wrong)."""
     with open(path, "rb") as f:
         head = f.read(65536)
@@ -63,6 +66,8 @@ def kind_of(path: Path) -> str:
         return "npz"
     if is_bemio(head):
         return "bemio"
+    if is_nemoh(head):
+        return "nemoh"
     if head[:3] == b"CDF" or head[:4] == b"\x89HDF":
         return "netcdf"
     if any(word in head for word in (b"Gravity:", b"Wave period", b"POTEN run date")):
@@ -84,6 +89,8 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: 
         c = _from_capytaine(path, models, starts, fluid)
     elif kind == "bemio":
         c = _from_bemio(path, models, starts, fluid)
+    elif kind == "nemoh":
+        c = _from_capytaine(path, models, starts, fluid, read_nemoh)
     else:
         c = _from_wamit(path, kind, models, starts, fluid, water, drift)
     if drift and c.mean_drift is None and not c.has_far_field:
@@ -153,10 +160,11 @@ def drift_table(path: Path, run, fluid) -> np.ndarray | None:
     return table
 
 
-def _from_capytaine(path: Path, models: list, starts: list, fluid) -> Coefficients:
-    """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py), made reciprocal and passive and moved to the bodies'
-    centres of mass; its hydrostatic stiffness, when it has one, checked against the scene's bodies."""
-    c, gravity, g, C = read_capytaine(path)
+def _from_capytaine(path: Path, models: list, starts: list, fluid, read=read_capytaine) -> Coefficients:
+    """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py; or a NEMOH run's, sim/io/nemoh.py, which reads to the
+    same: `read`), made reciprocal and passive and moved to the bodies' centres of mass; its hydrostatic stiffness,
+    when it has one, checked against the scene's bodies."""
+    c, gravity, g, C = read(path)
     _check_rho(path, c.rho, fluid)  # (before the stiffness, which holds rho)
     _check_g(path, g, fluid)
     if C is not None:

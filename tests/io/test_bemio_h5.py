@@ -162,3 +162,44 @@ def test_without_h5py_one_line_names_the_extra(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 2 and 'pip install -e ".[bemio]"' in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
+
+
+def _bemio_file(path: Path, omega, A, B, A_inf, X, headings_deg, cg, rho=1025.0, g=9.81, depth=None) -> Path:
+    """Known dimensional coefficients (floatsim's time factor) as WEC-Sim's writeBEMIOH5 lays them out, as h5py sees
+    it: per body its six rows against every column, nondimensional (A/rho, B/(rho w), X/(rho g)), WAMIT's e^(i w t)."""
+    bodies = A.shape[1] // 6
+    with h5py.File(path, "w") as f:
+        f["simulation_parameters/rho"] = [[rho]]
+        f["simulation_parameters/g"] = [[g]]
+        f["simulation_parameters/w"] = omega[:, None]
+        f["simulation_parameters/wave_dir"] = np.asarray(headings_deg, float)[:, None]
+        f["simulation_parameters/water_depth"] = "infinite" if depth is None else [[depth]]
+        for b in range(bodies):
+            rows = slice(6 * b, 6 * b + 6)
+            hc = f.create_group(f"body{b + 1}/hydro_coeffs")
+            hc["added_mass/inf_freq"] = A_inf[rows] / rho
+            hc["added_mass/all"] = np.moveaxis(A[:, rows], 0, -1) / rho
+            hc["radiation_damping/all"] = np.moveaxis(B[:, rows], 0, -1) / (rho * omega)
+            Xb = np.conj(X[:, :, rows]).transpose(2, 1, 0) / (rho * g)
+            hc["excitation/re"], hc["excitation/im"] = Xb.real, Xb.imag
+            f[f"body{b + 1}/properties/cg"] = np.asarray(cg[b], float)[:, None]
+    return path
+
+
+def test_several_bodies_come_back_as_the_coefficients_they_were_written_from(tmp_path):
+    """Two bodies 30 m apart, two headings, frequencies written in descending order: every coupling block, the
+    excitation of each body at each heading, each body's centre of gravity and the depth come back."""
+    rng = np.random.default_rng(60)
+    n, d = 5, 12
+    omega = np.linspace(2.0, 0.4, n)
+    A, B = rng.uniform(1e3, 1e5, (n, d, d)), rng.uniform(1e2, 1e4, (n, d, d))
+    A_inf = rng.uniform(1e3, 1e5, (d, d))
+    X = (rng.normal(size=(n, 2, d)) + 1j * rng.normal(size=(n, 2, d))) * 1e4
+    cg = [(0.0, 0.0, -1.0), (30.0, 0.0, -0.5)]
+    c, g, C = read_bemio(_bemio_file(tmp_path / "two.h5", omega, A, B, A_inf, X, [90.0, 0.0], cg, depth=50.0))
+    order = np.argsort(omega)
+    assert np.allclose(c.omega, omega[order]) and c.depth == 50.0 and g == 9.81 and C is None
+    assert np.allclose(c.added_mass, A[order]) and np.allclose(c.damping, B[order]) and np.allclose(c.added_mass_inf, A_inf)
+    assert np.allclose(c.headings, np.radians([0.0, 90.0]))
+    assert np.allclose(c.diffraction, X[order][:, ::-1])  # (headings sorted: 0 then 90 degrees)
+    assert np.allclose(c.center, cg)

@@ -120,3 +120,61 @@ def test_mistakes_are_one_line(tmp_path, change, message):
     done = run_cli(_scene(tmp_path, run / "Nemoh.cal"), "--t-end", "0.5")
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert "Traceback" not in done.stderr and len([line for line in done.stderr.splitlines() if "error" in line]) == 1, done.stderr
+
+
+def _nemoh_run(folder: Path, omega, A, B, X, headings_deg, points, rho=1025.0, g=9.81) -> Path:
+    """Known dimensional coefficients (floatsim's time factor) as a NEMOH run lays them out: Nemoh.cal with each body's
+    six dofs about its point, a radiation zone per mode moved (rows: omega, then A and B of every force), an
+    excitation zone per heading (rows: omega, then |X| and arg X of every force)."""
+    d = A.shape[1]
+    cal = [
+        "--- Environment ---",
+        f"{rho}\t! RHO",
+        f"{g}\t! G",
+        "0.\t! DEPTH",
+        "0. 0.\t! XEFF YEFF",
+        "--- Bodies ---",
+        f"{d // 6}\t! bodies",
+    ]
+    for x, y, z in points:
+        cal += ["--- Body ---", "mesh\\body.dat", "100 50", "6\t! Number of degrees of freedom"]
+        cal += [f"1 {a} {b} {c} 0. 0. 0." for a, b, c in np.eye(3)] + [f"2 {a} {b} {c} {x} {y} {z}" for a, b, c in np.eye(3)]
+        cal += (
+            ["6\t! forces"] + [f"1 {a} {b} {c} 0. 0. 0." for a, b, c in np.eye(3)] + [f"2 {a} {b} {c} {x} {y} {z}" for a, b, c in np.eye(3)]
+        )
+        cal += ["0\t! additional lines"]
+    cal += ["--- Load cases ---", f"{len(omega)} {omega.min()} {omega.max()}", f"{len(headings_deg)} 0. 90."]
+    (folder / "Results").mkdir(parents=True)
+    (folder / "Nemoh.cal").write_text("\n".join(cal) + "\n")
+    head = ['VARIABLES="w (rad/s)"'] + [f'"A {i + 1} {j + 1}" "B {i + 1} {j + 1}"' for i in range(1) for j in range(d)]
+    zones = []
+    for moved in range(d):
+        zones.append(f'Zone t="Motion of body {moved // 6 + 1} in DoF {moved % 6 + 1}",I= {len(omega)},F=POINT')
+        zones += [
+            " ".join(f"{v:.9E}" for v in [w, *np.ravel(np.column_stack([A[k, :, moved], B[k, :, moved]]))]) for k, w in enumerate(omega)
+        ]
+    (folder / "Results" / "RadiationCoefficients.tec").write_text("\n".join(head + zones) + "\n")
+    zones = []
+    for h, beta in enumerate(headings_deg):
+        zones.append(f'Zone t="Diffraction force - beta = {beta:.3f} deg",I= {len(omega)},F=POINT')
+        zones += [
+            " ".join(f"{v:.9E}" for v in [w, *np.ravel(np.column_stack([np.abs(X[k, h]), np.angle(X[k, h])]))]) for k, w in enumerate(omega)
+        ]
+    (folder / "Results" / "ExcitationForce.tec").write_text("\n".join(head + zones) + "\n")
+    return folder / "Nemoh.cal"
+
+
+def test_several_bodies_come_back_as_the_coefficients_they_were_written_from(tmp_path):
+    """Two bodies 100 m apart (as WEC-Sim's NEMOH cubes), two headings: every coupling block, each body's excitation at
+    each heading and each body's reference point come back; without Mesh/ files, the centres of gravity are the
+    reference points and there is no stiffness to check."""
+    rng = np.random.default_rng(61)
+    n, d = 6, 12
+    omega = np.linspace(0.3, 1.8, n)
+    A, B = rng.uniform(1e3, 1e5, (n, d, d)), rng.uniform(1e2, 1e4, (n, d, d))
+    X = (rng.normal(size=(n, 2, d)) + 1j * rng.normal(size=(n, 2, d))) * 1e4
+    points = [(0.0, 0.0, -2.5), (100.0, 0.0, -2.5)]
+    c, gravity, g, C = read_nemoh(_nemoh_run(tmp_path / "cubes", omega, A, B, X, [0.0, 30.0], points))
+    assert np.allclose(c.omega, omega) and np.allclose(c.added_mass, A) and np.allclose(c.damping, B)
+    assert np.allclose(c.diffraction, X) and np.allclose(c.headings, np.radians([0.0, 30.0]))
+    assert np.allclose(c.center, points) and np.allclose(gravity, points) and C is None and c.rho == 1025.0 and c.depth == np.inf

@@ -141,23 +141,28 @@ def _from_wamit(path: Path, kind: str, models: list, starts: list, fluid, water,
 def drift_table(path: Path, run, fluid) -> np.ndarray | None:
     """(n, m, 3) the mean drift of the WAMIT run whose numeric files `path` names, from its `.8` (momentum conservation)
     or else its `.9` (pressure integration) beside it, at the run's frequencies and headings, the yaw moment about the
-    world's origin; None when neither is there."""
-    found = next((beside(path, s) for s in DRIFT if beside(path, s).is_file()), None)
+    world's origin; None when neither is there. Several bodies': their total (what floatsim applies to their tree), from
+    the `.9`, each body's force and yaw about its own origin (a `.8`'s momentum flux is the bodies' together, about a point
+    no public file here lets us check: refused in one line)."""
+    bodies = run.added_mass.shape[1] // 6
+    kinds = DRIFT if bodies == 1 else DRIFT[1:]
+    found = next((beside(path, s) for s in kinds if beside(path, s).is_file()), None)
     if found is None:
+        if bodies > 1 and beside(path, ".8").is_file():
+            raise ConfigError(f"[fluid] bem_file {str(path)!r}: several bodies' drift is read from WAMIT's .9 (pressure integration, "
+                              "each body's), not its .8 (their total by momentum conservation): put the run's .9 beside it")  # fmt: skip
         return None
-    if run.added_mass.shape[1] > 6:
-        raise ConfigError(f"[fluid] bem_file {str(path)!r}: the drift of several bodies from {found.name} is not read (one body's only)")
-    periods, headings, D = read_drift(found, fluid.rho, run.g, run.length)
+    periods, headings, D = read_drift(found, fluid.rho, run.g, run.length, bodies)
     beta = np.mod(np.radians(headings), 2 * math.pi)
     if len(beta) != len(run.headings) or not np.allclose(np.sort(beta), np.sort(np.mod(run.headings, 2 * math.pi)), atol=1e-6):
         raise ConfigError(f"[fluid] bem_file {str(path)!r}: {found.name}'s headings ({', '.join(f'{h:g}' for h in headings)} degrees) "
                           "are not the excitation's")  # fmt: skip
     D = D[:, np.argsort(beta)][:, np.argsort(np.argsort(np.mod(run.headings, 2 * math.pi)))]
+    origins = np.atleast_2d(run.centers)[:, :2]  # each body's moment about its origin -> the world's
+    D[..., 2] += origins[:, 0] * D[..., 1] - origins[:, 1] * D[..., 0]
+    total = D.sum(axis=2)
     omega = 2 * math.pi / periods[::-1]
-    table = np.stack([[np.interp(run.omega, omega, D[::-1, m, i]) for i in range(3)] for m in range(len(beta))], -1).transpose(1, 2, 0)
-    x0, y0 = np.atleast_2d(run.centers)[0, :2]  # the moment about the body's origin -> the world's
-    table[..., 2] += x0 * table[..., 1] - y0 * table[..., 0]
-    return table
+    return np.stack([[np.interp(run.omega, omega, total[::-1, m, i]) for i in range(3)] for m in range(len(beta))], -1).transpose(1, 2, 0)
 
 
 def _from_capytaine(path: Path, models: list, starts: list, fluid, read=read_capytaine) -> Coefficients:

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from sim.errors import ConfigError
 from sim.hydro import bem
 from sim.hydro.drift import body_rao, mean_drift
 from sim.io.bem_file import drift_table
@@ -31,7 +32,7 @@ MASS = RHO * 2.07293
 def drift_at(path: Path, omega: float) -> float:
     """The surge drift per unit amplitude squared, N/m², of a `.8` or `.9` at omega (linear between its frequencies)."""
     periods, _, D = read_drift(path, RHO, G)
-    return float(np.interp(omega, 2 * math.pi / periods[::-1], D[::-1, 0, 0]))
+    return float(np.interp(omega, 2 * math.pi / periods[::-1], D[::-1, 0, 0, 0]))
 
 
 def run_hemisphere(folder: Path, bem_file: Path, period: float = 2.0, height: float = 0.1) -> subprocess.CompletedProcess:
@@ -118,3 +119,25 @@ def test_a_drift_files_units_headings_and_moment_point(tmp_path):
     np.testing.assert_allclose(table[0, 0], [0.5 * force, 0.0, 0.05 * moment + x0 * 0.0 - y0 * 0.5 * force], rtol=1e-6)
     np.testing.assert_allclose(table[0, 1], [0.1 * force, 0.3 * force, 0.2 * moment + x0 * 0.3 * force - y0 * 0.1 * force], rtol=1e-6)
     np.testing.assert_allclose(table[1, :, 0], [1.0 * force, 2.0 * force], rtol=1e-6)
+
+
+def test_several_bodies_drift_is_their_total_from_the_9(tmp_path):
+    """Two bodies' `.9` (modes 1, 2, 6 and 7, 8, 12, each body's yaw about its own origin): the run's drift is their total,
+    the yaw about the world's origin (each body's M_z + x_b F_y,b - y_b F_x,b); the `.8` alone is refused in one line (its
+    momentum flux is the bodies' together)."""
+    rows = [(10.0, 0.0, 0.0, 1, 0.5, 0.0, 0.5, 0.0), (10.0, 0.0, 0.0, 2, 0.1, 0.0, 0.1, 0.0), (10.0, 0.0, 0.0, 6, 0.05, 0.0, 0.05, 0.0),
+            (10.0, 0.0, 0.0, 3, 7.0, 0.0, 7.0, 0.0),  # heave: not a drift floatsim applies
+            (10.0, 0.0, 0.0, 7, 0.2, 0.0, 0.2, 0.0), (10.0, 0.0, 0.0, 8, -0.3, 0.0, -0.3, 0.0), (10.0, 0.0, 0.0, 12, 0.02, 0.0, 0.02, 0.0)]  # fmt: skip
+    text = " WAMIT Numeric Output -- Filename  run.9\n" + "".join(" ".join(f"{v:.6E}" for v in r) + "\n" for r in rows)
+    (tmp_path / "run.9").write_text(text)
+    origins = np.array([[0.0, 0.0, 0.0], [30.0, 5.0, 0.0]])
+    run = SimpleNamespace(omega=np.array([2 * math.pi / 10.0]), headings=np.radians([0.0]), g=G, length=1.0, centers=origins,
+                          added_mass=np.zeros((1, 12, 12)))  # fmt: skip
+    table = drift_table(tmp_path / "run.1", run, SimpleNamespace(rho=RHO))
+    f = RHO * G
+    x1, y1 = origins[1, :2]
+    expected = [(0.5 + 0.2) * f, (0.1 - 0.3) * f, (0.05 + 0.02) * f + x1 * (-0.3 * f) - y1 * (0.2 * f)]
+    np.testing.assert_allclose(table[0, 0], expected, rtol=1e-6)
+    (tmp_path / "run.9").rename(tmp_path / "run.8")
+    with pytest.raises(ConfigError, match="several bodies' drift is read from WAMIT's .9"):
+        drift_table(tmp_path / "run.1", run, SimpleNamespace(rho=RHO))

@@ -234,7 +234,9 @@ def _check_stiffness(path: Path, C: np.ndarray | None, centers: np.ndarray, mode
 
 def _check_sea(path: Path, c: Coefficients, water) -> None:
     """One line unless the file can excite the scene's bodies in its sea: excitation at the sea's depth, and at its
-    headings where the file has only one (a file of several is interpolated between them)."""
+    headings where the file has only one; a file of several is interpolated between neighbouring headings, but not
+    across a gap wider than HEADING_GAP (a file of 0 to 180 degrees, as WAMIT users solve a symmetric body, says nothing
+    of waves from 270)."""
     if not c.has_excitation:
         raise ConfigError(f"[fluid] bem_file {str(path)!r} has no wave excitation: the scene's waves need it")
     if not (c.depth == water.depth or abs(c.depth - water.depth) <= 1e-6 * water.depth):
@@ -245,6 +247,19 @@ def _check_sea(path: Path, c: Coefficients, water) -> None:
         if off > 1e-6:
             raise ConfigError(f"[fluid] bem_file {str(path)!r} has the excitation of waves travelling at {math.degrees(c.headings[0]):g} "
                               f"degrees only: set [waves] direction = {math.degrees(c.headings[0]):g} (and no spreading)")  # fmt: skip
+    h = np.sort(np.mod(c.headings, 2 * math.pi))
+    ends = np.append(h[1:], h[0] + 2 * math.pi)
+    for start, end in zip(h, ends):
+        if len(h) > 1 and end - start > HEADING_GAP:
+            inside = np.mod(np.asarray(water.direction) - start, 2 * math.pi)
+            if np.any((inside > 1e-6) & (inside < end - start - 1e-6)):
+                raise ConfigError(f"[fluid] bem_file {str(path)!r} has no headings between {math.degrees(start):g} and "
+                                  f"{math.degrees(end) % 360:g} degrees, and the scene's waves travel there ([waves] direction, "
+                                  "spreading): solve the file at headings around the sea's")  # fmt: skip
+
+
+HEADING_GAP = math.pi / 2
+"""rad: a file's excitation is interpolated between headings at most this far apart (wider: no heading there)."""
 
 
 def matched(c: Coefficients, starts: np.ndarray, path: Path) -> Coefficients:

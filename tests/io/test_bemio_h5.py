@@ -203,3 +203,28 @@ def test_several_bodies_come_back_as_the_coefficients_they_were_written_from(tmp
     assert np.allclose(c.headings, np.radians([0.0, 90.0]))
     assert np.allclose(c.diffraction, X[order][:, ::-1])  # (headings sorted: 0 then 90 degrees)
     assert np.allclose(c.center, cg)
+
+
+def _two_headings(f) -> None:
+    """The file's excitation at 0 and 90 degrees (the sphere's is the same at both, as an axisymmetric body's is)."""
+    del f["simulation_parameters/wave_dir"]
+    f["simulation_parameters/wave_dir"] = [[0.0], [90.0]]
+    hc = f["body1/hydro_coeffs/excitation"]
+    for name in ("re", "im", "mag", "phase"):
+        values = hc[name][()]
+        del hc[name]
+        hc[name] = np.concatenate([values, values], axis=1)
+
+
+@pytest.mark.parametrize("direction, refused", [(45.0, False), (90.0, False), (180.0, True), (300.0, True)])
+def test_a_sea_outside_the_files_headings_is_one_line(tmp_path, direction, refused):
+    """A file solved at 0 and 90 degrees excites waves between them (interpolated) and at them; waves from the gap
+    beyond (more than 90 degrees without a heading) are refused in one line."""
+    path = _copy(SPHERE, tmp_path / "two.h5", _two_headings)
+    waves = f'[waves]\nkind = "regular"\nheight = 1.0\nperiod = 7.0\ndepth = 200.0\ndirection = {direction}\n\n'
+    done = run_cli(sphere_scene(tmp_path, path, start=-2.0, waves=waves), "--t-end", "0.2")
+    if not refused:
+        assert done.returncode == 0, done.stderr
+        return
+    assert done.returncode == 2 and "has no headings between 90 and 0 degrees" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr

@@ -251,7 +251,7 @@ def _check_sea(path: Path, c: Coefficients, water) -> None:
     ends = np.append(h[1:], h[0] + 2 * math.pi)
     for start, end in zip(h, ends):
         if len(h) > 1 and end - start > HEADING_GAP:
-            inside = np.mod(np.asarray(water.direction) - start, 2 * math.pi)
+            inside = np.mod(_main_directions(water) - start, 2 * math.pi)
             if np.any((inside > 1e-6) & (inside < end - start - 1e-6)):
                 raise ConfigError(f"[fluid] bem_file {str(path)!r} has no headings between {math.degrees(start):g} and "
                                   f"{math.degrees(end) % 360:g} degrees, and the scene's waves travel there ([waves] direction, "
@@ -260,6 +260,17 @@ def _check_sea(path: Path, c: Coefficients, water) -> None:
 
 HEADING_GAP = math.pi / 2
 """rad: a file's excitation is interpolated between headings at most this far apart (wider: no heading there)."""
+MAIN_ENERGY = 0.99
+"""The share of a sea's energy whose directions a file's headings must cover (a spread sea's faint tails may not)."""
+
+
+def _main_directions(water) -> np.ndarray:
+    """The directions of the sea's components that carry MAIN_ENERGY of its energy, the largest first."""
+    direction = np.atleast_1d(np.asarray(water.direction, float))
+    energy = np.atleast_1d(np.asarray(water.amplitude, float)) ** 2 * np.ones_like(direction)
+    order = np.argsort(energy)[::-1]
+    share = np.cumsum(energy[order]) / max(energy.sum(), 1e-300)
+    return direction[order[: int(np.searchsorted(share, MAIN_ENERGY)) + 1]]
 
 
 def matched(c: Coefficients, starts: np.ndarray, path: Path) -> Coefficients:

@@ -16,7 +16,8 @@ the length scale):
 A file without `added_mass/all` and `radiation_damping/all` (SEA-Stack's own scripts write only the radiation's
 impulse response) has them from `radiation_damping/impulse_response_fun/K` (K / rho against `t`), inverting WEC-Sim's
 K(t) = (2/pi) int B(w) cos(w t) dw: B(w) = int K(t) cos(w t) dt, A(w) = A(inf) - (1/w) int K(t) sin(w t) dt (Ogilvie),
-0.1 % of the largest entry on SEA-Stack's IEA sphere, whose file has both.
+0.1 % of the largest entry over the IEA sphere's waves (0.3-8 rad/s; 1 % at the grid's ends) in SEA-Stack's file,
+which has both.
 
 BEMIO's time factor is WAMIT's, e^(i omega t) (its Capytaine and NEMOH readers conjugate to it): the excitation is
 conjugated to floatsim's e^(-i omega t). Read through h5py (the bemio extra).
@@ -28,7 +29,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import trapezoid
 
 from sim.errors import ConfigError
 from sim.hydro.bem import Coefficients
@@ -67,10 +67,12 @@ def _scalar(f, name: str, where: str) -> float:
 
 
 def _from_impulse_response(K: np.ndarray, t: np.ndarray, omega: np.ndarray, A_inf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n, r, c) A and B at `omega` from the radiation's impulse response K (r, c, nt) at times `t`."""
-    cos, sin = np.cos(np.outer(omega, t)), np.sin(np.outer(omega, t))
-    B = trapezoid(K[None] * cos[:, None, None, :], t, axis=-1)
-    A = A_inf[None] - trapezoid(K[None] * sin[:, None, None, :], t, axis=-1) / omega[:, None, None]
+    """(n, r, c) A and B at `omega` from the radiation's impulse response K (r, c, nt) at times `t` (the trapezoid rule,
+    as weights: no (n, r, c, nt) array)."""
+    step = np.diff(t)
+    weights = np.concatenate([[step[0] / 2], (step[:-1] + step[1:]) / 2, [step[-1] / 2]])
+    B = np.einsum("rct,nt->nrc", K * weights, np.cos(np.outer(omega, t)))
+    A = A_inf[None] - np.einsum("rct,nt->nrc", K * weights, np.sin(np.outer(omega, t))) / omega[:, None, None]
     return A, B
 
 
@@ -83,6 +85,9 @@ def _radiation(hc, rho: float, omega: np.ndarray, where: str, body: int) -> tupl
     elif "radiation_damping/impulse_response_fun/K" in hc:
         K = rho * _get(hc, "radiation_damping/impulse_response_fun/K", where)
         t = _get(hc, "radiation_damping/impulse_response_fun/t", where).ravel()
+        if K.ndim != 3 or K.shape[:2] != A_inf.shape or K.shape[2] != len(t) or len(t) < 2:
+            raise ConfigError(f"{where} body{body}: the radiation's impulse response {K.shape} does not fit its {len(t)} times and the "
+                              f"infinite-frequency added mass {A_inf.shape} (a cut file?)")  # fmt: skip
         A, B = _from_impulse_response(K, t, omega, A_inf)
     else:
         raise ConfigError(f"{where} body{body} has neither radiation_damping/all nor its impulse response")
@@ -150,6 +155,6 @@ def read_bemio(path: Path) -> tuple[Coefficients, float, np.ndarray | None]:
     centers = np.array(cg)
     if not np.isfinite(A).all() or not np.isfinite(B).all():
         raise ConfigError(f"{where}: its added mass or damping holds NaN or infinity")
-    c = Coefficients(omega[order], A[order], B[order], A_inf, rho, depth if depth > 0 else math.inf, 0,
-                     centers[0] if len(bodies) == 1 else centers, turn[by_heading], X, None if X is None else np.zeros_like(X))  # fmt: skip
+    c = Coefficients(omega[order], A[order], B[order], A_inf, rho, depth if depth > 0 else math.inf, 0, centers[0] if len(bodies) == 1 else centers,
+                     None if X is None else turn[by_heading], X, None if X is None else np.zeros_like(X))  # fmt: skip
     return c, g, (C if C.any() else None)

@@ -36,7 +36,7 @@ class Qtf:
     omega: np.ndarray
     """(n,) rad/s, ascending."""
     headings: np.ndarray
-    """(m,) rad, as the file lists them."""
+    """(m,) rad, ascending, in the file's own range (not wrapped to [0, 2 pi) as Coefficients.headings are)."""
     T: np.ndarray
     """(n, n, m, m, 6k) complex: N/m² (forces) and N m/m² (moments) per unit amplitude of each wave; T[i, j, a, b] for
     the waves omega_i from headings[a] and omega_j from headings[b]."""
@@ -81,8 +81,11 @@ def read_qtf(path: Path, rho: float, g: float, ulen: float = 1.0) -> Qtf:
     T[j, i, b, a, mode] = mirrored  # the other triangle first: the file's own rows win on the diagonal
     T[i, j, a, b, mode] = value
     filled[j, i, b, a] = filled[i, j, a, b] = True
-    pairs = len(np.unique(np.stack([np.minimum(i, j), np.maximum(i, j)]), axis=1).T)
-    if pairs != len(omega) * (len(omega) + 1) // 2:
-        raise ConfigError(f"{str(path)!r}: {pairs} of the {len(omega) * (len(omega) + 1) // 2} pairs of its {len(omega)} periods "
+    _, per_pair = np.unique(np.minimum(i, j) * len(omega) + np.maximum(i, j), return_counts=True)
+    if len(per_pair) != len(omega) * (len(omega) + 1) // 2:
+        raise ConfigError(f"{str(path)!r}: {len(per_pair)} of the {len(omega) * (len(omega) + 1) // 2} pairs of its {len(omega)} periods "
                           "(a cut file?)")  # fmt: skip
+    if per_pair.min() != per_pair.max():
+        raise ConfigError(f"{str(path)!r}: some pairs of periods have {per_pair.min()} rows, others {per_pair.max()} (its heading pairs "
+                          "and modes: a file cut inside a pair?)")  # fmt: skip
     return Qtf(kind, omega, np.radians(headings), T, filled)

@@ -228,3 +228,18 @@ def test_a_sea_outside_the_files_headings_is_one_line(tmp_path, direction, refus
         return
     assert done.returncode == 2 and "has no headings between 90 and 0 degrees" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_file_without_excitation_runs_in_still_water_and_is_refused_in_waves(tmp_path):
+    """Radiation only (a decay's needs): the run goes; the same file under waves is one line."""
+
+    def no_excitation(f) -> None:
+        for name in ("re", "im", "mag", "phase"):
+            del f[f"body1/hydro_coeffs/excitation/{name}"]
+
+    path = _copy(SPHERE, tmp_path / "radiation.h5", no_excitation)
+    done = run_cli(sphere_scene(tmp_path, path), "--t-end", "0.5")
+    assert done.returncode == 0, done.stderr
+    waves = '[waves]\nkind = "regular"\nheight = 1.0\nperiod = 7.0\ndepth = 200.0\n\n'
+    done = run_cli(sphere_scene(tmp_path, path, waves=waves), "--t-end", "0.5")
+    assert done.returncode == 2 and "has no wave excitation" in done.stderr, done.stderr

@@ -98,6 +98,14 @@ def _five_dofs(run: Path) -> None:
     cal.write_text(cal.read_text().replace("6\t\t\t\t! Number of degrees of freedom", "5\t\t\t\t! Number of degrees of freedom", 1))
 
 
+def _extra_number(run: Path) -> None:
+    """A row of ExcitationForce.tec one number longer (another run's force count)."""
+    tec = run / "Results" / "ExcitationForce.tec"
+    lines = tec.read_text().splitlines()
+    lines[8] += " 0.1E+01"
+    tec.write_text("\n".join(lines) + "\n")
+
+
 def _cut(run: Path) -> None:
     tec = run / "Results" / "RadiationCoefficients.tec"
     tec.write_text("\n".join(tec.read_text().splitlines()[:-30]) + "\n")
@@ -107,14 +115,17 @@ def _cut(run: Path) -> None:
     "change, message",
     [
         (_five_dofs, "degrees of freedom are not surge, sway, heave, roll, pitch and yaw"),
-        (_cut, "(a cut file?)"),
+        (_cut, "(a cut file, or another run's bodies?)"),
+        (_extra_number, "has 1002 numbers, 77 rows of 13 are 1001"),
+        (lambda run: (run / "Mesh" / "KH.dat").write_text("1 2 3\n"), "is not a 6 x 6 stiffness matrix"),
         (lambda run: (run / "Results" / "ExcitationForce.tec").unlink(), "ExcitationForce.tec' is missing"),
         (lambda run: (run / "Mesh" / "KH.dat").write_text((NEMOH / "Mesh" / "KH.dat").read_text().replace("0.6236735E+06", "0.3118E+06")),
          "heave stiffness is"),
     ],
 )  # fmt: skip
 def test_mistakes_are_one_line(tmp_path, change, message):
-    """A run of five dofs, a cut results file, a missing one, another body's stiffness: each one line, exit 2."""
+    """A run of five dofs, a cut results file, a row too long, a stiffness that is not 6 x 6, a missing results file,
+    another body's stiffness: each one line, exit 2."""
     run = _copy(tmp_path)
     change(run)
     done = run_cli(_scene(tmp_path, run / "Nemoh.cal"), "--t-end", "0.5")
@@ -170,11 +181,26 @@ def test_several_bodies_come_back_as_the_coefficients_they_were_written_from(tmp
     reference points and there is no stiffness to check."""
     rng = np.random.default_rng(61)
     n, d = 6, 12
-    omega = np.linspace(0.3, 1.8, n)
+    omega = np.array([0.9, 0.3, 1.8, 1.2, 0.6, 1.5])  # (out of order, as the headings: the reader sorts both)
     A, B = rng.uniform(1e3, 1e5, (n, d, d)), rng.uniform(1e2, 1e4, (n, d, d))
     X = (rng.normal(size=(n, 2, d)) + 1j * rng.normal(size=(n, 2, d))) * 1e4
     points = [(0.0, 0.0, -2.5), (100.0, 0.0, -2.5)]
-    c, gravity, g, C = read_nemoh(_nemoh_run(tmp_path / "cubes", omega, A, B, X, [0.0, 30.0], points))
-    assert np.allclose(c.omega, omega) and np.allclose(c.added_mass, A) and np.allclose(c.damping, B)
-    assert np.allclose(c.diffraction, X) and np.allclose(c.headings, np.radians([0.0, 30.0]))
+    c, gravity, g, C = read_nemoh(_nemoh_run(tmp_path / "cubes", omega, A, B, X, [30.0, 0.0], points))
+    order = np.argsort(omega)
+    assert np.allclose(c.omega, omega[order]) and np.allclose(c.added_mass, A[order]) and np.allclose(c.damping, B[order])
+    assert np.allclose(c.diffraction, X[order][:, ::-1]) and np.allclose(c.headings, np.radians([0.0, 30.0]))
     assert np.allclose(c.center, points) and np.allclose(gravity, points) and C is None and c.rho == 1025.0 and c.depth == np.inf
+
+
+def test_nemohs_own_lower_case_folders_and_untitled_headings_read_the_same(tmp_path):
+    """NEMOH writes results/ and mesh/ (WEC-Sim's examples have Results/ and Mesh/), and prints a heading in 7
+    characters (-100 degrees and below as *******): the run reads the same, its headings from Nemoh.cal's load cases."""
+    run = _copy(tmp_path)
+    (run / "Results").rename(run / "results")
+    (run / "Mesh").rename(run / "mesh")
+    tec = run / "results" / "ExcitationForce.tec"
+    tec.write_text(tec.read_text().replace("beta =   0.000 deg", "beta = ******* deg"))
+    ours, gravity, _, C = read_nemoh(run / "Nemoh.cal")
+    theirs, _, _, C0 = read_nemoh(NEMOH / "Nemoh.cal")
+    assert np.allclose(ours.added_mass, theirs.added_mass) and np.allclose(ours.diffraction, theirs.diffraction)
+    assert np.allclose(ours.headings, [0.0]) and C is not None and np.allclose(C, C0)

@@ -82,3 +82,12 @@ def test_a_cut_qtf_file_is_one_line(tmp_path):
         read_qtf(cut, RHO, G)
     with pytest.raises(ConfigError, match="a QTF file is WAMIT's .12d"):
         read_qtf(tmp_path / "other.8", RHO, G)
+
+
+def test_a_qtf_file_cut_inside_a_pair_is_one_line(tmp_path):
+    """The last pair of periods with one of its six modes gone: the pairs are all there, their rows are not."""
+    lines = SEMI.read_text().splitlines()
+    cut = tmp_path / "cut.12d"
+    cut.write_text("\n".join(lines[:-1]) + "\n")
+    with pytest.raises(ConfigError, match="some pairs of periods have 5 rows, others 6"):
+        read_qtf(cut, RHO, G)

@@ -86,11 +86,11 @@ def from_file(path: Path, models: list, starts: list, fluid, water=None, drift: 
         except ValueError as e:
             raise ConfigError(f"[fluid] bem_file {str(path)!r}: {e}") from None
     elif kind == "netcdf":
-        c = _from_capytaine(path, models, starts, fluid)
+        c = _from_dataset(path, models, starts, fluid)
     elif kind == "bemio":
-        c = _from_bemio(path, models, starts, fluid)
+        c = _from_dataset(path, models, starts, fluid, read_bemio)
     elif kind == "nemoh":
-        c = _from_capytaine(path, models, starts, fluid, read_nemoh)
+        c = _from_dataset(path, models, starts, fluid, read_nemoh)
     else:
         c = _from_wamit(path, kind, models, starts, fluid, water, drift)
     if drift and c.mean_drift is None and not c.has_far_field:
@@ -165,26 +165,16 @@ def drift_table(path: Path, run, fluid) -> np.ndarray | None:
     return np.stack([[np.interp(run.omega, omega, total[::-1, m, i]) for i in range(3)] for m in range(len(beta))], -1).transpose(1, 2, 0)
 
 
-def _from_capytaine(path: Path, models: list, starts: list, fluid, read=read_capytaine) -> Coefficients:
-    """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py; or a NEMOH run's, sim/io/nemoh.py, which reads to the
-    same: `read`), made reciprocal and passive and moved to the bodies' centres of mass; its hydrostatic stiffness,
-    when it has one, checked against the scene's bodies."""
+def _from_dataset(path: Path, models: list, starts: list, fluid, read=read_capytaine) -> Coefficients:
+    """A Capytaine dataset's coefficients (sim/io/capytaine_nc.py; or a NEMOH run's, sim/io/nemoh.py, or a BEMIO file's,
+    sim/io/bemio_h5.py, which read to the same: `read`), made reciprocal and passive and moved to the bodies' centres
+    of mass; its hydrostatic stiffness, when it has one, checked against the scene's bodies."""
     c, gravity, g, C = read(path)
     _check_rho(path, c.rho, fluid)  # (before the stiffness, which holds rho)
     _check_g(path, g, fluid)
     if C is not None:
         _check_stiffness(path, C, gravity, models, starts, fluid)
     return moved(_passive(path, c, models), gravity)
-
-
-def _from_bemio(path: Path, models: list, starts: list, fluid) -> Coefficients:
-    """A BEMIO file's coefficients (sim/io/bemio_h5.py), about each body's centre of gravity as WEC-Sim takes them, made
-    reciprocal and passive; its hydrostatic stiffness checked against the scene's bodies."""
-    c, g, C = read_bemio(path)
-    _check_rho(path, c.rho, fluid)  # (before the stiffness, which holds rho)
-    _check_g(path, g, fluid)
-    _check_stiffness(path, C, np.atleast_2d(c.center).reshape(-1, 3), models, starts, fluid)
-    return _passive(path, c, models)
 
 
 def _check_rho(path: Path, rho: float, fluid) -> None:

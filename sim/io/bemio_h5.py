@@ -32,6 +32,7 @@ import numpy as np
 
 from sim.errors import ConfigError
 from sim.hydro.bem import Coefficients
+from sim.hydro.impulse_response import frequency_response
 
 EXTRA = 'pip install -e ".[bemio]"'
 MARK = b"simulation_parameters"
@@ -66,16 +67,6 @@ def _scalar(f, name: str, where: str) -> float:
     return float(value.ravel()[0])
 
 
-def _from_impulse_response(K: np.ndarray, t: np.ndarray, omega: np.ndarray, A_inf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n, r, c) A and B at `omega` from the radiation's impulse response K (r, c, nt) at times `t` (the trapezoid rule,
-    as weights: no (n, r, c, nt) array)."""
-    step = np.diff(t)
-    weights = np.concatenate([[step[0] / 2], (step[:-1] + step[1:]) / 2, [step[-1] / 2]])
-    B = np.einsum("rct,nt->nrc", K * weights, np.cos(np.outer(omega, t)))
-    A = A_inf[None] - np.einsum("rct,nt->nrc", K * weights, np.sin(np.outer(omega, t))) / omega[:, None, None]
-    return A, B
-
-
 def _radiation(hc, rho: float, omega: np.ndarray, where: str, body: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(6, 6N) A(inf) and (n, 6, 6N) A and B of one body's rows, dimensional."""
     A_inf = rho * _get(hc, "added_mass/inf_freq", f"{where} body{body}")
@@ -88,7 +79,7 @@ def _radiation(hc, rho: float, omega: np.ndarray, where: str, body: int) -> tupl
         if K.ndim != 3 or K.shape[:2] != A_inf.shape or K.shape[2] != len(t) or len(t) < 2:
             raise ConfigError(f"{where} body{body}: the radiation's impulse response {K.shape} does not fit its {len(t)} times and the "
                               f"infinite-frequency added mass {A_inf.shape} (a cut file?)")  # fmt: skip
-        A, B = _from_impulse_response(K, t, omega, A_inf)
+        A, B = frequency_response(K, t, omega, A_inf)
     else:
         raise ConfigError(f"{where} body{body} has neither radiation_damping/all nor its impulse response")
     if A.shape != (len(omega),) + A_inf.shape or B.shape != A.shape or A_inf.shape[0] != 6:
@@ -110,9 +101,10 @@ def _excitation(hc, rho_g: float, shape: tuple[int, int], where: str) -> np.ndar
     return np.conj(rho_g * X.transpose(2, 1, 0))
 
 
-def read_bemio(path: Path) -> tuple[Coefficients, float, np.ndarray | None]:
-    """(the coefficients about each body's centre of gravity with the whole excitation in `diffraction`, g, the
-    hydrostatic stiffness (6N, 6N, block diagonal) or None): one-line ConfigError on a file floatsim cannot take."""
+def read_bemio(path: Path) -> tuple[Coefficients, np.ndarray, float, np.ndarray | None]:
+    """(the coefficients about each body's centre of gravity with the whole excitation in `diffraction`, those centres
+    ((k, 3), as capytaine_nc.read_capytaine and nemoh.read_nemoh give theirs), g, the hydrostatic stiffness (6N, 6N,
+    block diagonal) or None): one-line ConfigError on a file floatsim cannot take."""
     try:
         import h5py  # the bemio extra
     except ImportError:
@@ -157,4 +149,4 @@ def read_bemio(path: Path) -> tuple[Coefficients, float, np.ndarray | None]:
         raise ConfigError(f"{where}: its added mass or damping holds NaN or infinity")
     c = Coefficients(omega[order], A[order], B[order], A_inf, rho, depth if depth > 0 else math.inf, 0, centers[0] if len(bodies) == 1 else centers,
                      None if X is None else turn[by_heading], X, None if X is None else np.zeros_like(X))  # fmt: skip
-    return c, g, (C if C.any() else None)
+    return c, centers, g, (C if C.any() else None)

@@ -32,10 +32,10 @@ import re
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import trapezoid
 
 from sim.errors import ConfigError
 from sim.hydro.bem import Coefficients
+from sim.hydro.impulse_response import frequency_response, impulse_response
 
 ZONE = re.compile(r'Zone\s+t="([^"]*)"\s*,\s*I\s*=\s*(\d+)', re.IGNORECASE)
 NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eEdD][-+]?\d+)?$")
@@ -125,10 +125,9 @@ def added_mass_at_infinity(omega: np.ndarray, A: np.ndarray, B: np.ndarray) -> n
     """(d, d) A(inf) from A(w) and B(w) ((n, d, d)) by Ogilvie's relation, the median over the upper half of the
     frequencies (the module's docstring)."""
     t = np.linspace(0.0, min(IRF_SECONDS, math.pi / np.diff(omega).max()), IRF_SAMPLES)  # (two frequencies at least: read_nemoh)
-    K = (2 / math.pi) * trapezoid(B[:, :, :, None] * np.cos(np.outer(omega, t))[:, None, None, :], omega, axis=0)
     upper = omega >= np.median(omega)
-    estimates = [A[k] + trapezoid(K * np.sin(omega[k] * t), t, axis=-1) / omega[k] for k in np.flatnonzero(upper)]
-    return np.median(estimates, axis=0)
+    memory, _ = frequency_response(impulse_response(omega, B, t), t, omega[upper], np.zeros(A.shape[1:]))  # -(1/w) int K sin
+    return np.median(A[upper] - memory, axis=0)
 
 
 def _files(path: Path) -> Path:

@@ -47,7 +47,7 @@ def test_the_iea_sphere_file_reads_to_its_units():
     its coefficients are about the centre of gravity, 2 m below the centre, where a sphere's surge and pitch couple
     (A15 = 2 A11: a sphere's pressure passes through its centre)."""
     assert kind_of(SPHERE) == "bemio"
-    c, g, C = read_bemio(SPHERE)
+    c, gravity, g, C = read_bemio(SPHERE)
     displaced = 1000.0 * 2 / 3 * math.pi * R**3
     assert c.added_mass_inf[2, 2] == pytest.approx(0.5 * displaced, rel=0.002)
     stiffness = 1000.0 * g * math.pi * R**2
@@ -97,8 +97,8 @@ def _impulse_response_only(f) -> None:
 def test_radiation_from_the_impulse_response_alone(tmp_path):
     """A file with only the radiation's impulse response: its A and B are the ones the response was made from,
     within 1 % of their largest over the sphere's waves (0.3 to 8 rad/s)."""
-    c0, _, _ = read_bemio(SPHERE)
-    c, _, _ = read_bemio(_copy(SPHERE, tmp_path / "irf.h5", _impulse_response_only))
+    c0, *_ = read_bemio(SPHERE)
+    c, *_ = read_bemio(_copy(SPHERE, tmp_path / "irf.h5", _impulse_response_only))
     band = (c.omega > 0.3) & (c.omega < 8.0)
     for M, M0 in ((c.added_mass, c0.added_mass), (c.damping, c0.damping)):
         for i, j in ((2, 2), (0, 0), (0, 4), (4, 4)):
@@ -196,13 +196,13 @@ def test_several_bodies_come_back_as_the_coefficients_they_were_written_from(tmp
     A_inf = rng.uniform(1e3, 1e5, (d, d))
     X = (rng.normal(size=(n, 2, d)) + 1j * rng.normal(size=(n, 2, d))) * 1e4
     cg = [(0.0, 0.0, -1.0), (30.0, 0.0, -0.5)]
-    c, g, C = read_bemio(_bemio_file(tmp_path / "two.h5", omega, A, B, A_inf, X, [90.0, 0.0], cg, depth=50.0))
+    c, gravity, g, C = read_bemio(_bemio_file(tmp_path / "two.h5", omega, A, B, A_inf, X, [90.0, 0.0], cg, depth=50.0))
     order = np.argsort(omega)
     assert np.allclose(c.omega, omega[order]) and c.depth == 50.0 and g == 9.81 and C is None
     assert np.allclose(c.added_mass, A[order]) and np.allclose(c.damping, B[order]) and np.allclose(c.added_mass_inf, A_inf)
     assert np.allclose(c.headings, np.radians([0.0, 90.0]))
     assert np.allclose(c.diffraction, X[order][:, ::-1])  # (headings sorted: 0 then 90 degrees)
-    assert np.allclose(c.center, cg)
+    assert np.allclose(c.center, cg) and np.allclose(gravity, cg)
 
 
 def _two_headings(f) -> None:
